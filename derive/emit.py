@@ -148,8 +148,8 @@ def render(prog: Program) -> str:
     for fname, spec in prog.functions.items():
         outs = []
         for oname, mat in spec.outputs.items():
-            rows = ", ".join("ca.horzcat(" + ", ".join(pr(sp.sympify(x)) for x in mat.row(i)) + ")" for i in range(mat.rows))
-            outs.append((oname, f"ca.vertcat({rows})" if mat.rows > 1 else rows))
+            rows = ", ".join("ca.horzcat(" + ", ".join(pr(sp.sympify(x)) for x in row) + ")" for row in mat)
+            outs.append((oname, f"ca.vertcat({rows})" if len(mat) > 1 else rows))
         ins = ", ".join(spec.inputs)
         w(f"    # {fname}: {spec.doc}")
         w(f"    out[{fname!r}] = ca.Function(")

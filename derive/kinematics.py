@@ -138,22 +138,27 @@ def rot(phi: sp.Expr) -> sp.Matrix:
 J = sp.Matrix([[0, -1], [1, 0]])
 
 
+Vec = tuple  # a plane vector (x, y) of SymPy expressions
+
+
 def chain_sum_derivatives(
     cos_phi: list[sp.Expr],
     sin_phi: list[sp.Expr],
-    v: list[sp.Matrix],
-    dv: list[sp.Matrix],
-    ddv: list[sp.Matrix],
+    v: list[Vec],
+    dv: list[Vec],
+    ddv: list[Vec],
     assign,
     tag: str,
-) -> tuple[sp.Matrix, list[sp.Matrix], list[sp.Matrix], list[sp.Matrix]]:
+) -> tuple[Vec, list[Vec], list[Vec], list[Vec]]:
     """Value and derivatives of ``Q = sum_k R(phi_k) v_k(theta_k)`` in the screw-theory form.
+
+    Plane vectors are tuples ``(x, y)`` (SymPy's Matrix arithmetic is far slower on 2-vectors).
 
     Parameters
     ----------
     cos_phi, sin_phi : list
         cos and sin of the cumulative angle phi_k before segment k (k = 1..n).
-    v, dv, ddv : list of 2x1 Matrix
+    v, dv, ddv : list of (x, y)
         the local vector of each segment and its first and second derivative in theta_k.
     assign : callable(name, expr) -> Symbol
         records an intermediate quantity in the straight-line program and returns its symbol.
@@ -162,29 +167,35 @@ def chain_sum_derivatives(
 
     Returns
     -------
-    Q : 2x1 Matrix
-    D : list of 2x1 Matrix, D[j] = dQ/dtheta_j
-    DD : list of 2x1 Matrix, DD[j] = d2Q/dtheta_j^2
-    S : list of 2x1 Matrix, S[j] = sum_{k>j} R(phi_k) v_k (the part beyond joint j)
+    Q : (x, y)
+    D : list, D[j] = dQ/dtheta_j
+    DD : list, DD[j] = d2Q/dtheta_j^2
+    S : list, S[j] = sum_{k>j} R(phi_k) v_k (the part beyond joint j)
     """
     n = len(v)
 
-    def rotate(k: int, a: sp.Matrix) -> sp.Matrix:
+    def rotate(k: int, a: Vec) -> Vec:
         c, s = cos_phi[k], sin_phi[k]
-        return sp.Matrix([c * a[0] - s * a[1], s * a[0] + c * a[1]])
+        return (c * a[0] - s * a[1], s * a[0] + c * a[1])
 
-    def vec(name: str, a: sp.Matrix) -> sp.Matrix:
-        return sp.Matrix([assign(f"{name}_x", a[0]), assign(f"{name}_y", a[1])])
+    def vec(name: str, a: Vec) -> Vec:
+        return (assign(f"{name}_x", a[0]), assign(f"{name}_y", a[1]))
 
     rotated = [vec(f"{tag}_r{k + 1}", rotate(k, v[k])) for k in range(n)]
-    S_: list[sp.Matrix] = [sp.zeros(2, 1) for _ in range(n)]
-    acc = sp.zeros(2, 1)
+    S_: list[Vec] = [(sp.Integer(0), sp.Integer(0))] * n
+    acc: Vec = (sp.Integer(0), sp.Integer(0))
     for j in range(n - 1, -1, -1):
         S_[j] = acc
-        acc = vec(f"{tag}_tail{j + 1}", acc + rotated[j]) if j > 0 else acc + rotated[j]
+        summed = (acc[0] + rotated[j][0], acc[1] + rotated[j][1])
+        acc = vec(f"{tag}_tail{j + 1}", summed) if j > 0 else summed
     Q = vec(f"{tag}_Q", acc)
-    D = [vec(f"{tag}_D{j + 1}", rotate(j, dv[j]) + J * S_[j]) for j in range(n)]
-    DD = [rotate(j, ddv[j]) - S_[j] for j in range(n)]
+    D = []
+    DD = []
+    for j in range(n):
+        rd, rdd = rotate(j, dv[j]), rotate(j, ddv[j])
+        # J S = (-S_y, S_x): the rotation of everything beyond joint j
+        D.append(vec(f"{tag}_D{j + 1}", (rd[0] - S_[j][1], rd[1] + S_[j][0])))
+        DD.append((rdd[0] - S_[j][0], rdd[1] - S_[j][1]))
     return Q, D, DD, S_
 
 

@@ -27,7 +27,7 @@ import sympy as sp
 from . import energy
 from . import symbols as S
 from .effects import EffectSet, check_segments, check_variant
-from .kinematics import J, chain_sum_derivatives, chord, fraction_in_segment
+from .kinematics import chain_sum_derivatives, chord, fraction_in_segment
 
 
 @dataclass
@@ -35,7 +35,7 @@ class FunctionSpec:
     """One CasADi Function to emit: its input names and its named outputs."""
 
     inputs: list[str]
-    outputs: dict[str, sp.Matrix]
+    outputs: dict[str, list[list[sp.Expr]]]  # each output a matrix, as a list of rows
     doc: str
 
 
@@ -64,7 +64,7 @@ class _Builder:
             return expr
         assert name not in self.names, name
         self.names.add(name)
-        sym = sp.Symbol(name, real=True)
+        sym = sp.Symbol(name)
         self.assignments.append((sym, expr))
         return sym
 
@@ -89,8 +89,22 @@ def _chord_template(b: _Builder, key: str, n: int, sigma) -> None:
     b.template(key, [c[0], c[1], dc[0], dc[1], ddc[0], ddc[1]])
 
 
-def _vec3(vals: list[sp.Expr]) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix]:
-    return sp.Matrix(vals[0:2]), sp.Matrix(vals[2:4]), sp.Matrix(vals[4:6])
+def _vec3(vals: list[sp.Expr]) -> tuple[tuple, tuple, tuple]:
+    """(chord, d chord, d2 chord) as three plane vectors."""
+    return tuple(vals[0:2]), tuple(vals[2:4]), tuple(vals[4:6])
+
+
+def _column(values) -> list[list[sp.Expr]]:
+    return [[v] for v in values]
+
+
+def _dot(w: tuple, a: tuple) -> sp.Expr:
+    return w[0] * a[0] + w[1] * a[1]
+
+
+def _dot_J(w: tuple, a: tuple) -> sp.Expr:
+    """w . (J a), J the rotation by +90 degrees: J (a_x, a_y) = (-a_y, a_x)."""
+    return -w[0] * a[1] + w[1] * a[0]
 
 
 def build(n: int, effects: EffectSet, variant: str = "paper") -> Program:
@@ -112,8 +126,8 @@ def build(n: int, effects: EffectSet, variant: str = "paper") -> Program:
         sin_phi.append(b.assign(f"sphi{k}", sp.sin(phi)))
     total_angle = b.assign("theta_TOL", phi + th[n - 1])  # Eq. (17)
 
-    def rotate(k: int, a: sp.Matrix) -> sp.Matrix:
-        return sp.Matrix([cos_phi[k] * a[0] - sin_phi[k] * a[1], sin_phi[k] * a[0] + cos_phi[k] * a[1]])
+    def rotate(k: int, a: tuple) -> tuple:
+        return (cos_phi[k] * a[0] - sin_phi[k] * a[1], sin_phi[k] * a[0] + cos_phi[k] * a[1])
 
     # --- separable terms: per-segment summands, their sum, first and second derivative
     sep = energy.separable(effects.names(), n, variant)
@@ -139,14 +153,14 @@ def build(n: int, effects: EffectSet, variant: str = "paper") -> Program:
     hess_off = [sp.Integer(0)] * n  # hess_off[k]: the entry (j, k) for every j < k
     terms_out: dict[str, sp.Expr] = {name: b.assign(f"U_{name}", term_sums[name]) for name in term_names}
 
-    def add_potential(tag: str, w: sp.Matrix, v, dv, ddv) -> sp.Expr:
+    def add_potential(tag: str, w: tuple, v, dv, ddv) -> sp.Expr:
         """Add w . Q(theta) for the chain sum Q with local vectors v to gradient and Hessian."""
-        Q, D, DD, S_ = chain_sum_derivatives(cos_phi, sin_phi, v, dv, ddv, b.assign, tag)
+        Q, D, DD, _ = chain_sum_derivatives(cos_phi, sin_phi, v, dv, ddv, b.assign, tag)
         for j in range(n):
-            grad[j] = grad[j] + (w.T * D[j])[0]
-            hess_diag[j] = hess_diag[j] + (w.T * DD[j])[0]
-            hess_off[j] = hess_off[j] + (w.T * J * D[j])[0]
-        return (w.T * Q)[0]
+            grad[j] = grad[j] + _dot(w, D[j])
+            hess_diag[j] = hess_diag[j] + _dot(w, DD[j])
+            hess_off[j] = hess_off[j] + _dot_J(w, D[j])
+        return _dot(w, Q)
 
     # --- payloads (Eq. 14): -f . (p(s) - p_straight(s)), p(s) a chain sum with fractions sigma
     if effects.payloads:
@@ -156,7 +170,7 @@ def build(n: int, effects: EffectSet, variant: str = "paper") -> Program:
         sig = [b.assign(f"sig{k}_{i + 1}", fraction_in_segment(s, i + 1, n)) for i in range(n)]
         cs = [_vec3(b.instantiate("cs", f"p{k}c{i + 1}", {S.t: th[i], S.sigma: sig[i]})) for i in range(n)]
         f = energy.force_vector(F, Om)
-        w = sp.Matrix([b.assign(f"w{k}_x", -f[0]), b.assign(f"w{k}_y", -f[1])])
+        w = (b.assign(f"w{k}_x", -f[0]), b.assign(f"w{k}_y", -f[1]))
         pot = add_potential(f"pl{k}", w, [c[0] for c in cs], [c[1] for c in cs], [c[2] for c in cs])
         terms_out[f"payload{k}"] = b.assign(f"U_payload{k}", pot + f[0] * s * S.L)
 
@@ -166,8 +180,8 @@ def build(n: int, effects: EffectSet, variant: str = "paper") -> Program:
     if effects.gravity:
         _chord_template(b, "ch", n, sp.Rational(1, 2))
         ch = [_vec3(b.instantiate("ch", f"h{i + 1}", {S.t: th[i]})) for i in range(n)]
-        vg = [[(n - 1 - i) * c1[i][m] + ch[i][m] for m in range(3)] for i in range(n)]
-        w = sp.Matrix([b.assign("wg_x", -S.M * S.g / n), 0])
+        vg = [[((n - 1 - i) * c1[i][m][0] + ch[i][m][0], (n - 1 - i) * c1[i][m][1] + ch[i][m][1]) for m in range(3)] for i in range(n)]
+        w = (b.assign("wg_x", -S.M * S.g / n), sp.Integer(0))
         pot = add_potential("gr", w, [v[0] for v in vg], [v[1] for v in vg], [v[2] for v in vg])
         terms_out["gravity"] = b.assign("U_gravity", pot + S.M * S.g * S.L / 2)
 
@@ -176,33 +190,34 @@ def build(n: int, effects: EffectSet, variant: str = "paper") -> Program:
     hd = [b.assign(f"hdiag{j + 1}", hess_diag[j]) for j in range(n)]
     # hess_off[0] would be the entry above the first diagonal one: there is none
     ho = [sp.Integer(0)] + [b.assign(f"hoff{j + 1}", hess_off[j]) for j in range(1, n)]
-    H = sp.Matrix(n, n, lambda i, j: hd[i] if i == j else ho[max(i, j)])
+    H = [[hd[i] if i == j else ho[max(i, j)] for j in range(n)] for i in range(n)]
 
     # --- kinematics: segment end points (heads of the chain) and the tip pose
-    pts = [sp.Matrix([0, 0])]
+    pts = [(sp.Integer(0), sp.Integer(0))]
     for i in range(n):
         r = rotate(i, c1[i][0])
-        pts.append(sp.Matrix([b.assign(f"pt{i + 1}_x", pts[-1][0] + r[0]), b.assign(f"pt{i + 1}_y", pts[-1][1] + r[1])]))
-    points = sp.Matrix.hstack(*pts)
-    tip = sp.Matrix([pts[-1][0], pts[-1][1], total_angle])
+        pts.append((b.assign(f"pt{i + 1}_x", pts[-1][0] + r[0]), b.assign(f"pt{i + 1}_y", pts[-1][1] + r[1])))
+    points = [[p[0] for p in pts], [p[1] for p in pts]]
+    tip = _column([pts[-1][0], pts[-1][1], total_angle])
 
     # --- centreline: the point at fraction s_c of L (and the heading there)
     s_c = sp.Symbol("s", real=True)
     sig_c = [b.assign(f"sigc{i + 1}", fraction_in_segment(s_c, i + 1, n)) for i in range(n)]
     b.template("cc", list(chord(S.t, S.sigma, n)))
-    pc = sp.zeros(2, 1)
-    heading = sp.Integer(0)
+    pcx, pcy, heading = [], [], []
     for i in range(n):
-        cv = sp.Matrix(b.instantiate("cc", f"cc{i + 1}", {S.t: th[i], S.sigma: sig_c[i]}))
-        pc = pc + rotate(i, cv)
-        heading = heading + sig_c[i] * th[i]
-    centre = sp.Matrix([b.assign("cl_x", pc[0]), b.assign("cl_y", pc[1]), b.assign("cl_heading", heading)])
+        cv = b.instantiate("cc", f"cc{i + 1}", {S.t: th[i], S.sigma: sig_c[i]})
+        r = rotate(i, cv)
+        pcx.append(r[0])
+        pcy.append(r[1])
+        heading.append(sig_c[i] * th[i])
+    centre = _column([b.assign("cl_x", sp.Add(*pcx)), b.assign("cl_y", sp.Add(*pcy)), b.assign("cl_heading", sp.Add(*heading))])
 
     pnames = ["theta", *effects.parameters()]
-    terms_vec = sp.Matrix([terms_out[name] for name in effects.terms()])
+    terms_vec = _column([terms_out[name] for name in effects.terms()])
     functions = {
-        "energy": FunctionSpec(pnames, {"U": sp.Matrix([U]), "terms": terms_vec}, "total potential energy U (N*mm) and its terms, in the order of TERMS"),
-        "gradient": FunctionSpec(pnames, {"grad": sp.Matrix(g_syms)}, "dU/dtheta (N*mm/rad)"),
+        "energy": FunctionSpec(pnames, {"U": [[U]], "terms": terms_vec}, "total potential energy U (N*mm) and its terms, in the order of TERMS"),
+        "gradient": FunctionSpec(pnames, {"grad": _column(g_syms)}, "dU/dtheta (N*mm/rad)"),
         "hessian": FunctionSpec(pnames, {"hess": H}, "d2U/dtheta2 (N*mm/rad^2), dense and symmetric"),
         "kinematics": FunctionSpec(["theta", "L"], {"tip": tip, "points": points}, "tip [x, y, angle] (mm, mm, rad) and the n+1 segment end points (2 x (n+1), mm)"),
         "centreline": FunctionSpec(["theta", "L", "s"], {"point": centre}, "the point [x, y, heading] at fraction s of L from the base"),

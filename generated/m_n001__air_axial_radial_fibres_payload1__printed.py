@@ -3,7 +3,7 @@
 Segments n = 1; effects: air,axial,radial,fibres,payload; variant: printed.
 Regenerate with:
     esba generate --segments 1 --effects air,axial,radial,fibres,payload --variant printed
-(or `esba generate --refresh` for every committed model). Derivation source sha256: fc780e1155d87c17.
+(or `esba generate --refresh` for every committed model). Derivation source sha256: 999c4c51c5defcd7.
 
 Straight-line program: 157 assignments, 225 lines.
 CasADi Functions (SX instructions / nodes):
@@ -41,7 +41,7 @@ def build():
     s1 = ca.SX.sym('s1')
     s = ca.SX.sym('s')
     u1_0 = (r1)**3
-    u1_1 = (theta[0]*u1_0)
+    u1_1 = (u1_0*theta[0])
     u1_2 = (PI*P)
     u1_3 = (1.0/L)
     u1_4 = (r2)**2
@@ -62,7 +62,7 @@ def build():
     u1_19 = (r2 + (-u1_18))
     u1_20 = (-u1_19)
     u1_21 = ((u1_20)**2/(2.0))
-    u1_22 = (4.0*P*u1_6*r2*(PI)**2*(ca.tan(rho))**2)
+    u1_22 = (4.0*u1_6*P*r2*(PI)**2*(ca.tan(rho))**2)
     u1_23 = (u1_3/(4.0))
     u1_24 = (u1_11*r1)
     u1_25 = (1.0/u1_16)
@@ -116,7 +116,7 @@ def build():
     U_air = (-u1_1*u1_2)
     U_axial = (u1_3*u1_9*(theta[0])**2/(8.0))
     U_radial = (u1_13*u1_21)
-    U_fibres = (theta[0]*u1_22)
+    U_fibres = (u1_22*theta[0])
     sig1_1 = ca.fmin(1.0, ca.fmax(0.0, s1))
     p1c1_0 = (sig1_1)**2
     p1c1_1 = (theta[0])**2
@@ -184,7 +184,7 @@ def build():
     pl1_D1_y = (p1c1_32 + (p1c1_54*theta[0]/(2.0)))
     U_payload1 = ((pl1_r1_x*w1_x) + (pl1_r1_y*w1_y) + (F1*s1*L*ca.cos(Omega1)))
     U = (U_air + U_axial + U_fibres + U_payload1 + U_radial)
-    grad1 = (u1_22 + (pl1_D1_x*w1_x) + (pl1_D1_y*w1_y) + (-u1_0*u1_2) + (theta[0]*u1_23*u1_9) + (u1_21*u1_24*u1_8) + (u1_13*u1_14*u1_18*u1_20*u1_25*((u1_15*u1_26) + (-u1_16*u1_27/(2.0*(u1_14)**2)))))
+    grad1 = (u1_22 + (pl1_D1_x*w1_x) + (pl1_D1_y*w1_y) + (-u1_0*u1_2) + (u1_21*u1_24*u1_8) + (u1_23*u1_9*theta[0]) + (u1_13*u1_14*u1_18*u1_20*u1_25*((u1_15*u1_26) + (-u1_16*u1_27/(2.0*(u1_14)**2)))))
     hdiag1 = ((u1_8*((u1_29*u1_30) + (-u1_23*u1_7) + (u1_26*u1_33*u1_34) + (u1_27*u1_30*u1_34/(2.0)) + (-u1_24*u1_25*u1_32) + (-u1_29*u1_31*u1_33))) + (w1_y*(p1c1_54 + (p1c1_31*theta[0]*ca.if_else(p1c1_22, ((p1c1_21*((-p1c1_44) + (-p1c1_49*((-p1c1_45) + (-p1c1_18*((-p1c1_46) + (0.00020667989417989417*p1c1_56))) + (-p1c1_47*p1c1_55/(20.0)))) + (-p1c1_33*p1c1_48*theta[0]))) + (p1c1_50*((-p1c1_20*p1c1_48) + (-p1c1_43*theta[0]/(12.0))))), ((-p1c1_25*p1c1_57) + ((-16.0)*p1c1_51*p1c1_53) + (2.0*p1c1_28*(p1c1_52)**2) + (24.0*p1c1_25*p1c1_26/((theta[0])**4))))))) + (p1c1_15*w1_x*ca.if_else(p1c1_10, ((-p1c1_34) + (-p1c1_7*((-p1c1_35) + (-p1c1_5*((-p1c1_39) + (0.0033068783068783067*p1c1_56))) + (-p1c1_40*p1c1_55/(5.0)))) + ((-0.6666666666666666)*p1c1_41*p1c1_55)), ((-p1c1_42*p1c1_57) + (-p1c1_11*p1c1_13*sig1_1) + (2.0*p1c1_12*p1c1_13*p1c1_51)))))
     pt1_x = (L*ca.if_else(c1_7, (1.0 + (-c1_4*c1_5)), c1_10))
     pt1_y = (c1_11*c1_23)

@@ -1,0 +1,21 @@
+"""Every tolerance of the test suite, in one place, with what it is for.
+
+Kernel round-off: two exact formulas for the same number (SymPy vs generated CasADi vs CasADi AD)
+differ only by floating-point round-off, scaled by the size of the terms (energies are O(100) N*mm).
+Finite differences: central differences with step h have truncation error O(h^2) and round-off
+O(eps/h); with h = 1e-5 rad both are below 1e-6 relative.
+Solver accuracy: IPOPT/Newton stop at a gradient norm of about 1e-8; angles are then good to
+about 1e-6 rad.
+"""
+
+#: relative tolerance between two exact evaluations of the same expression (round-off)
+KERNEL_RTOL = 1e-9
+#: absolute floor for the same comparison, in the units of the quantity (N*mm, N*mm/rad, ...)
+KERNEL_ATOL = 1e-8
+#: central finite differences, step and tolerance
+FD_STEP = 1e-5
+FD_RTOL = 1e-6
+FD_ATOL = 1e-5
+#: the paper's Table 2 (issue 3): segment and total angles in degrees, tip in mm
+TABLE2_ANGLE_DEG = 0.15
+TABLE2_TIP_MM = 0.2
