@@ -164,10 +164,15 @@ def render(prog: Program) -> str:
     return "\n".join(lines)
 
 
-def _counts(body: str) -> dict[str, dict[str, int]]:
+def _exec_source(text: str) -> dict:
+    """Run a model's source and return its CasADi Functions (our own generated code)."""
     ns: dict = {}
-    exec(compile(body, "<model>", "exec"), ns)  # noqa: S102 - our own generated code
-    funs = ns["build"]()
+    exec(compile(text, "<model>", "exec"), ns)  # noqa: S102
+    return ns["build"]()
+
+
+def _counts(body: str) -> dict[str, dict[str, int]]:
+    funs = _exec_source(body)
     return {name: {"instructions": f.n_instructions(), "nodes": f.n_nodes()} for name, f in funs.items()}
 
 
@@ -214,6 +219,7 @@ def generate_source(n: int, effects: EffectSet, variant: str) -> tuple[str, dict
         "instructions": {k: v["instructions"] for k, v in counts.items()},
     }
     entry["_timing"] = {"derive_s": t1 - t0, "emit_s": time.perf_counter() - t1}
+    entry["_assignments"] = len(prog.assignments)
     return text, entry
 
 
@@ -251,12 +257,10 @@ def write_model(n: int, effects: EffectSet | str, variant: str = "paper", folder
     effects = EffectSet.parse(effects) if isinstance(effects, str) else effects
     folder = Path(folder) if folder is not None else GENERATED_DIR
     text, entry = generate_source(n, effects, variant)
-    timing = entry.pop("_timing")
     path = folder / entry["file"]
     atomic_write(path, text)
     if manifest:
         update_manifest(folder, entry)
-    entry["_timing"] = timing
     return path, entry
 
 

@@ -1,0 +1,154 @@
+"""Benchmarks: tables of medians over repeated runs, printed by ``esba bench ...``.
+
+Speed targets are met here, not in timed tests. Every comparison runs side by side in one
+process, so the ratios hold on a noisy shared machine even when absolute times do not.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+
+#: Segment counts of the generation benchmark (issue 2).
+GENERATION_NS = (1, 2, 4, 8, 16, 32, 64, 100)
+#: The naive SymPy route (expanded POE, sympy.diff) is timed up to this n only: it grows ~n^3.3.
+NAIVE_MAX_N = 12
+BENCH_EFFECTS = "air,axial,radial,fibres,payload"
+
+
+def median_time(fn: Callable[[], object], repeat: int) -> float:
+    """Median wall time of ``repeat`` calls of ``fn``, in seconds."""
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def per_call(fn: Callable[[], object], calls: int = 200, repeat: int = 5) -> float:
+    """Median over ``repeat`` batches of the mean time of one call, in seconds."""
+    return statistics.median(median_time(lambda: [fn() for _ in range(calls)], 1) / calls for _ in range(repeat))
+
+
+@dataclass(frozen=True)
+class GenerationRow:
+    n: int
+    derive_s: float
+    emit_s: float
+    total_s: float
+    assignments: int
+    instructions: dict
+    ad_hessian_instructions: int
+    naive_s: float | None
+    call_us: dict
+
+
+def _naive_generation(n: int) -> float:
+    """The first thing one writes: the POE tip position expanded, then sympy.diff twice."""
+    import sympy as sp
+
+    from derive import energy
+    from derive import symbols as S
+    from derive.effects import EffectSet
+
+    t0 = time.perf_counter()
+    th = S.theta(n)
+    eff = EffectSet.parse(BENCH_EFFECTS)
+    sep = energy.separable(eff.names(), n, "paper")
+    U = sum((e.subs(S.t, th[i]) for e in sep.values() for i in range(n)), sp.Integer(0))
+    x = y = sp.Integer(0)
+    for i in range(n):
+        phi = sum(th[:i], sp.Integer(0))
+        l = S.L / (n * th[i])
+        cx, cy = l * sp.sin(th[i]), l * (1 - sp.cos(th[i]))
+        x += sp.cos(phi) * cx - sp.sin(phi) * cy
+        y += sp.sin(phi) * cx + sp.cos(phi) * cy
+    F, Om, _ = S.payload(1)
+    U += y * F * sp.sin(Om) + (S.L - x) * F * sp.cos(Om)
+    grad = [sp.diff(U, t) for t in th]
+    hess = [[sp.diff(grad[i], th[j]) for j in range(i, n)] for i in range(n)]
+    sp.cse([U, *grad, *[h for row in hess for h in row]])
+    return time.perf_counter() - t0
+
+
+def generation(ns: Sequence[int] = GENERATION_NS, repeat: int = 3, naive: bool = True, progress=None) -> list[GenerationRow]:
+    """Generation time and size against n, and the per-call time of the generated Functions."""
+    import casadi as ca
+
+    from derive.effects import EffectSet
+    from derive.emit import _exec_source, generate_source
+
+    eff = EffectSet.parse(BENCH_EFFECTS)
+    values = {"L": 135.0, "r1": 8.0, "r2": 3.0, "d": 4.0, "rho": 0.1745, "E": 0.54, "P": 0.12, "F1": 2.0, "Omega1": 1.5708, "s1": 1.0}
+    rows = []
+    for n in ns:
+        runs = []
+        for _ in range(repeat if n <= 32 else max(1, min(repeat, 2))):
+            t0 = time.perf_counter()
+            text, entry = generate_source(n, eff, "paper")
+            runs.append((time.perf_counter() - t0, entry))
+        total, entry = sorted(runs, key=lambda r: r[0])[len(runs) // 2]
+        funs = _exec_source(text)
+        th_sym = ca.SX.sym("th", n)
+        p = [values[k] for k in eff.parameters()]
+        U = funs["energy"](th_sym, *p)[0]
+        ad_hessian = ca.Function("H", [th_sym], [ca.hessian(U, th_sym)[0]])
+        theta = np.linspace(0.05, 0.6, n)
+        calls = {name: per_call(lambda f=funs[name]: f(theta, *p), calls=100 if n < 64 else 20) * 1e6 for name in ("energy", "gradient", "hessian")}
+        naive_s = median_time(lambda: _naive_generation(n), 1) if naive and n <= NAIVE_MAX_N else None
+        rows.append(
+            GenerationRow(
+                n=n,
+                derive_s=entry["_timing"]["derive_s"],
+                emit_s=entry["_timing"]["emit_s"],
+                total_s=total,
+                assignments=entry["_assignments"],
+                instructions=entry["instructions"],
+                ad_hessian_instructions=ad_hessian.n_instructions(),
+                naive_s=naive_s,
+                call_us=calls,
+            )
+        )
+        if progress:
+            progress(n)
+    return rows
+
+
+def growth_exponent(ns: Sequence[int], times: Sequence[float], n_min: int = 16) -> float:
+    """Least-squares slope of log(time) against log(n) for n >= n_min."""
+    pts = [(np.log(n), np.log(t)) for n, t in zip(ns, times) if n >= n_min and t > 0]
+    if len(pts) < 2:
+        return float("nan")
+    x, y = np.array(pts).T
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def generation_table(rows: list[GenerationRow]) -> str:
+    head = (
+        f"{'n':>4} {'derive s':>9} {'emit s':>7} {'total s':>8} {'naive s':>8} {'ratio':>6} "
+        f"{'U instr':>8} {'grad instr':>10} {'hess instr':>10} {'AD hess':>8} "
+        f"{'U us':>7} {'grad us':>8} {'hess us':>8}"
+    )
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        naive = f"{r.naive_s:8.2f}" if r.naive_s is not None else f"{'-':>8}"
+        ratio = f"{r.naive_s / r.total_s:6.1f}" if r.naive_s is not None else f"{'-':>6}"
+        lines.append(
+            f"{r.n:>4} {r.derive_s:9.2f} {r.emit_s:7.2f} {r.total_s:8.2f} {naive} {ratio} "
+            f"{r.instructions['energy']:>8} {r.instructions['gradient']:>10} {r.instructions['hessian']:>10} "
+            f"{r.ad_hessian_instructions:>8} {r.call_us['energy']:7.1f} {r.call_us['gradient']:8.1f} {r.call_us['hessian']:8.1f}"
+        )
+    k = growth_exponent([r.n for r in rows], [r.total_s for r in rows])
+    lines += [
+        "",
+        f"generation time grows as n^{k:.2f} for n >= 16 (target: at most n^2, and n = 100 within 30 s)",
+        "naive: expanded POE tip + sympy.diff + cse, the same effects (ratio = naive / esba, same run)",
+        "AD hess: instructions of CasADi's own AD Hessian of the generated energy (the yardstick)",
+        "us: median per-call time of the generated Functions from Python (interpreted SX)",
+    ]
+    return "\n".join(lines)
