@@ -104,7 +104,7 @@ def _cmd_audit(args: argparse.Namespace) -> int:
         return EXIT_OK
     path, verdicts = audit.write_page(args.out)
     data = {"page": str(path), "verdicts": {k: v.verdict for k, v in verdicts.items()}}
-    _emit(args, data, lambda d: "\n".join([f"wrote {d['page']}"] + [f"  Eq. {k:<10} {v}" for k, v in d["verdicts"].items()]))
+    _emit(args, data, lambda d: "\n".join([f"wrote {d['page']}"] + [f"  {k:<26} {v}" for k, v in d["verdicts"].items()]))
     return EXIT_OK
 
 
