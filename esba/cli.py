@@ -117,9 +117,342 @@ def _add_audit(sub) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
+# esba solve / stiffness / pressure / validate: scenes and equilibria (issue 3)
+
+#: Where ``esba solve`` writes its figure when no scene file is given and no --plot.
+DEFAULT_SOLVE_FIGURE = "esba-solve.png"
+
+
+def _float_arg(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number >= 1")
+    return value
+
+
+def _add_scene_flags(p: argparse.ArgumentParser, payloads: bool = True) -> None:
+    p.add_argument("scene", nargs="?", default=None, metavar="SCENE.toml", help="scene file (default: the main job, Table 1 with a 2 N horizontal tip payload, n = 3)")
+    p.add_argument("--segments", "-n", type=_segments, help="segment count n >= 1")
+    drive = p.add_mutually_exclusive_group()
+    drive.add_argument("--pressure", type=_float_arg, help="pressure, MPa")
+    drive.add_argument("--target-angle", type=_float_arg, metavar="DEG", help="use the pressure that bends the unloaded actuator to DEG")
+    if payloads:
+        p.add_argument("--payload", type=_float_arg, action="append", metavar="N", help="payload magnitude in N (repeatable; replaces the scene's payloads)")
+        p.add_argument("--payload-angle", type=_float_arg, action="append", metavar="DEG", help="direction Omega of the k-th payload from the vertical (90 = horizontal; one value applies to all)")
+        p.add_argument("--payload-at", type=_float_arg, action="append", metavar="FRACTION", help="point of the k-th payload as a fraction of L (1 = tip; one value applies to all)")
+        p.add_argument("--no-payload", action="store_true", help="no payloads (and no payload terms)")
+    p.add_argument("--gravity", action="store_true", default=None, help="include the actuator's weight (Eq. 15)")
+    p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
+    p.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default: the scene's, else {DEFAULT_VARIANT})")
+    p.add_argument("--json", action="store_true", help="print JSON")
+
+
+def _per_payload(flag: str, values: list[float] | None, count: int) -> list[float] | None:
+    if values is None:
+        return None
+    if count == 0:
+        raise UsageError(f"{flag} given but there is no payload: add --payload N")
+    if len(values) == 1:
+        return values * count
+    if len(values) != count:
+        raise UsageError(f"{flag} given {len(values)} times for {count} payloads: give it once (for all) or once per payload")
+    return values
+
+
+def _scene_from_args(args: argparse.Namespace, payloads: bool = True):
+    """The scene file (or the main job) with the flags applied; bad values are usage errors."""
+    from esba.scene import MAIN_JOB, Payload, SceneError, load_scene
+
+    try:
+        scene = load_scene(args.scene) if args.scene else MAIN_JOB
+        changes: dict = {}
+        if args.segments is not None:
+            changes["segments"] = args.segments
+        if args.pressure is not None:
+            changes["pressure"] = args.pressure
+        if args.target_angle is not None:
+            changes["target_angle_deg"] = args.target_angle
+        if args.gravity:
+            changes["gravity"] = True
+        if args.no_fibres:
+            changes["fibres"] = False
+        if args.variant is not None:
+            changes["variant"] = args.variant
+        if payloads:
+            if args.no_payload and (args.payload or args.payload_angle or args.payload_at):
+                raise UsageError("--no-payload cannot be combined with --payload, --payload-angle or --payload-at")
+            current = list(scene.payloads)
+            if args.no_payload:
+                current = []
+            elif args.payload is not None:
+                current = [Payload(f) for f in args.payload]
+            angles = _per_payload("--payload-angle", args.payload_angle, len(current))
+            ats = _per_payload("--payload-at", args.payload_at, len(current))
+            if args.no_payload or args.payload is not None or angles or ats:
+                current = [
+                    Payload(p.force, angles[k] if angles else p.angle_deg, ats[k] if ats else p.at) for k, p in enumerate(current)
+                ]
+                changes["payloads"] = tuple(current)
+        return scene.replace(**changes) if changes else scene
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _fmt(values, digits: int = 3) -> str:
+    return ", ".join(f"{v:.{digits}f}" for v in values)
+
+
+def _solve_table(d: dict) -> str:
+    terms = ", ".join(f"{k} {v:.3f}" for k, v in d["energy_terms_nmm"].items())
+    loads = "; ".join(f"{p['force_n']:g} N at {p['angle_deg']:g} deg, s = {p['at']:g}" for p in d["payloads"]) or "none"
+    rows = [
+        ("scene", d["scene"]),
+        ("effects", ", ".join(d["effects"])),
+        ("payloads", loads),
+        ("pressure", f"{d['pressure_mpa']:.7f} MPa ({d['pressure_from']})"),
+        ("theta", f"({_fmt(d['theta_deg'], 2)}) deg"),
+        ("total angle", f"{d['total_angle_deg']:.3f} deg"),
+        ("tip x, y", f"{d['tip_mm'][0]:.3f}, {d['tip_mm'][1]:.3f} mm (orientation {d['tip_angle_deg']:.2f} deg)"),
+        ("energy", f"{d['energy_nmm']:.4f} N mm ({terms})"),
+        ("stability", f"{d['stability']} (Hessian eigenvalues {_fmt(d['eigenvalues'], 3)} N mm/rad^2)"),
+        ("solver", f"IPOPT {d['status']}, {d['iterations']} iterations in {d['steps']} solves, {d['solve_time_s']:.3f} s"),
+    ]
+    if d.get("message"):
+        rows.append(("NOT OK", d["message"]))
+    for note in d.get("notes", []):
+        rows.append(("note", note))
+    if d.get("figure"):
+        rows.append(("figure", f"wrote {d['figure']}"))
+    return "\n".join(f"{k:>12}: {v}" for k, v in rows)
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from esba.equilibrium import EquilibriumError, solve
+
+    from esba.equilibrium import SolverOptions
+
+    scene = _scene_from_args(args)
+    options = SolverOptions(max_iter=args.max_iter, continuation=not args.no_continuation)
+    try:
+        result = solve(scene, options)
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    data = result.to_dict()
+    data["scene"] = scene.describe()
+    plot = args.plot
+    if plot is None and args.scene is None and not args.no_plot:
+        plot = DEFAULT_SOLVE_FIGURE
+    if plot and not args.no_plot:
+        from esba.plots import save_figure, solve_figure
+
+        unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False), pressure=result.pressure)
+        data["figure"] = str(save_figure(solve_figure(result, unloaded), plot).resolve())
+    _emit(args, data, _solve_table)
+    if not result.ok:
+        print(f"esba: solve not ok: {result.message or result.status}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _add_solve(sub) -> None:
+    p = sub.add_parser("solve", help="solve a scene's equilibrium (no arguments: the paper's Table 2 case, n = 3)")
+    _add_scene_flags(p)
+    p.add_argument("--plot", metavar="FILE", help=f"write the deformed and unloaded shapes (default {DEFAULT_SOLVE_FIGURE} when no scene file is given)")
+    p.add_argument("--no-plot", action="store_true", help="write no figure")
+    p.add_argument("--max-iter", type=_positive_int, default=200, metavar="N", help="IPOPT iterations per solve (default 200)")
+    p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
+    p.set_defaults(func=_cmd_solve)
+
+
+def _stiffness_table(d: dict) -> str:
+    lines = [
+        f"secant stiffness K = F / delta from the unloaded state ({d['initial_angle_deg']:.2f} deg), "
+        f"P = {d['pressure_mpa']:.7f} MPa held, tip payload at {d['payload_angle_deg']:g} deg; n = {d['segments']}, {d['variant']}",
+        f"{'F (N)':>8} {'delta (mm)':>11} {'K (N/m)':>9} {'tip x, y (mm)':>18}",
+    ]
+    for f, dl, k, tip in zip(d["payloads_n"], d["displacement_mm"], d["stiffness_n_per_m"], d["tip_mm"]):
+        lines.append(f"{f:8.3f} {dl:11.3f} {k:9.3f} {tip[0]:8.2f}, {tip[1]:7.2f}")
+    t = d["tangent"]
+    lines.append(f"tangent at F = 0: horizontal {t['horizontal_n_per_m']:.3f} N/m, vertical {t['vertical_n_per_m']:.3f} N/m")
+    if t["matrix_n_per_m"] is not None:
+        m = t["matrix_n_per_m"]
+        lines.append(f"K_tip (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]")
+    else:
+        lines.append("K_tip: singular (one segment moves the tip along one direction only)")
+    for msg in d["messages"]:
+        lines.append(f"NOT OK: {msg}")
+    return "\n".join(lines)
+
+
+def _cmd_stiffness(args: argparse.Namespace) -> int:
+    from esba.equilibrium import EquilibriumError
+    from esba.scene import SceneError
+    from esba.stiffness import PAPER_FORCES, secant_stiffness
+
+    scene = _scene_from_args(args, payloads=False)
+    forces = tuple(args.payload) if args.payload else PAPER_FORCES
+    try:
+        result = secant_stiffness(scene, forces, angle_deg=args.payload_angle)
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    _emit(args, result.to_dict(), _stiffness_table)
+    if not result.ok:
+        print("esba: stiffness not ok: a solve failed or was not stable", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _add_stiffness(sub) -> None:
+    p = sub.add_parser("stiffness", help="secant stiffness of the tip (Section 4.4.3) and its tangent matrix")
+    _add_scene_flags(p, payloads=False)
+    p.add_argument("--payload", type=_float_arg, action="append", metavar="N", help="tip payload in N (repeatable; default 0.5, 1, 2)")
+    p.add_argument("--payload-angle", type=_float_arg, default=90.0, metavar="DEG", help="direction Omega of the payload (default 90, horizontal)")
+    p.set_defaults(func=_cmd_stiffness)
+
+
+def _pressure_table(d: dict) -> str:
+    rows = [("pressure", f"{d['pressure_mpa']:.7f} MPa"), ("method", d["method"]), ("target", json.dumps(d["target"]))]
+    if "residual" in d:
+        rows.append(("residual", f"{d['residual']:.3g}"))
+        rows.append(("theta", f"({_fmt(d['equilibrium']['theta_deg'], 2)}) deg"))
+        rows.append(("tip x, y", f"{_fmt(d['equilibrium']['tip_mm'])} mm"))
+    if d.get("message"):
+        rows.append(("note" if d.get("ok", True) else "NOT OK", d["message"]))
+    return "\n".join(f"{k:>10}: {v}" for k, v in rows)
+
+
+def _cmd_pressure(args: argparse.Namespace) -> int:
+    from esba.equilibrium import EquilibriumError, pressure_for_angle
+    from esba.scene import SceneError
+    from esba.stiffness import pressure_for_target
+
+    chosen = [a for a in ("target_angle", "total_angle", "tip_x", "tip_y") if getattr(args, a) is not None]
+    if args.target_angle is not None and len(chosen) > 1 or args.total_angle is not None and len(chosen) > 1:
+        raise UsageError("give one target: --target-angle, --total-angle, or --tip-x/--tip-y")
+    if not chosen:
+        raise UsageError("pressure needs a target: --target-angle DEG (unloaded), --total-angle DEG or --tip-x/--tip-y MM (under the payloads)")
+    if args.pressure is not None:
+        raise UsageError("--pressure is what this command finds: give a target instead")
+    keep_target, args.target_angle = args.target_angle, None
+    scene = _scene_from_args(args)
+    try:
+        if keep_target is not None:
+            scene = scene.replace(target_angle_deg=keep_target)
+            p = pressure_for_angle(scene)
+            data = {
+                "ok": True,
+                "pressure_mpa": p,
+                "method": "closed form (U is linear in P; unloaded, uniform curvature)",
+                "target": {"target_angle_deg": keep_target},
+                "segments": scene.segments,
+                "variant": scene.variant,
+            }
+        else:
+            if not scene.payloads:
+                raise UsageError("--total-angle/--tip-x/--tip-y are targets under payloads: add --payload N (or use --target-angle)")
+            if args.total_angle is not None:
+                r = pressure_for_target(scene, total_angle_deg=args.total_angle)
+            else:
+                r = pressure_for_target(scene, tip_mm=(args.tip_x, args.tip_y))
+            data = r.to_dict()
+            data["method"] = "NLP over (theta, P) with dU/dtheta = 0"
+            data["segments"] = scene.segments
+            data["variant"] = scene.variant
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    _emit(args, data, _pressure_table)
+    if not data["ok"]:
+        print(f"esba: pressure not found: {data.get('message', '')}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _add_pressure(sub) -> None:
+    p = sub.add_parser("pressure", help="the pressure for a target angle (closed form) or a loaded target (NLP)")
+    _add_scene_flags(p)
+    p.add_argument("--total-angle", type=_float_arg, metavar="DEG", help="target total angle under the payloads")
+    p.add_argument("--tip-x", type=_float_arg, metavar="MM", help="target tip x under the payloads")
+    p.add_argument("--tip-y", type=_float_arg, metavar="MM", help="target tip y under the payloads")
+    p.set_defaults(func=_cmd_pressure)
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from esba import validation
+
+    rows = validation.table2()
+    if args.check:
+        stale = validation.check_page(args.out, rows)
+        if stale:
+            print(f"esba: {args.out or validation.DOC_PATH} is stale: run `esba validate` and commit it", file=sys.stderr)
+            return EXIT_FAILED
+    else:
+        path = validation.write_page(args.out, rows)
+    data = {"passed": all(r.passed for r in rows), "rows": [r.to_dict() for r in rows]}
+    if not args.check:
+        data["page"] = str(path)
+    _emit(args, data, lambda d: validation.summary(rows) + (f"\nwrote {d['page']}" if "page" in d else "\npage is up to date"))
+    return EXIT_OK if data["passed"] else EXIT_FAILED
+
+
+def _add_validate(sub) -> None:
+    p = sub.add_parser("validate", help="compare with the paper's Table 2 (n = 1..4); write docs/validation.md")
+    p.add_argument("--check", action="store_true", help="write nothing; exit 1 when the committed page is stale")
+    p.add_argument("--out", default=None, help="page to write (default docs/validation.md)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_cmd_validate)
+
+
+# ---------------------------------------------------------------------------------------------
+# esba bench
+
+
+def _cmd_bench_generation(args: argparse.Namespace) -> int:
+    from esba import bench
+
+    ns = [n for n in bench.GENERATION_NS if n <= args.max_n]
+
+    def progress(n):
+        print(f"  n = {n} done", file=sys.stderr)
+
+    rows = bench.generation(ns, repeat=args.repeat, naive=not args.no_naive, progress=None if args.json else progress)
+    data = {"rows": [r.__dict__ for r in rows], "growth_exponent": bench.growth_exponent([r.n for r in rows], [r.total_s for r in rows])}
+    _emit(args, data, lambda d: bench.generation_table(rows))
+    return EXIT_OK
+
+
+def _add_bench(sub) -> None:
+    p = sub.add_parser("bench", help="benchmarks: tables of medians over repeated runs")
+    bsub = p.add_subparsers(dest="bench", parser_class=_Parser, required=True)
+    g = bsub.add_parser("generation", help="generation time and size against n; per-call time of U, gradient, Hessian")
+    g.add_argument("--max-n", type=_segments, default=100, help="largest n (default 100)")
+    g.add_argument("--repeat", type=_segments, default=3, help="runs per n, median reported (default 3)")
+    g.add_argument("--no-naive", action="store_true", help="skip the naive SymPy route")
+    g.add_argument("--json", action="store_true")
+    g.set_defaults(func=_cmd_bench_generation)
+
+
+# ---------------------------------------------------------------------------------------------
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [_add_generate, _add_audit]
+COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_stiffness, _add_pressure, _add_validate, _add_bench]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -44,6 +44,7 @@ __all__ = [
     "Equilibrium",
     "EquilibriumError",
     "solve",
+    "evaluate",
     "pressure_for_angle",
     "stability_verdict",
     "STABILITY",
@@ -97,7 +98,12 @@ class SolverOptions:
     load_steps : int
         Steps of the payload and weight ramp from the unloaded state.
     max_halvings : int
-        How often a failed continuation step may be halved before the solve is reported failed.
+        How often a continuation step may be halved (after a failed solve, or a jump larger than
+        ``max_jump_deg``) before the solve is reported failed (or the jump accepted and noted).
+    max_jump_deg : float
+        Largest change of any segment angle in one continuation step, degrees, before the step is
+        halved; a jump that persists at the smallest step (a snap-through, or a very steep path)
+        is followed and noted.
     polish : bool
         Newton steps on the exact Hessian after IPOPT (stationarity to round-off).
     stationarity_tol : float
@@ -125,6 +131,7 @@ class SolverOptions:
     pressure_steps: int = 4
     load_steps: int = 4
     max_halvings: int = 6
+    max_jump_deg: float = 15.0
     polish: bool = True
     stationarity_tol: float = 1e-7
     critical_tol: float = 1e-9
@@ -141,6 +148,7 @@ class SolverOptions:
         _check_int("pressure_steps", self.pressure_steps, 1)
         _check_int("load_steps", self.load_steps, 1)
         _check_int("max_halvings", self.max_halvings, 0)
+        _check_pos("max_jump_deg", self.max_jump_deg)
         _check_pos("stationarity_tol", self.stationarity_tol)
         _check_pos("critical_tol", self.critical_tol, 1.0)
         _check_int("samples_per_segment", self.samples_per_segment, 1)
@@ -216,6 +224,8 @@ class Equilibrium:
         Wall time of the whole solve, s.
     message : str
         Why the result is not ok (empty when it is).
+    notes : tuple of str
+        What happened on the way that the result does not show (a jump on the load path).
     """
 
     scene: Scene
@@ -235,6 +245,7 @@ class Equilibrium:
     steps: int
     solve_time_s: float
     message: str = ""
+    notes: tuple[str, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -287,6 +298,7 @@ class Equilibrium:
             "eigenvalues": [float(v) for v in self.eigenvalues],
             "status": self.status,
             "message": self.message,
+            "notes": list(self.notes),
             "iterations": self.iterations,
             "steps": self.steps,
             "gradient_norm": self.gradient_norm,
@@ -443,6 +455,90 @@ def _near_bound(theta: np.ndarray, lbx: np.ndarray) -> bool:
     return bool(np.any(theta - lbx <= 1e-7 * np.maximum(1.0, np.abs(lbx))))
 
 
+def _resolve_pressure(scene: Scene, pressure: float | None) -> tuple[float, np.ndarray | None]:
+    """The pressure to use and, when it comes from the target angle, the exact unloaded state."""
+    if pressure is not None:
+        return float(pressure), None
+    if scene.pressure is not None:
+        return scene.pressure, None
+    p = pressure_for_angle(scene)
+    return p, np.full(scene.segments, math.radians(scene.target_angle_deg) / scene.segments)
+
+
+def evaluate(
+    scene: Scene,
+    theta: Sequence[float],
+    pressure: float | None = None,
+    options: SolverOptions | None = None,
+    *,
+    status: str = "Evaluated",
+    success: bool = True,
+    iterations: int = 0,
+    steps: int = 0,
+    solve_time_s: float = 0.0,
+    message: str = "",
+    notes: Sequence[str] = (),
+) -> Equilibrium:
+    """An :class:`Equilibrium` for given angles: energy, tip, centre-line, stationarity and stability.
+
+    :func:`solve` ends here; call it directly to assess angles found some other way (e.g. by an
+    NLP that only asks for dU/dtheta = 0). ``success`` is withdrawn when theta is on the domain
+    boundary or not stationary within ``options.stationarity_tol``.
+
+    Examples
+    --------
+    >>> from esba.scene import Scene, Payload
+    >>> column = Scene(pressure=0.0, payloads=(Payload(20.0, 180.0),))   # a 20 N push up the axis
+    >>> r = evaluate(column, [0.0, 0.0, 0.0])
+    >>> r.stability, r.ok
+    ('unstable', False)
+    """
+    options = DEFAULT_OPTIONS if options is None else options
+    model = scene.model()
+    pressure, _ = _resolve_pressure(scene, pressure)
+    theta = np.asarray(theta, dtype=float).ravel()
+    if theta.shape != (scene.segments,) or not np.all(np.isfinite(theta)):
+        raise SolverOptionsError(f"theta has shape {theta.shape}: expected {scene.segments} finite angles (rad)")
+    full = scene.parameters(pressure)
+    lbx = model.lower_bounds(full)
+    pv = model.param_vector(full)
+    if np.any(theta < lbx):
+        raise EquilibriumError(f"theta={np.degrees(theta).round(3).tolist()} deg lies outside the model's domain (Eq. 10)")
+    grad = model.gradient(theta, pv)
+    gnorm = float(np.max(np.abs(grad)))
+    eig = np.sort(np.linalg.eigvalsh(model.hessian(theta, pv)))
+    verdict = stability_verdict(eig, options.critical_tol)
+    if success and _near_bound(theta, lbx):
+        success, status = False, "At_Bound"
+        message = "the solve stopped on the model's domain boundary (Eq. 10: the chamber closes): not an equilibrium"
+    elif success and gnorm > options.stationarity_tol:
+        success, status = False, "Not_Stationary"
+        message = f"max |dU/dtheta| = {gnorm:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}"
+    if success and verdict != "stable":
+        message = f"the equilibrium is {verdict}: smallest Hessian eigenvalue {eig[0]:.3g} N mm/rad^2 (largest {eig[-1]:.3g})"
+    cl = model.centreline(theta, full["L"], samples=scene.segments * options.samples_per_segment + 1)
+    return Equilibrium(
+        scene=scene,
+        model=model,
+        pressure=pressure,
+        theta=theta,
+        tip=model.tip(theta, full["L"]),
+        centreline=cl,
+        energy=model.energy(theta, pv),
+        terms=model.energy_terms(theta, pv),
+        gradient_norm=gnorm,
+        eigenvalues=eig,
+        stability=verdict,
+        status=status,
+        success=success,
+        iterations=iterations,
+        steps=steps,
+        solve_time_s=solve_time_s,
+        message=message,
+        notes=tuple(notes),
+    )
+
+
 def solve(
     scene: Scene,
     options: SolverOptions | None = None,
@@ -467,31 +563,28 @@ def solve(
     -------
     Equilibrium
         Check :attr:`Equilibrium.ok` (or call :meth:`Equilibrium.check`): a failed or unstable
-        solve is returned with ``ok == False`` and a ``message``.
+        solve is returned with ``ok == False`` and a ``message``. A jump on the load path (the
+        angles change by more than ``options.max_jump_deg`` however small the step: a
+        snap-through, or a very steep path) is followed, as the actuator would, and recorded in
+        ``notes``.
     """
     options = DEFAULT_OPTIONS if options is None else options
     if not isinstance(options, SolverOptions):
         raise SolverOptionsError(f"options={options!r}: expected a SolverOptions")
+    model = scene.model()  # loaded (or generated) before the clock starts
     t_start = time.perf_counter()
-    model = scene.model()
     n = scene.segments
-    known_unloaded: np.ndarray | None = None
-    if pressure is None:
-        if scene.pressure is not None:
-            pressure = scene.pressure
-        else:
-            pressure = pressure_for_angle(scene)
-            known_unloaded = np.full(n, math.radians(scene.target_angle_deg) / n)
-    pressure = float(pressure)
+    pressure, known_unloaded = _resolve_pressure(scene, pressure)
     full = scene.parameters(pressure)
     lbx = model.lower_bounds(full)
     pv_full = model.param_vector(full)
     loaded = bool(scene.payloads) or scene.gravity
+    max_jump = math.radians(options.max_jump_deg)
 
     iterations = 0
     steps = 0
     message = ""
-    status_override = ""
+    notes: list[str] = []
 
     def attempt(theta_start: np.ndarray, pv: np.ndarray) -> _Attempt:
         nonlocal iterations, steps
@@ -501,21 +594,32 @@ def solve(
         return a
 
     def ramp(theta: np.ndarray, pv_at, what: str, n_steps: int) -> tuple[np.ndarray, str]:
-        """Follow factor 0 -> 1 from theta; return the state at 1 or the last good one and a message."""
-        lam, dlam, halvings = 0.0, 1.0 / n_steps, 0
+        """Follow factor 0 -> 1 from theta; return the state at 1 (or the last good one and why not)."""
+        base = 1.0 / n_steps
+        smallest = base / 2**options.max_halvings
+        lam, dlam = 0.0, base
         while lam < 1.0:
             target = min(1.0, lam + dlam)
             pv = pv_at(target)
             a = attempt(theta, pv)
-            if _accepted(model, options, a, pv, lbx) and not _near_bound(a.theta, lbx):
+            good = _accepted(model, options, a, pv, lbx) and not _near_bound(a.theta, lbx)
+            jump = float(np.max(np.abs(a.theta - theta))) if good else math.inf
+            if good and (jump <= max_jump or dlam <= smallest * (1 + 1e-9)):
+                if jump > max_jump:
+                    notes.append(
+                        f"the angles jump by up to {math.degrees(jump):.1f} deg as the {what} goes from "
+                        f"{100 * lam:.4g}% to {100 * target:.4g}% of its value: a snap-through, or a path "
+                        "too steep to follow in the smallest continuation step"
+                    )
                 theta, lam = a.theta, target
+                dlam = min(base, 2.0 * dlam)
                 continue
-            halvings += 1
-            if halvings > options.max_halvings:
+            if dlam <= smallest * (1 + 1e-9):
+                reason = a.status if not a.success else ("a domain bound" if _near_bound(a.theta, lbx) else "no stable equilibrium")
                 return theta, (
-                    f"the {what} ramp from the known state stopped at {100 * lam:.3g}% "
-                    f"(step to {100 * target:.3g}% gave {a.status}): the branch reached physically "
-                    "is lost there (a limit point or snap-through) or the solver cannot follow it"
+                    f"the {what} ramp from the known state stopped at {100 * lam:.4g}% "
+                    f"(the step to {100 * target:.4g}% gave {reason}): the branch followed is lost there "
+                    "or the solver cannot follow it"
                 )
             dlam /= 2.0
         return theta, ""
@@ -542,52 +646,24 @@ def solve(
             theta, message = ramp(
                 theta, lambda lam: model.param_vector(scene.parameters(pressure, load_factor=lam)), "load", options.load_steps
             )
-        if message:
-            status_override = "Continuation_Failed"
 
     final = attempt(theta, pv_full)
-    if status_override:
-        # report the state at the full load from the last good one, but not as an answer
-        success = False
+    if message:  # continuation failed: report the full-load solve from the last good state, not as an answer
+        status, success = "Continuation_Failed", False
     else:
-        success = final.success
-    theta = final.theta
-    grad = model.gradient(theta, pv_full)
-    gnorm = float(np.max(np.abs(grad)))
-    eig = np.sort(np.linalg.eigvalsh(model.hessian(theta, pv_full)))
-    verdict = stability_verdict(eig, options.critical_tol)
-    status = status_override or final.status
-    if success and _near_bound(theta, lbx):
-        success, status = False, "At_Bound"
-        message = "the solve stopped on the model's domain boundary (Eq. 10): not an equilibrium"
-    elif success and gnorm > options.stationarity_tol:
-        success, status = False, "Not_Stationary"
-        message = f"max |dU/dtheta| = {gnorm:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}"
-    elif not success and not message:
-        message = f"IPOPT did not converge: {final.status}"
-    if success and verdict != "stable":
-        message = (
-            f"the equilibrium is {verdict}: smallest Hessian eigenvalue {eig[0]:.3g} N mm/rad^2 "
-            f"(largest {eig[-1]:.3g})"
-        )
-    s = np.linspace(0.0, 1.0, n * options.samples_per_segment + 1)
-    cl = model.centreline(theta, full["L"], samples=len(s))
-    return Equilibrium(
-        scene=scene,
-        model=model,
-        pressure=pressure,
-        theta=theta,
-        tip=model.tip(theta, full["L"]),
-        centreline=cl,
-        energy=model.energy(theta, pv_full),
-        terms=model.energy_terms(theta, pv_full),
-        gradient_norm=gnorm,
-        eigenvalues=eig,
-        stability=verdict,
+        status, success = final.status, final.success
+        if not success:
+            message = f"IPOPT did not converge: {final.status}"
+    return evaluate(
+        scene,
+        final.theta,
+        pressure,
+        options,
         status=status,
         success=success,
         iterations=iterations,
         steps=steps,
         solve_time_s=time.perf_counter() - t_start,
         message=message,
+        notes=notes,
     )
