@@ -450,9 +450,40 @@ def _add_bench(sub) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
+# esba figures
+
+
+def _cmd_figures(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from esba import figures
+    from esba.equilibrium import EquilibriumError
+
+    out = figures.DEFAULT_OUT if args.out is None else args.out
+    try:
+        written = figures.write_all(out, args.only)
+    except figures.FigureError as exc:
+        raise UsageError(f"--only: {exc}") from None
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    data = {"out": str(Path(out).resolve()), "figures": {name: str(path.resolve()) for name, path in written.items()}}
+    _emit(args, data, lambda d: "\n".join(f"wrote {path}" for path in d["figures"].values()))
+    return EXIT_OK
+
+
+def _add_figures(sub) -> None:
+    p = sub.add_parser("figures", help="regenerate the paper-style figures (Figs. 7b, 8c, 10, 11, ...) as PNG files")
+    p.add_argument("--out", metavar="DIR", default=None, help="folder to write (default docs/figures/)")
+    p.add_argument("--only", metavar="NAME", nargs="+", action="extend", default=None, help="write only these figures (e.g. fig7b fig11)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_cmd_figures)
+
+
+# ---------------------------------------------------------------------------------------------
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_stiffness, _add_pressure, _add_validate, _add_bench]
+COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_stiffness, _add_pressure, _add_validate, _add_bench, _add_figures]
 
 
 def build_parser() -> argparse.ArgumentParser:
