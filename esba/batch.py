@@ -424,7 +424,7 @@ def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
     return h.hexdigest()[:20]
 
 
-_FUNCTIONS: dict[tuple, tuple[ca.Function, str, float, float]] = {}
+_FUNCTIONS: dict[tuple, ca.Function] = {}
 
 
 def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) -> tuple[ca.Function, str, float, float]:
@@ -448,25 +448,27 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
         elif size < options.compile_min:
             why = f"compile='auto' and {size} elements < compile_min = {options.compile_min}"
     compiled = not why
+    if compiled:
+        backend = f"compiled C ({Path(cc).name} -O2), cached {lib}"
+    else:
+        backend = f"interpreted (CasADi virtual machine, 2 threads): {why}"
     cached = _FUNCTIONS.get((key, compiled))
     if cached is not None:
-        return cached[0], cached[1], 0.0, 0.0
+        return cached, backend, 0.0, 0.0
     t0 = time.perf_counter()
     element = _element_function(model, options, angle_mode)
     build_s = time.perf_counter() - t0
     compile_s = 0.0
     if not compiled:
         fun = element.map(options.chunk, "thread", 2)
-        backend = f"interpreted (CasADi virtual machine, 2 threads): {why}"
     else:
         mapped = element.map(f"esba_batch_{key}", "serial", options.chunk, [], [])
-        backend = f"compiled C ({Path(cc).name} -O2), cached {lib}"
         if not lib.exists():
             t1 = time.perf_counter()
             _compile(mapped, lib, cc)
             compile_s = time.perf_counter() - t1
         fun = ca.external(mapped.name(), str(lib))
-    _FUNCTIONS[(key, compiled)] = (fun, backend, build_s, compile_s)
+    _FUNCTIONS[(key, compiled)] = fun
     return fun, backend, build_s, compile_s
 
 

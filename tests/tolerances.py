@@ -19,3 +19,11 @@ FD_ATOL = 1e-5
 #: the paper's Table 2 (issue 3): segment and total angles in degrees, tip in mm
 TABLE2_ANGLE_DEG = 0.15
 TABLE2_TIP_MM = 0.2
+#: batch vs IPOPT (issue 5): both stop at max |dU/dtheta| <= 1e-7 N mm/rad on Hessians of
+#: O(10-1000) N mm/rad^2, so the angles of the same equilibrium agree to about 1e-8 rad
+BATCH_THETA_ATOL = 1e-6
+#: an equilibrium counts as stationary (the solver's own acceptance, SolverOptions.stationarity_tol)
+EQUILIBRIUM_GRAD_ATOL = 1e-7
+#: continuity in the loads (issue 5): tip change per load step that is not a jump, mm, for the
+#: small steps of the property tests (0.01 N); a jump is reported by the load path itself
+CONTINUITY_TIP_MM = 1.0

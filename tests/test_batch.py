@@ -1,0 +1,133 @@
+"""The batch solver (issue 5): same answers as esba.equilibrium.solve, every element accounted for.
+
+Speed is measured by ``esba bench batch``, not here.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from esba.batch import BatchOptions, BatchOptionsError, compiler, solve_arrays, solve_scenes
+from esba.equilibrium import solve
+from esba.model import load_model
+from esba.scene import Actuator, Payload, Scene
+
+from .tolerances import BATCH_THETA_ATOL, EQUILIBRIUM_GRAD_ATOL
+
+INTERPRETED = BatchOptions(compile="never")
+
+
+def _scenes() -> list[Scene]:
+    """Pressures and target angles, payloads in several directions and places, other geometries."""
+    out = []
+    for p in (0.0, 0.03, 0.12, 0.2):
+        for f, om in ((0.0, 90.0), (1.0, 90.0), (2.0, 0.0), (1.5, 225.0)):
+            out.append(Scene(pressure=p, payloads=(Payload(f, om),)))
+    out.append(Scene(target_angle_deg=90.0, payloads=(Payload(2.0, 90.0),)))
+    out.append(Scene(target_angle_deg=45.0, payloads=(Payload(1.0, 300.0, at=0.5),)))
+    out.append(Scene(actuator=Actuator(r2=1.0, d=0.0, rho_deg=40.0), pressure=0.2, payloads=(Payload(0.5, 60.0),)))
+    out.append(Scene(actuator=Actuator(r2=6.0, d=1.5, rho_deg=0.0), pressure=0.05, payloads=(Payload(1.0, 90.0),)))
+    return out
+
+
+def _compare(scenes, result):
+    for i, s in enumerate(scenes):
+        ref = solve(s)
+        assert ref.ok == bool(result.ok[i]), (i, s.describe(), ref.message, result.messages[i])
+        if ref.ok:
+            np.testing.assert_allclose(result.theta[i], ref.theta, atol=BATCH_THETA_ATOL, err_msg=s.describe())
+            np.testing.assert_allclose(result.tip[i], ref.tip, atol=1e3 * BATCH_THETA_ATOL)
+            assert result.pressure[i] == pytest.approx(ref.pressure, rel=1e-12)
+
+
+def test_batch_agrees_with_ipopt_solve():
+    scenes = _scenes()
+    r = solve_scenes(scenes, INTERPRETED)
+    assert r.ok.all(), [m for m in r.messages if m]
+    assert (r.gradient_norm <= EQUILIBRIUM_GRAD_ATOL).all()
+    assert set(r.method) <= {"newton", "newton-retry"}
+    _compare(scenes, r)
+
+
+def test_retry_and_ipopt_fallback_agree_too():
+    # a deliberately starved fast path: one load step, one Newton iteration, nothing after
+    starved = BatchOptions(compile="never", load_steps=1, newton_steps=1, final_steps=0)
+    scenes = _scenes()[4:12]
+    r = solve_scenes(scenes, starved)
+    assert "newton-retry" in set(r.method)
+    _compare(scenes, r)
+    r = solve_scenes(scenes, BatchOptions(compile="never", load_steps=1, newton_steps=1, final_steps=0, retry=False))
+    assert "ipopt" in set(r.method)
+    _compare(scenes, r)
+
+
+def test_unsolved_elements_say_why_and_are_never_silent():
+    starved = BatchOptions(compile="never", load_steps=1, newton_steps=1, final_steps=0, retry=False, fallback=False)
+    r = solve_scenes(_scenes(), starved)
+    assert not r.ok.all()
+    for i in range(len(r)):
+        if r.ok[i]:
+            assert r.messages[i] == "" and np.all(np.isfinite(r.theta[i]))
+        else:
+            assert "IPOPT fallback not run (fallback=False)" in r.messages[i]
+            assert r.method[i] == "none"
+    # without scenes there is nothing to fall back to, and the message says so
+    m = load_model(3)
+    v = dict(L=135.0, r1=8.0, r2=3.0, d=4.0, rho=math.radians(10), E=0.54, P=0.2, F1=[0.0, 3.0], Omega1=math.pi / 2, s1=1.0)
+    r = solve_arrays(m, v, options=BatchOptions(compile="never", load_steps=1, newton_steps=1, final_steps=0, retry=False))
+    assert not r.ok[1]
+    assert all("no scene given" in msg for msg, ok in zip(r.messages, r.ok) if not ok)
+
+
+def test_mixed_effects_keep_their_order():
+    scenes = [
+        Scene(pressure=0.1),
+        Scene(pressure=0.1, payloads=(Payload(1.0),)),
+        Scene(pressure=0.1, gravity=True),
+        Scene(target_angle_deg=60.0, payloads=(Payload(1.0),)),
+        Scene(pressure=0.1, payloads=(Payload(1.0), Payload(0.5, 0.0, at=0.5))),
+    ]
+    r = solve_scenes(scenes, INTERPRETED)
+    assert r.ok.all()
+    _compare(scenes, r)
+
+
+@pytest.mark.skipif(compiler() is None, reason="no C compiler ($CC, gcc, cc) on this machine")
+def test_compiled_equals_interpreted():
+    scenes = _scenes()[:8]
+    a = solve_scenes(scenes, BatchOptions(compile="always", chunk=4))
+    b = solve_scenes(scenes, BatchOptions(compile="never", chunk=4))
+    assert a.backend.startswith("compiled C") and b.backend.startswith("interpreted")
+    np.testing.assert_allclose(a.theta, b.theta, atol=1e-12)
+
+
+def test_auto_does_not_compile_small_batches():
+    r = solve_scenes(_scenes()[:2], BatchOptions(compile="auto", compile_min=10_000))
+    if compiler() is None:
+        assert "no C compiler" in r.backend
+    elif not r.backend.startswith("compiled"):  # unless this library is already cached
+        assert "compile_min" in r.backend
+
+
+def test_progress_bar_and_counts(capsys):
+    r = solve_scenes(_scenes()[:3], BatchOptions(compile="never", progress=True))
+    assert r.counts()["ok"] == 3 and r.counts()["not_ok"] == 0
+    assert r.per_equilibrium_us() > 0
+    assert capsys.readouterr().out == ""  # the bar goes to stderr, nothing to stdout
+
+
+def test_bad_batches_are_refused():
+    with pytest.raises(BatchOptionsError, match="empty"):
+        solve_scenes([])
+    with pytest.raises(BatchOptionsError, match="segment counts"):
+        solve_scenes([Scene(segments=2), Scene(segments=3)])
+    with pytest.raises(BatchOptionsError, match="chunk=0"):
+        BatchOptions(chunk=0)
+    with pytest.raises(BatchOptionsError, match="max_step"):
+        BatchOptions(max_step=-1.0)
+    m = load_model(3)
+    with pytest.raises(KeyError, match="needs parameters"):
+        solve_arrays(m, {"L": 135.0})
