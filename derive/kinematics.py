@@ -42,7 +42,7 @@ def skew(w: sp.Matrix) -> sp.Matrix:
     """The hat map of a 3-vector: ``skew(w) @ v == w x v``.
 
     (The paper's Appendix (a) prints -omega_1 in row 1, column 2; the correct entry is -omega_3:
-    see ``paper.HAT_OMEGA_PRINTED`` and the audit.)
+    see ``paper.hat_omega_printed`` and the audit.)
     """
     return sp.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
 
