@@ -126,6 +126,9 @@ class BatchOptions:
         Relative eigenvalue threshold of the stability verdict (as ``SolverOptions``).
     progress : bool
         Show a tqdm progress bar on stderr.
+    cache : str or None
+        Folder of the compiled libraries (default: ``compiled/`` in esba's cache, beside
+        :func:`esba.model.cache_dir`).
 
     Examples
     --------
@@ -150,6 +153,7 @@ class BatchOptions:
     stationarity_tol: float = DEFAULT_OPTIONS.stationarity_tol
     critical_tol: float = DEFAULT_OPTIONS.critical_tol
     progress: bool = False
+    cache: str | None = None
 
     def __post_init__(self) -> None:
         if self.compile not in _COMPILE_MODES:
@@ -164,6 +168,8 @@ class BatchOptions:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise BatchOptionsError(f"{name}={v!r}: expected a finite number > 0")
+        if self.cache is not None and not isinstance(self.cache, (str, os.PathLike)):
+            raise BatchOptionsError(f"cache={self.cache!r}: expected a folder path or None")
         for name in ("retry", "fallback", "progress"):
             if not isinstance(getattr(self, name), bool):
                 raise BatchOptionsError(f"{name}={getattr(self, name)!r}: expected True or False")
@@ -358,6 +364,7 @@ def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> 
     n, npar = model.n, len(model.parameters)
     idx = _indices(model)
     step = _newton_step(model, options.max_step)
+    free_step = _newton_step(model, 1e6)  # the unloaded problem is nearly quadratic: no limit
     th = ca.SX.sym("theta", n)
     ps = ca.SX.sym("p", npar)
     gh = ca.Function(
@@ -380,7 +387,7 @@ def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> 
         for k in range(1, options.pressure_steps + 1):
             pk = _scaled(p_full, idx, k / options.pressure_steps, 0.0)
             for _ in range(options.newton_steps):
-                x = step(x, pk)
+                x = free_step(x, pk)
     if loaded:
         for k in range(1, options.load_steps + 1):
             pk = _scaled(p_full, idx, 1.0, k / options.load_steps)
@@ -411,7 +418,9 @@ def compiler() -> str | None:
     return None
 
 
-def _compiled_dir() -> Path:
+def _compiled_dir(options: BatchOptions) -> Path:
+    if options.cache is not None:
+        return Path(options.cache)
     return cache_dir().parent.parent / "compiled"
 
 
@@ -433,7 +442,7 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
     Returns the Function, a backend description, the build time and the compile time (s).
     """
     key = _key(model, options, angle_mode)
-    lib = _compiled_dir() / f"esba_batch_{key}.so"
+    lib = _compiled_dir(options) / f"esba_batch_{key}.so"
     cc = compiler() if options.compile != "never" else None
     if options.compile == "always" and cc is None:
         raise BatchOptionsError("compile='always' but no C compiler was found ($CC, gcc, cc): install gcc or use compile='auto'")
@@ -452,7 +461,7 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
         backend = f"compiled C ({Path(cc).name} -O2), cached {lib}"
     else:
         backend = f"interpreted (CasADi virtual machine, 2 threads): {why}"
-    cached = _FUNCTIONS.get((key, compiled))
+    cached = _FUNCTIONS.get((key, compiled, str(lib)))
     if cached is not None:
         return cached, backend, 0.0, 0.0
     t0 = time.perf_counter()
@@ -468,7 +477,7 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
             _compile(mapped, lib, cc)
             compile_s = time.perf_counter() - t1
         fun = ca.external(mapped.name(), str(lib))
-    _FUNCTIONS[(key, compiled)] = fun
+    _FUNCTIONS[(key, compiled, str(lib))] = fun
     return fun, backend, build_s, compile_s
 
 

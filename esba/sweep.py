@@ -1,0 +1,481 @@
+"""Grid sweeps over pressure, payload and geometry, solved as one batch (:mod:`esba.batch`).
+
+:func:`sweep` takes a base scene and values for any of the axes ``pressure`` (MPa), ``payload``
+(N, one payload at the base scene's first payload's direction and point, else horizontal at the
+tip), ``payload_angle`` (degrees), ``r2`` and ``d`` (mm), and solves every point of their
+Cartesian product. Geometries outside the design space (r2 + d >= r1) are rows marked
+``infeasible`` and not solved; every other row is ok or says why not.
+
+:func:`load_path` follows one scene's payload from 0 to its full magnitude in small steps, each
+warm-started from the last, and reports where the path jumps (a snap-through) instead of
+connecting the two branches silently.
+
+:func:`fig12` draws the paper's Fig. 12: the bending angle against r2 for d = 0, 2, 4, 6 mm and
+against d for r2 = 2, 4, 6 mm, at rho = 10 degrees and P = 0.2 MPa without payload.
+
+Examples
+--------
+>>> from esba.scene import Scene
+>>> s = sweep(Scene(pressure=0.1), r2=[2.0, 3.0, 5.0], d=[2.0, 4.0], options=BatchOptions(compile="never"))
+>>> s.shape, int(s.ok.sum()), s.status.tolist()
+((3, 2), 5, ['ok', 'ok', 'ok', 'ok', 'ok', 'infeasible'])
+>>> s.total_angle_deg[:2].round(1).tolist()
+[34.8, 37.2]
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from .batch import BatchOptions, BatchResult, solve_arrays
+from .equilibrium import SolverOptions, solve
+from .scene import Payload, Scene, SceneError
+
+__all__ = ["AXES", "SweepResult", "LoadPath", "sweep", "load_path", "fig12", "parse_values", "SweepError"]
+
+#: The axes of a sweep, in the order of the grid's dimensions, with their units.
+AXES: dict[str, str] = {"pressure": "MPa", "payload": "N", "payload_angle": "deg", "r2": "mm", "d": "mm"}
+
+
+class SweepError(ValueError):
+    """A sweep that cannot be set up: the message names the axis and the value."""
+
+
+def parse_values(text: str) -> list[float]:
+    """Axis values from ``"a:b:k"`` (k evenly spaced values from a to b) or ``"v1,v2,..."``.
+
+    Examples
+    --------
+    >>> parse_values("0:0.2:5")
+    [0.0, 0.05, 0.1, 0.15, 0.2]
+    >>> parse_values("2,4,6")
+    [2.0, 4.0, 6.0]
+    >>> parse_values("1:2")
+    Traceback (most recent call last):
+    ...
+    esba.sweep.SweepError: '1:2': expected start:stop:count (count >= 1) or a comma-separated list of numbers
+    """
+    msg = f"{text!r}: expected start:stop:count (count >= 1) or a comma-separated list of numbers"
+    try:
+        if ":" in text:
+            parts = text.split(":")
+            if len(parts) != 3:
+                raise SweepError(msg)
+            a, b, k = float(parts[0]), float(parts[1]), int(parts[2])
+            if k < 1:
+                raise SweepError(msg)
+            values = [a] if k == 1 else [float(v) for v in np.linspace(a, b, k)]
+        else:
+            values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise SweepError(msg) from None
+    if not values or not all(math.isfinite(v) for v in values):
+        raise SweepError(msg)
+    return [round(v, 12) for v in values]
+
+
+@dataclass(frozen=True, eq=False)
+class SweepResult:
+    """Every point of a sweep grid: the axes, the status and the equilibrium of each point.
+
+    Attributes
+    ----------
+    base : Scene
+        The scene the grid varies.
+    axes : dict
+        Axis name -> values, for the axes swept (in :data:`AXES` order).
+    points : dict
+        Axis name -> value of every point (flattened grid, C order), for every axis of
+        :data:`AXES` (fixed ones repeat the base scene's value; ``payload`` 0 without payload).
+    status : ndarray of str
+        ``ok``, ``infeasible`` (geometry outside the design space, not solved) or ``not ok``.
+    messages : tuple of str
+        Why a point is not ok (empty when it is).
+    batch : BatchResult or None
+        The solves of the feasible points (None when there is none).
+    """
+
+    base: Scene
+    axes: dict[str, list[float]]
+    points: dict[str, np.ndarray]
+    status: np.ndarray
+    messages: tuple[str, ...]
+    pressure: np.ndarray
+    theta: np.ndarray
+    tip: np.ndarray
+    stability: np.ndarray
+    method: np.ndarray
+    batch: BatchResult | None = field(repr=False)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """The grid's shape, one entry per swept axis."""
+        return tuple(len(v) for v in self.axes.values())
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Converged and stable, per point (flattened)."""
+        return self.status == "ok"
+
+    @property
+    def total_angle_deg(self) -> np.ndarray:
+        """Total bending angle per point, degrees (NaN where infeasible: see :attr:`status`)."""
+        return np.degrees(np.sum(self.theta, axis=1))
+
+    def grid(self, values: np.ndarray) -> np.ndarray:
+        """A flattened per-point array reshaped to the grid."""
+        return np.asarray(values).reshape(self.shape)
+
+    def rows(self) -> list[dict[str, Any]]:
+        """One dict per point: the axes, status, angles (degrees), tip (mm), solver facts."""
+        out = []
+        n = self.theta.shape[1]
+        for i in range(len(self.status)):
+            feasible = self.status[i] != "infeasible"
+            row: dict[str, Any] = {
+                "pressure_mpa": float(self.pressure[i]) if feasible else float(self.points["pressure"][i]),
+                "payload_n": float(self.points["payload"][i]),
+                "payload_angle_deg": float(self.points["payload_angle"][i]),
+                "r2_mm": float(self.points["r2"][i]),
+                "d_mm": float(self.points["d"][i]),
+                "status": str(self.status[i]),
+                "stability": str(self.stability[i]),
+                "method": str(self.method[i]),
+                "total_angle_deg": float(self.total_angle_deg[i]) if feasible else None,
+                "tip_x_mm": float(self.tip[i, 0]) if feasible else None,
+                "tip_y_mm": float(self.tip[i, 1]) if feasible else None,
+            }
+            for k in range(n):
+                row[f"theta{k + 1}_deg"] = float(math.degrees(self.theta[i, k])) if feasible else None
+            row["message"] = self.messages[i]
+            out.append(row)
+        return out
+
+    def to_csv(self) -> str:
+        """The rows as CSV text (empty cells where a point is infeasible)."""
+        rows = self.rows()
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+        writer.writeheader()
+        for r in rows:
+            writer.writerow({k: ("" if v is None else v) for k, v in r.items()})
+        return buf.getvalue()
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the base scene, the axes, counts, the backend and every row."""
+        counts = {s: int(np.sum(self.status == s)) for s in ("ok", "not ok", "infeasible")}
+        return {
+            "base": self.base.describe(),
+            "segments": self.base.segments,
+            "axes": {k: {"values": v, "unit": AXES[k]} for k, v in self.axes.items()},
+            "counts": counts,
+            "backend": self.batch.backend if self.batch is not None else "",
+            "timings_s": dict(self.batch.timings) if self.batch is not None else {},
+            "rows": self.rows(),
+        }
+
+    def write(self, path: str | Path) -> Path:
+        """Write CSV (``.csv``) or JSON (``.json``) by the file's suffix."""
+        path = Path(path)
+        if path.suffix.lower() == ".csv":
+            text = self.to_csv()
+        elif path.suffix.lower() == ".json":
+            text = json.dumps(self.to_dict(), indent=1)
+        else:
+            raise SweepError(f"output {str(path)!r}: expected a .csv or .json file")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+        return path
+
+
+def _axis(name: str, values) -> list[float] | None:
+    if values is None:
+        return None
+    vals = [float(v) for v in (values if isinstance(values, (list, tuple, np.ndarray)) else [values])]
+    if not vals or not all(math.isfinite(v) for v in vals):
+        raise SweepError(f"{name}={values!r}: expected one or more finite numbers")
+    if name in ("pressure", "payload", "d") and min(vals) < 0:
+        raise SweepError(f"{name}: {min(vals):g} {AXES[name]} given; expected values >= 0")
+    if name == "r2" and min(vals) <= 0:
+        raise SweepError(f"r2: {min(vals):g} mm given; expected values > 0")
+    return vals
+
+
+def sweep(
+    base: Scene | None = None,
+    *,
+    pressure=None,
+    payload=None,
+    payload_angle=None,
+    r2=None,
+    d=None,
+    options: BatchOptions | None = None,
+) -> SweepResult:
+    """Solve every point of the grid of the given axes around ``base`` in one batch.
+
+    Parameters
+    ----------
+    base : Scene, optional
+        Everything not swept (default ``Scene()``: Table 1 at its 90 degree pressure, n = 3).
+        Without a ``pressure`` axis the base scene's pressure (or target angle, per geometry) is used.
+    pressure, payload, payload_angle, r2, d : float or sequence of float, optional
+        Axis values (MPa, N, degrees, mm, mm). A ``payload`` or ``payload_angle`` axis replaces
+        the base scene's payloads with one payload.
+    options : BatchOptions, optional
+
+    Returns
+    -------
+    SweepResult
+    """
+    base = Scene() if base is None else base
+    if not isinstance(base, Scene):
+        raise SweepError(f"base={base!r}: expected a Scene")
+    given = {"pressure": pressure, "payload": payload, "payload_angle": payload_angle, "r2": r2, "d": d}
+    axes = {k: v for k, v in ((k, _axis(k, given[k])) for k in AXES) if v is not None}
+    if not axes:
+        raise SweepError("sweep needs at least one axis: pressure, payload, payload_angle, r2 or d")
+
+    payload_swept = "payload" in axes or "payload_angle" in axes
+    first = base.payloads[0] if base.payloads else Payload(0.0, 90.0, 1.0)
+    if payload_swept:
+        base = base.replace(payloads=(first,))
+    fixed = {
+        "pressure": base.pressure if base.pressure is not None else float("nan"),
+        "payload": first.force if base.payloads else 0.0,
+        "payload_angle": first.angle_deg,
+        "r2": base.actuator.r2,
+        "d": base.actuator.d,
+    }
+    grid = list(itertools.product(*axes.values())) if axes else [()]
+    size = len(grid)
+    cols = {k: np.full(size, float(fixed[k])) for k in AXES}
+    for j, name in enumerate(axes):
+        cols[name] = np.array([pt[j] for pt in grid])
+    angle_mode = "pressure" not in axes and base.pressure is None
+
+    def scene_of(i: int) -> Scene:
+        changes: dict[str, Any] = {"r2": float(cols["r2"][i]), "d": float(cols["d"][i])}
+        if not angle_mode:
+            changes["pressure"] = float(cols["pressure"][i])
+        if payload_swept:
+            changes["payloads"] = (Payload(float(cols["payload"][i]), float(cols["payload_angle"][i]), first.at),)
+        return base.replace(**changes)
+
+    # geometry: validated once per distinct (r2, d)
+    status = np.full(size, "ok", dtype=object)
+    messages = [""] * size
+    bad: dict[tuple[float, float], str] = {}
+    for key in set(zip(cols["r2"].tolist(), cols["d"].tolist())):
+        try:
+            dataclasses.replace(base.actuator, r2=key[0], d=key[1])
+        except SceneError as exc:
+            bad[key] = str(exc)
+    for i, key in enumerate(zip(cols["r2"].tolist(), cols["d"].tolist())):
+        if key in bad:
+            status[i], messages[i] = "infeasible", bad[key]
+    feasible = np.where(status != "infeasible")[0]
+
+    n = base.segments
+    theta = np.full((size, n), np.nan)
+    tip = np.full((size, 3), np.nan)
+    pres = cols["pressure"].copy()
+    stability = np.full(size, "", dtype=object)
+    method = np.full(size, "", dtype=object)
+    batch = None
+    if len(feasible):
+        model = base.model()
+        values: dict[str, Any] = base.parameters(0.0 if angle_mode else fixed["pressure"])
+        values = {k: np.full(len(feasible), float(values[k])) for k in model.parameters}
+        values["r2"] = cols["r2"][feasible]
+        values["d"] = cols["d"][feasible]
+        if not angle_mode:
+            values["P"] = cols["pressure"][feasible]
+        if payload_swept:
+            values["F1"] = cols["payload"][feasible]
+            values["Omega1"] = np.radians(cols["payload_angle"][feasible])
+        target = math.radians(base.target_angle_deg) if angle_mode else None
+        batch = solve_arrays(model, values, target_angle=target, options=options, scene_of=lambda j: scene_of(int(feasible[j])))
+        theta[feasible] = batch.theta
+        tip[feasible] = batch.tip
+        pres[feasible] = batch.pressure
+        stability[feasible] = batch.stability
+        method[feasible] = batch.method
+        for j, i in enumerate(feasible):
+            if not batch.ok[j]:
+                status[i], messages[i] = "not ok", batch.messages[j]
+    return SweepResult(
+        base=base,
+        axes=axes,
+        points=cols,
+        status=status.astype(str),
+        messages=tuple(messages),
+        pressure=pres,
+        theta=theta,
+        tip=tip,
+        stability=stability.astype(str),
+        method=method.astype(str),
+        batch=batch,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# one load path, jumps reported
+
+
+@dataclass(frozen=True, eq=False)
+class LoadPath:
+    """Equilibria along a payload ramp from 0 to the full load, and where the path jumps.
+
+    Attributes
+    ----------
+    factors : ndarray
+        Load factors reached (0 ... 1).
+    theta : ndarray, shape (k, n)
+        Angles at each factor, rad.
+    tip : ndarray, shape (k, 3)
+        Tip pose at each factor.
+    min_eigenvalue : ndarray
+        Smallest Hessian eigenvalue at each factor (it tends to 0 before a snap-through).
+    jumps : list of dict
+        Each jump: the factors before and after, the tip before and after (mm) and the distance.
+    ok : bool
+        Every step converged to a stable equilibrium.
+    message : str
+        What went wrong, when ``ok`` is False.
+    """
+
+    factors: np.ndarray
+    theta: np.ndarray
+    tip: np.ndarray
+    min_eigenvalue: np.ndarray
+    jumps: list[dict]
+    ok: bool
+    message: str = ""
+
+    @property
+    def continuous(self) -> bool:
+        """True when no jump was found."""
+        return not self.jumps
+
+
+def load_path(scene: Scene, steps: int = 40, jump_mm: float = 2.0, min_step: float = 1e-4, options: SolverOptions | None = None) -> LoadPath:
+    """Follow ``scene``'s payloads (and weight) from 0 to full, warm-starting each solve.
+
+    A step whose tip moves more than ``jump_mm`` is halved until either it moves less (the path
+    is continuous there) or the step falls below ``min_step``: then the path jumps, and the jump
+    is recorded (a snap-through to another branch), not smoothed over.
+
+    Examples
+    --------
+    >>> from esba.scene import Scene, Payload
+    >>> p = load_path(Scene(target_angle_deg=90.0, payloads=(Payload(2.0),)), steps=8)
+    >>> p.ok, p.continuous, round(float(p.tip[-1, 1]), 2)
+    (True, True, 10.22)
+    """
+    opts = options if options is not None else SolverOptions()
+    unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False))
+    pressure = unloaded.pressure
+    factors, thetas, tips, eigs, jumps = [0.0], [unloaded.theta], [unloaded.tip], [float(unloaded.eigenvalues[0])], []
+    if not unloaded.ok:
+        return LoadPath(np.array(factors), np.array(thetas), np.array(tips), np.array(eigs), jumps, False, unloaded.message)
+
+    def at(lam: float, theta0) -> Any:
+        s = scene.replace(payloads=tuple(p.scaled(lam) for p in scene.payloads), g=scene.g * lam)
+        return solve(s, opts, pressure=pressure, theta0=theta0)
+
+    lam, dlam = 0.0, 1.0 / steps
+    while lam < 1.0 - 1e-12:
+        target = min(1.0, lam + dlam)
+        r = at(target, thetas[-1])
+        moved = float(np.hypot(*(r.tip[:2] - tips[-1][:2]))) if r.ok else math.inf
+        if r.ok and moved <= jump_mm:
+            lam = target
+            factors.append(lam)
+            thetas.append(r.theta)
+            tips.append(r.tip)
+            eigs.append(float(r.eigenvalues[0]))
+            dlam = min(1.0 / steps, 2 * dlam)
+            continue
+        if dlam / 2 >= min_step:
+            dlam /= 2
+            continue
+        if not r.ok:
+            msg = f"no stable equilibrium after load factor {lam:.4g} ({r.message or r.status})"
+            return LoadPath(np.array(factors), np.array(thetas), np.array(tips), np.array(eigs), jumps, False, msg)
+        jumps.append(
+            {
+                "from_factor": lam,
+                "to_factor": target,
+                "tip_before_mm": [float(v) for v in tips[-1][:2]],
+                "tip_after_mm": [float(v) for v in r.tip[:2]],
+                "distance_mm": moved,
+                "min_eigenvalue_before": eigs[-1],
+            }
+        )
+        lam = target
+        factors.append(lam)
+        thetas.append(r.theta)
+        tips.append(r.tip)
+        eigs.append(float(r.eigenvalues[0]))
+        dlam = 1.0 / steps
+    return LoadPath(np.array(factors), np.array(thetas), np.array(tips), np.array(eigs), jumps, True)
+
+
+# ---------------------------------------------------------------------------------------------
+# Fig. 12
+
+
+#: The paper's Fig. 12: rho = 10 degrees, P = 0.2 MPa, no payload; d = 0, 2, 4, 6 (a), r2 = 2, 4, 6 (b).
+FIG12_D = (0.0, 2.0, 4.0, 6.0)
+FIG12_R2 = (2.0, 4.0, 6.0)
+
+
+def fig12(base: Scene | None = None, points: int = 60, options: BatchOptions | None = None):
+    """Fig. 12 of the paper: bending angle against r2 (for each d) and against d (for each r2).
+
+    Each curve runs to the edge of the design space, r2 + d = r1 - 0.05 mm. Returns the figure
+    and the sweeps: ``{"r2": [one per d], "d": [one per r2]}``.
+    """
+    from .plots import new_figure
+
+    base = Scene(pressure=0.2, segments=3) if base is None else base
+    r1 = base.actuator.r1
+    edge = 0.05  # mm: the thinnest chamber wall of the sweep
+    sweeps: dict[str, list[SweepResult]] = {"r2": [], "d": []}
+    fig = new_figure(10.0, 4.2)
+    ax_a, ax_b = fig.subplots(1, 2)
+    for dv in FIG12_D:
+        s = sweep(base, d=dv, r2=list(np.linspace(0.1, r1 - dv - edge, points)), options=options)
+        sweeps["r2"].append(s)
+        ax_a.plot(s.points["r2"], np.where(s.ok, s.total_angle_deg, np.nan), label=f"d = {dv:g} mm")
+    for rv in FIG12_R2:
+        s = sweep(base, r2=rv, d=list(np.linspace(0.0, r1 - rv - edge, points)), options=options)
+        sweeps["d"].append(s)
+        ax_b.plot(s.points["d"], np.where(s.ok, s.total_angle_deg, np.nan), label=f"r2 = {rv:g} mm")
+    ax_a.set_xlabel("chamber radius r2 (mm)")
+    ax_a.set_ylabel("bending angle (deg, log scale)")
+    ax_a.set_yscale("log")
+    ax_a.set_title("(a) bending angle against r2")
+    ax_b.set_xlabel("eccentric distance d (mm)")
+    ax_b.set_ylabel("bending angle (deg)")
+    ax_b.set_title("(b) bending angle against d")
+    for ax in (ax_a, ax_b):
+        ax.grid(True, which="both", color="0.9", lw=0.6)
+        ax.legend()
+    a = base.actuator
+    fig.suptitle(
+        f"Fig. 12 type: r1 = {a.r1:g} mm, rho = {a.rho_deg:g} deg, P = {base.pressure:g} MPa, no payload, n = {base.segments}\n"
+        f"each curve ends at the design-space edge r2 + d = r1 - {edge:g} mm (esba sweep --fig12)",
+        fontsize=10,
+    )
+    return fig, sweeps
