@@ -438,6 +438,91 @@ def _cmd_bench_generation(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
+    from esba import accuracy as acc
+
+    def say(msg):
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    if args.quick:
+        ns, ref_n, fixed_n, naive_ns, size = (1, 2, 3, 4), 16, 4, (3,), 1000
+    else:
+        ns, ref_n, fixed_n, naive_ns, size = tuple(n for n in acc.ACCURACY_NS if n <= args.max_n), args.reference_n, args.fixed_n, (3, 8, 16), 10_000
+    if ref_n < 4 or ref_n % 4:
+        raise UsageError(f"--reference-n {ref_n}: expected a multiple of 4 (the reference extrapolates from n/4, n/2, n)")
+    study = acc.accuracy_study(ns, ref_n, repeat=args.repeat, progress=say)
+    say(f"tolerance study (n = {fixed_n})")
+    tol = acc.tolerance_study(fixed_n, repeat=args.repeat)
+    say(f"effect study (n = {fixed_n})")
+    eff = acc.effect_study(fixed_n, repeat=args.repeat)
+    for rows in (tol, eff):
+        for r in rows:
+            r["n"] = fixed_n
+    say("naive BFGS against esba")
+    naive = acc.naive_study(naive_ns, repeat=args.repeat)
+    say(f"batch of {size}")
+    batch = acc.batch_study(size)
+    data = {
+        "reference": study.reference,
+        "rows": [r.__dict__ for r in study.rows],
+        "costs": {n: c.__dict__ for n, c in study.costs.items()},
+        "reach": {
+            case: {f"{mm:g} mm": (None if (r := study.first_n_below(case, mm)) is None else r.n) for mm in (1.0, 0.1)} for case in study.reference
+        },
+        "tolerance": tol,
+        "effects": eff,
+        "naive": naive,
+        "batch": batch,
+    }
+    if not args.no_write:
+        command = "esba bench accuracy" + (" --quick" if args.quick else "")
+        if not args.quick and (args.max_n, args.reference_n, args.fixed_n, args.repeat) != (128, 256, 16, 5):
+            command += f" --max-n {args.max_n} --reference-n {args.reference_n} --fixed-n {args.fixed_n} --repeat {args.repeat}"
+        doc, fig = acc.write_page(study, tol, eff, naive, batch, command, doc=args.out, fig_path=args.figure)
+        data["page"], data["figure"] = str(doc), str(fig)
+
+    def table(d: dict) -> str:
+        lines = [f"{'case':>10} {'n':>4} {'error mm':>9} {'n vs n+1':>9} {'solve ms':>9}"]
+        for r in study.rows:
+            lines.append(f"{r.case:>10} {r.n:>4} {r.error_mm:9.3g} {r.next_mm:9.3g} {1e3 * r.solve_s:9.2f}")
+        lines += [f"{case}: reaches {reach}" for case, reach in d["reach"].items()]
+        lines.append(f"batch: {batch.get('compiled_us', batch['interpreted_us']):.1f} us per equilibrium; naive {batch['naive_us']:.0f} us; IPOPT {batch['ipopt_us']:.0f} us")
+        if "page" in d:
+            lines.append(f"wrote {d['page']} and {d['figure']}")
+        return "\n".join(lines)
+
+    _emit(args, data, table)
+    return EXIT_OK
+
+
+def _cmd_bench_batch(args: argparse.Namespace) -> int:
+    from esba import accuracy as acc
+
+    data = acc.batch_study(args.size, args.segments)
+
+    def table(d: dict) -> str:
+        rows = [("batch size", f"{d['size']} equilibria, n = {d['segments']} (pressures 0-0.2 MPa x horizontal tip payloads 0-2 N)")]
+        if "compiled_us" in d:
+            rows += [
+                ("compiled, warm", f"{d['compiled_us']:.1f} us per equilibrium (fast path alone {d['compiled_fast_path_us']:.1f} us)"),
+                ("compiled, first", f"{d['compiled_first_us']:.1f} us per equilibrium (compiling took {d['compiled_first_compile_s']:.1f} s)"),
+            ]
+        rows += [
+            ("interpreted", f"{d['interpreted_us']:.1f} us per equilibrium"),
+            ("IPOPT solve", f"{d['ipopt_us']:.0f} us per equilibrium (esba.equilibrium.solve, one by one)"),
+            ("naive BFGS", f"{d['naive_us']:.0f} us per equilibrium (SciPy, numeric gradients)"),
+            ("speed-up", f"{d['speedup_vs_naive']:.0f}x naive, {d['speedup_vs_ipopt']:.0f}x IPOPT"),
+            ("answered by", str(d["counts"])),
+            ("vs IPOPT", f"largest angle difference {d['max_theta_difference_vs_ipopt']:.2g} rad on a sample"),
+            ("backend", d["backend"]),
+        ]
+        return "\n".join(f"{k:>16}: {v}" for k, v in rows)
+
+    _emit(args, data, table)
+    return EXIT_OK
+
+
 def _add_bench(sub) -> None:
     p = sub.add_parser("bench", help="benchmarks: tables of medians over repeated runs")
     bsub = p.add_subparsers(dest="bench", parser_class=_Parser, required=True)
@@ -447,6 +532,23 @@ def _add_bench(sub) -> None:
     g.add_argument("--no-naive", action="store_true", help="skip the naive SymPy route")
     g.add_argument("--json", action="store_true")
     g.set_defaults(func=_cmd_bench_generation)
+
+    a = bsub.add_parser("accuracy", help="tip error against n, tolerance, effects, naive vs esba, batch; writes docs/accuracy-vs-time.md")
+    a.add_argument("--max-n", type=_segments, default=128, help="largest n of the study (default 128)")
+    a.add_argument("--reference-n", type=_segments, default=256, help="finest n; the reference extrapolates from n/4, n/2, n (default 256)")
+    a.add_argument("--fixed-n", type=_segments, default=16, help="n of the tolerance and effect studies (default 16)")
+    a.add_argument("--repeat", type=_segments, default=5, help="solves per timing, median reported (default 5)")
+    a.add_argument("--quick", action="store_true", help="a small smoke run (n <= 4, reference n = 16, batch of 1000)")
+    a.add_argument("--out", default=None, metavar="FILE", help="page to write (default docs/accuracy-vs-time.md)")
+    a.add_argument("--figure", default=None, metavar="FILE", help="figure to write (default docs/figures/accuracy-vs-time.png)")
+    a.add_argument("--no-write", action="store_true", help="print only; write no page or figure")
+    a.add_argument("--json", action="store_true")
+    a.set_defaults(func=_cmd_bench_accuracy)
+    b = bsub.add_parser("batch", help="us per equilibrium of the batch path against IPOPT and naive BFGS")
+    b.add_argument("--size", type=_segments, default=10_000, help="batch size (default 10000)")
+    b.add_argument("--segments", "-n", type=_segments, default=3, help="segment count (default 3)")
+    b.add_argument("--json", action="store_true")
+    b.set_defaults(func=_cmd_bench_batch)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -481,9 +583,113 @@ def _add_figures(sub) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
+# esba sweep (issue 5): grids on the batch path
+
+
+def _values_arg(text: str) -> list[float]:
+    from esba.sweep import SweepError, parse_values
+
+    try:
+        return parse_values(text)
+    except SweepError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _sweep_table(d: dict) -> str:
+    lines = [f"base: {d['base']}", "axes: " + "; ".join(f"{k} {v['values']} {v['unit']}" for k, v in d["axes"].items())]
+    lines.append(f"points: {d['counts']}; {d['backend']}")
+    rows = d["rows"]
+    if len(rows) <= 60:
+        head = f"{'P MPa':>9} {'F N':>6} {'Om deg':>7} {'r2':>6} {'d':>6} {'angle deg':>10} {'tip x, y mm':>18}  status"
+        lines.append(head)
+        for r in rows:
+            ang = "" if r["total_angle_deg"] is None else f"{r['total_angle_deg']:10.3f}"
+            tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
+            lines.append(f"{r['pressure_mpa']:9.5f} {r['payload_n']:6.3g} {r['payload_angle_deg']:7.3g} {r['r2_mm']:6.3g} {r['d_mm']:6.3g} {ang:>10} {tip:>18}  {r['status']}")
+    else:
+        lines.append(f"{len(rows)} rows: write them with --out FILE.csv or FILE.json")
+    for k in ("out", "figure"):
+        if d.get(k):
+            lines.append(f"wrote {d[k]}")
+    return "\n".join(lines)
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from esba.batch import BatchOptions
+    from esba.plots import save_figure
+    from esba.scene import Scene, SceneError, load_scene
+    from esba.sweep import SweepError, fig12, sweep, sweep_figure
+
+    try:
+        base = load_scene(args.scene) if args.scene else Scene()
+        changes: dict = {}
+        if args.segments is not None:
+            changes["segments"] = args.segments
+        if args.target_angle is not None:
+            changes["target_angle_deg"] = args.target_angle
+        if args.gravity:
+            changes["gravity"] = True
+        if args.no_fibres:
+            changes["fibres"] = False
+        if args.variant is not None:
+            changes["variant"] = args.variant
+        base = base.replace(**changes) if changes else base
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+    options = BatchOptions(compile="never" if args.no_compile else "auto", progress=not (args.json or args.no_progress))
+    if args.fig12:
+        if any(v is not None for v in (args.pressure, args.payload, args.payload_angle, args.r2, args.d)):
+            raise UsageError("--fig12 draws its own grid (r2 and d at P = 0.2 MPa, no payload): give no axes with it")
+        fig, sweeps = fig12(base.replace(pressure=0.2, payloads=()), options=options)
+        path = save_figure(fig, args.fig12)
+        curves = [s for group in sweeps.values() for s in group]
+        bad = sum(int((s.status == "not ok").sum()) for s in curves)
+        data = {"figure": str(path), "curves": len(curves), "points": sum(len(s.status) for s in curves), "not_ok": bad}
+        _emit(args, data, lambda d: f"wrote {d['figure']}: {d['curves']} curves, {d['points']} points, {d['not_ok']} not ok")
+        return EXIT_OK if bad == 0 else EXIT_FAILED
+    try:
+        result = sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d, options=options)
+        data = result.to_dict()
+        if args.out:
+            data["out"] = str(result.write(args.out))
+        if args.plot:
+            data["figure"] = str(save_figure(sweep_figure(result), args.plot))
+    except (SweepError, SceneError) as exc:
+        raise UsageError(str(exc)) from None
+    _emit(args, data, _sweep_table)
+    if data["counts"]["not ok"]:
+        print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _add_sweep(sub) -> None:
+    p = sub.add_parser("sweep", help="solve a grid over pressure, payload, r2, d as one batch; CSV/JSON out; Fig. 12")
+    p.add_argument("scene", nargs="?", default=None, metavar="SCENE.toml", help="base scene (default: Table 1 at its 90 degree pressure, no payload, n = 3)")
+    values = "VALUES: start:stop:count or v1,v2,..."
+    p.add_argument("--pressure", type=_values_arg, metavar="VALUES", help=f"pressures, MPa ({values}; default: the base scene's)")
+    p.add_argument("--payload", type=_values_arg, metavar="VALUES", help="tip payload magnitudes, N (one payload, horizontal unless --payload-angle)")
+    p.add_argument("--payload-angle", type=_values_arg, metavar="VALUES", help="payload directions Omega from the vertical, degrees")
+    p.add_argument("--r2", type=_values_arg, metavar="VALUES", help="chamber radii, mm")
+    p.add_argument("--d", type=_values_arg, metavar="VALUES", help="eccentric distances, mm")
+    p.add_argument("--segments", "-n", type=_segments, help="segment count n >= 1")
+    p.add_argument("--target-angle", type=_float_arg, metavar="DEG", help="without --pressure: each design at the pressure that bends it unloaded to DEG")
+    p.add_argument("--gravity", action="store_true", help="include the actuator's weight (Eq. 15)")
+    p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
+    p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant")
+    p.add_argument("--out", metavar="FILE", help="write every point to FILE.csv or FILE.json")
+    p.add_argument("--plot", metavar="FILE", help="total angle against the first swept axis, one curve per other value")
+    p.add_argument("--fig12", metavar="FILE", help="write the paper's Fig. 12 (angle vs r2 for d = 0, 2, 4, 6; vs d for r2 = 2, 4, 6; P = 0.2 MPa)")
+    p.add_argument("--no-compile", action="store_true", help="use CasADi's interpreter, not compiled C")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true", help="print JSON (every row)")
+    p.set_defaults(func=_cmd_sweep)
+
+
+# ---------------------------------------------------------------------------------------------
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_stiffness, _add_pressure, _add_validate, _add_bench, _add_figures]
+COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_stiffness, _add_pressure, _add_validate, _add_sweep, _add_bench, _add_figures]
 
 
 def build_parser() -> argparse.ArgumentParser:
