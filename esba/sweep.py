@@ -41,7 +41,7 @@ from .batch import BatchOptions, BatchResult, solve_arrays
 from .equilibrium import SolverOptions, solve
 from .scene import Payload, Scene, SceneError
 
-__all__ = ["AXES", "SweepResult", "LoadPath", "sweep", "load_path", "fig12", "parse_values", "SweepError"]
+__all__ = ["AXES", "SweepResult", "LoadPath", "sweep", "load_path", "fig12", "sweep_figure", "parse_values", "SweepError"]
 
 #: The axes of a sweep, in the order of the grid's dimensions, with their units.
 AXES: dict[str, str] = {"pressure": "MPa", "payload": "N", "payload_angle": "deg", "r2": "mm", "d": "mm"}
@@ -429,6 +429,36 @@ def load_path(scene: Scene, steps: int = 40, jump_mm: float = 2.0, min_step: flo
         eigs.append(float(r.eigenvalues[0]))
         dlam = 1.0 / steps
     return LoadPath(np.array(factors), np.array(thetas), np.array(tips), np.array(eigs), jumps, True)
+
+
+def sweep_figure(result: SweepResult, max_curves: int = 12):
+    """Total bending angle against the first swept axis with more than one value, one curve per
+    combination of the other axes (points that are not ok are left out, not drawn as zero).
+    """
+    from .plots import new_figure
+
+    names = [k for k, v in result.axes.items() if len(v) > 1] or list(result.axes)
+    x_name = names[0]
+    others = [k for k in result.axes if k != x_name]
+    combos = list(itertools.product(*(result.axes[k] for k in others)))
+    if len(combos) > max_curves:
+        raise SweepError(f"the figure would have {len(combos)} curves (> {max_curves}): sweep fewer values of {', '.join(others)}")
+    fig = new_figure(6.5, 4.5)
+    ax = fig.subplots()
+    angle = np.where(result.ok, result.total_angle_deg, np.nan)
+    for combo in combos:
+        mask = np.ones(len(angle), dtype=bool)
+        for k, v in zip(others, combo):
+            mask &= np.isclose(result.points[k], v)
+        label = ", ".join(f"{k} = {v:g} {AXES[k]}" for k, v in zip(others, combo)) or None
+        ax.plot(result.points[x_name][mask], angle[mask], "o-", ms=3, label=label)
+    ax.set_xlabel(f"{x_name} ({AXES[x_name]})")
+    ax.set_ylabel("total bending angle (deg)")
+    ax.grid(True, color="0.9", lw=0.6)
+    if combos and others:
+        ax.legend(fontsize=8)
+    ax.set_title(result.base.describe(), fontsize=7)
+    return fig
 
 
 # ---------------------------------------------------------------------------------------------
