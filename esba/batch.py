@@ -124,6 +124,11 @@ class BatchOptions:
         Largest accepted max |dU/dtheta_i|, N mm/rad (as :class:`esba.equilibrium.SolverOptions`).
     critical_tol : float
         Relative eigenvalue threshold of the stability verdict (as ``SolverOptions``).
+    max_jump_deg : float
+        Largest change of any segment angle in one load step, degrees (as ``SolverOptions``):
+        an element that changes more is passed on (retry, then IPOPT, whose finer continuation
+        follows a snap-through and notes it), so that a jump is never taken silently. The
+        unloaded pressure ramp is not checked: its uniform path is unique.
     progress : bool
         Show a tqdm progress bar on stderr.
     cache : str or None
@@ -152,6 +157,7 @@ class BatchOptions:
     fallback: bool = True
     stationarity_tol: float = DEFAULT_OPTIONS.stationarity_tol
     critical_tol: float = DEFAULT_OPTIONS.critical_tol
+    max_jump_deg: float = DEFAULT_OPTIONS.max_jump_deg
     progress: bool = False
     cache: str | None = None
 
@@ -164,7 +170,7 @@ class BatchOptions:
         _whole("load_steps", self.load_steps, 1)
         _whole("newton_steps", self.newton_steps, 1)
         _whole("final_steps", self.final_steps, 0)
-        for name in ("max_step", "stationarity_tol", "critical_tol"):
+        for name in ("max_step", "stationarity_tol", "critical_tol", "max_jump_deg"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise BatchOptionsError(f"{name}={v!r}: expected a finite number > 0")
@@ -225,6 +231,8 @@ class BatchResult:
         One of :data:`METHODS`.
     messages : tuple of str
         Why each element is not ok (empty when it is).
+    notes : tuple of tuple of str
+        What happened on the way (a jump on the load path, from the IPOPT fallback), per element.
     backend : str
         How the fast path ran: compiled (with the compiler and the cached library) or
         interpreted, and why.
@@ -244,6 +252,7 @@ class BatchResult:
     messages: tuple[str, ...]
     backend: str
     timings: dict = field(default_factory=dict)
+    notes: tuple[tuple[str, ...], ...] = ()
 
     def __len__(self) -> int:
         return len(self.pressure)
@@ -297,6 +306,7 @@ def _concat(parts: Sequence[tuple[np.ndarray, BatchResult]], size: int) -> Batch
         "method": np.empty(size, dtype=object),
     }
     messages = [""] * size
+    notes: list[tuple[str, ...]] = [()] * size
     timings: dict[str, float] = {}
     backends = []
     for idx, r in parts:
@@ -304,13 +314,14 @@ def _concat(parts: Sequence[tuple[np.ndarray, BatchResult]], size: int) -> Batch
             out[k][idx] = getattr(r, k)
         for j, i in enumerate(idx):
             messages[i] = r.messages[j]
+            notes[i] = r.notes[j]
         for k, v in r.timings.items():
             timings[k] = timings.get(k, 0.0) + v
         if r.backend not in backends:
             backends.append(r.backend)
     out["stability"] = out["stability"].astype(str)
     out["method"] = out["method"].astype(str)
-    return BatchResult(messages=tuple(messages), backend="; ".join(backends), timings=timings, **out)
+    return BatchResult(messages=tuple(messages), notes=tuple(notes), backend="; ".join(backends), timings=timings, **out)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -360,7 +371,7 @@ def _newton_step(model: Model, max_step: float) -> ca.Function:
 
 
 def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> ca.Function:
-    """One element's load path: (p, target) -> theta, P, grad, hess, tip, lower bound."""
+    """One element's load path: (p, target) -> theta, P, grad, hess, tip, largest load-step change."""
     n, npar = model.n, len(model.parameters)
     idx = _indices(model)
     step = _newton_step(model, options.max_step)
@@ -388,11 +399,14 @@ def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> 
             pk = _scaled(p_full, idx, k / options.pressure_steps, 0.0)
             for _ in range(options.newton_steps):
                 x = free_step(x, pk)
+    jump = ca.MX(0.0)
     if loaded:
         for k in range(1, options.load_steps + 1):
             pk = _scaled(p_full, idx, 1.0, k / options.load_steps)
+            before = x
             for _ in range(options.newton_steps):
                 x = step(x, pk)
+            jump = ca.fmax(jump, ca.mmax(ca.fabs(x - before)))
     for _ in range(options.final_steps):
         x = step(x, p_full)
     g, h = gh(x, p_full)
@@ -400,9 +414,9 @@ def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> 
     return ca.Function(
         "esba_batch_element",
         [p, target],
-        [x, pressure, g, ca.vec(h), tip],
+        [x, pressure, g, ca.vec(h), tip, jump],
         ["p", "target"],
-        ["theta", "P", "grad", "hess", "tip"],
+        ["theta", "P", "grad", "hess", "tip", "jump"],
     )
 
 
@@ -428,7 +442,7 @@ def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
     h = hashlib.sha256()
     h.update(model.path.read_bytes())
     h.update(Path(__file__).read_bytes())
-    settings = (options.chunk, options.pressure_steps, options.load_steps, options.newton_steps, options.final_steps, options.max_step, angle_mode, ca.__version__)
+    settings = (options.chunk, options.pressure_steps, options.load_steps, options.newton_steps, options.final_steps, options.max_step, angle_mode, ca.__version__)  # max_jump_deg is checked in Python
     h.update(repr(settings).encode())
     return h.hexdigest()[:20]
 
@@ -526,7 +540,7 @@ def _stability(eig: np.ndarray, critical_tol: float) -> np.ndarray:
 def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, options: BatchOptions, bar, size_hint: int = 0) -> dict:
     fun, backend, build_s, compile_s = _mapped(model, options, angle_mode, max(pv.shape[1], size_hint))
     n, size, chunk = model.n, pv.shape[1], options.chunk
-    outs = {k: [] for k in ("theta", "P", "grad", "hess", "tip")}
+    outs = {k: [] for k in ("theta", "P", "grad", "hess", "tip", "jump")}
     t0 = time.perf_counter()
     for start in range(0, size, chunk):
         stop = min(size, start + chunk)
@@ -548,6 +562,7 @@ def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, op
         "grad": data["grad"].T.reshape(size, n),
         "hess": data["hess"].T.reshape(size, n, n),
         "tip": data["tip"].T.reshape(size, 3),
+        "jump": data["jump"].ravel(),
         "backend": backend,
         "build": build_s,
         "compile": compile_s,
@@ -570,7 +585,8 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
         near = np.any(theta - lb[:, None] <= 1e-7 * np.maximum(1.0, np.abs(lb))[:, None], axis=1)
         pressure_ok = np.isfinite(P) & (P >= 0)
         stationary = gnorm <= options.stationarity_tol
-        success = finite & stationary & ~near & pressure_ok
+        jumped = ~(run["jump"] <= math.radians(options.max_jump_deg))
+        success = finite & stationary & ~near & pressure_ok & ~jumped
     messages = []
     for i in range(len(P)):
         if not pressure_ok[i]:
@@ -581,6 +597,11 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
             messages.append("the Newton path left the model's domain (non-finite values)")
         elif near[i]:
             messages.append("the solve stopped on the model's domain boundary (Eq. 10): not an equilibrium")
+        elif jumped[i]:
+            messages.append(
+                f"an angle changed by {math.degrees(run['jump'][i]):.3g} deg in one load step (> max_jump_deg = "
+                f"{options.max_jump_deg:g}): a snap-through or a steep path, for finer continuation to decide"
+            )
         elif not stationary[i]:
             messages.append(f"max |dU/dtheta| = {gnorm[i]:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}")
         elif stability[i] != "stable":
@@ -662,6 +683,7 @@ def solve_arrays(
         success, stability, gnorm, eig, messages, pressure_ok = _verify(model, pv, run, angle_mode, options)
         method = np.where(success & (stability == "stable"), "newton", "none").astype(object)
         theta, tip, P = run["theta"], run["tip"], run["P"]
+        notes: list[tuple[str, ...]] = [()] * len(P)
         timings = {"build": run["build"], "compile": run["compile"], "fast": run["fast"], "retry": 0.0, "fallback": 0.0}
 
         # retry the failures (that have a pressure) with a denser continuation
@@ -705,6 +727,7 @@ def solve_arrays(
                 theta[i], tip[i], P[i] = eq.theta, eq.tip, eq.pressure
                 gnorm[i], eig[i], success[i], stability[i] = eq.gradient_norm, ev, eq.success, eq.stability
                 messages[i] = eq.message
+                notes[i] = tuple(getattr(eq, "notes", ()))
                 method[i] = "ipopt"
                 if bar is not None:
                     bar.update(1)
@@ -729,6 +752,7 @@ def solve_arrays(
         messages=tuple(messages),
         backend=run["backend"],
         timings=timings,
+        notes=tuple(notes),
     )
 
 

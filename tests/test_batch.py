@@ -41,6 +41,7 @@ def _compare(scenes, result):
             np.testing.assert_allclose(result.theta[i], ref.theta, atol=BATCH_THETA_ATOL, err_msg=s.describe())
             np.testing.assert_allclose(result.tip[i], ref.tip, atol=1e3 * BATCH_THETA_ATOL)
             assert result.pressure[i] == pytest.approx(ref.pressure, rel=1e-12)
+            assert result.notes[i] == tuple(ref.notes), "a jump solve() notes must be noted by the batch too"
 
 
 def test_batch_agrees_with_ipopt_solve():
@@ -117,6 +118,20 @@ def test_progress_bar_and_counts(capsys):
     assert r.counts()["ok"] == 3 and r.counts()["not_ok"] == 0
     assert r.per_equilibrium_us() > 0
     assert capsys.readouterr().out == ""  # the bar goes to stderr, nothing to stdout
+
+
+def test_a_snap_through_is_never_taken_silently():
+    """A straight actuator pushed along its axis (10 N at 180 deg, P = 1e-3 MPa) snaps sideways at ~3 N.
+
+    The Newton path sees an angle change larger than max_jump_deg in one load step and hands the
+    element on; IPOPT's finer continuation follows the snap and notes it, as solve() does.
+    """
+    scenes = [Scene(pressure=1e-3, payloads=(Payload(f, 180.0),)) for f in (1.0, 10.0)]
+    r = solve_scenes(scenes, INTERPRETED)
+    assert r.method.tolist() == ["newton", "ipopt"]
+    assert r.ok.all()
+    assert r.notes[0] == () and any("jump" in note for note in r.notes[1])
+    _compare(scenes, r)
 
 
 def test_bad_batches_are_refused():
