@@ -435,6 +435,10 @@ def _cmd_bench_generation(args: argparse.Namespace) -> int:
     rows = bench.generation(ns, repeat=args.repeat, naive=not args.no_naive, progress=None if args.json else progress)
     data = {"rows": [r.__dict__ for r in rows], "growth_exponent": bench.growth_exponent([r.n for r in rows], [r.total_s for r in rows])}
     _emit(args, data, lambda d: bench.generation_table(rows))
+    if args.markdown:
+        command = f"esba bench generation --max-n {args.max_n} --repeat {args.repeat}{' --no-naive' if args.no_naive else ''} --markdown {args.markdown}"
+        path = bench.write_generation_page(args.markdown, rows, command)
+        print(f"wrote {path}", file=sys.stderr)
     return EXIT_OK
 
 
@@ -530,6 +534,7 @@ def _add_bench(sub) -> None:
     g.add_argument("--max-n", type=_segments, default=100, help="largest n (default 100)")
     g.add_argument("--repeat", type=_segments, default=3, help="runs per n, median reported (default 3)")
     g.add_argument("--no-naive", action="store_true", help="skip the naive SymPy route")
+    g.add_argument("--markdown", metavar="FILE", help="also write the table as a docs page (docs/performance.md)")
     g.add_argument("--json", action="store_true")
     g.set_defaults(func=_cmd_bench_generation)
 
@@ -580,6 +585,124 @@ def _add_figures(sub) -> None:
     p.add_argument("--only", metavar="NAME", nargs="+", action="extend", default=None, help="write only these figures (e.g. fig7b fig11)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_figures)
+
+
+# ---------------------------------------------------------------------------------------------
+# esba design (issue 4): IPOPT on the full-space NLP, PSO as the paper did
+
+
+def _design_rows(d: dict) -> list[tuple[str, str]]:
+    def num(v, fmt):
+        return "-" if v is None else format(v, fmt)
+
+    rows = [
+        ("status", d["status"] + (f": {d['message']}" if d.get("message") else "")),
+        ("r2, d", f"{num(d['r2_mm'], '.5f')}, {num(d['d_mm'], '.5f')} mm (wall {num(d['wall_mm'], '.4f')} mm)"),
+        ("pressure", f"{num(d['pressure_mpa'], '.6f')} MPa (unloaded 90 deg)"),
+        ("stiffness", f"{num(d['stiffness_n_per_m'], '.5f')} N/m (load path: {num(d['stiffness_check_n_per_m'], '.5f')})"),
+        ("objective", f"{d['objective']} = {num(d['objective_value'], '.6g')} {d['objective_unit']}"),
+    ]
+    if d.get("best_reachable_stiffness") is not None:
+        rows.append(("best K", f"{d['best_reachable_stiffness']:.5f} N/m reachable"))
+    rows.append(("stable", f"{d['stable']}; on the load path: {d['on_load_path']}"))
+    active = []
+    for c in d["active_constraints"]:
+        sens = "" if c["sensitivity"] is None else f" (d objective / d bound = {c['sensitivity']:+.4g} {d['objective_unit']}/{c['unit']})"
+        active.append(f"{c['name']}: {c['description']}{sens}")
+    rows.append(("active", "; ".join(active) or "none"))
+    work = f"{d['iterations']} iterations, {d['evaluations']} starts" if d["method"] == "ipopt" else f"{d['evaluations']} designs"
+    rows.append(("time", f"{d['solve_time_s']:.3f} s ({work}; set-up {d['setup_time_s']:.3f} s)"))
+    return rows
+
+
+def _design_table(d: dict) -> str:
+    if d.get("method") != "both":
+        lines = [d["problem"], f"method: {d['method']}"] + [f"{k:>10}: {v}" for k, v in _design_rows(d)]
+    else:
+        lines = [d["ipopt"]["problem"]]
+        for name in ("ipopt", "pso"):
+            lines.append(f"-- {name}")
+            lines += [f"{k:>10}: {v}" for k, v in _design_rows(d[name])]
+        diff = d["differences"]
+
+        def num(v, fmt):
+            return "-" if v is None else format(v, fmt)
+
+        lines.append(
+            f"-- PSO - IPOPT: r2 {num(diff['r2_mm'], '+.2e')} mm, d {num(diff['d_mm'], '+.2e')} mm, objective "
+            f"{num(diff['objective_rel'], '+.2e')} (relative); PSO took {num(diff['time_ratio_pso_over_ipopt'], '.0f')} "
+            f"times as long; agree (0.01 mm, 0.1 %): {diff['agree']}"
+        )
+    if d.get("figure"):
+        lines.append(f"wrote {d['figure']}")
+    return "\n".join(lines)
+
+
+def _cmd_design(args: argparse.Namespace) -> int:
+    from esba.design import DesignError, DesignOptions, DesignProblem, compare, optimise_ipopt, optimise_pso, write_doc
+    from esba.pso import PSOOptions, PSOOptionsError
+
+    try:
+        pso_options = PSOOptions(particles=args.particles, iterations=args.iterations, seed=args.seed)
+        options = DesignOptions(starts=args.starts)
+        if args.write_doc:
+            path, _ = write_doc(args.write_doc, segments=args.segments, options=options, pso_options=pso_options)
+            _emit(args, {"page": str(path)}, lambda d: f"wrote {d['page']}")
+            return EXIT_OK
+        problem = DesignProblem(
+            objective=args.objective,
+            segments=args.segments,
+            variant=args.variant,
+            min_stiffness=args.min_stiffness,
+            max_pressure=args.max_pressure,
+            target_angle_deg=args.target_angle,
+            min_wall=args.min_wall,
+        )
+    except (DesignError, PSOOptionsError) as exc:
+        raise UsageError(str(exc)) from None
+    if args.method == "ipopt":
+        run = optimise_ipopt(problem, options)
+    elif args.method == "pso":
+        run = optimise_pso(problem, options, pso_options)
+    else:
+        run = compare(problem, options, pso_options)
+    data = run.to_dict()
+    if args.plot:
+        from esba.design_figures import design_figure
+
+        data["figure"] = str(design_figure(run, args.plot).resolve())
+    _emit(args, data, _design_table)
+    results = [run] if args.method != "both" else [run.ipopt, run.pso]
+    bad = [r for r in results if r.status != "optimal"]
+    for r in bad:
+        print(f"esba: design {r.status} ({r.method}): {r.message}", file=sys.stderr)
+    return EXIT_FAILED if bad else EXIT_OK
+
+
+#: ``esba.design.METHODS`` and ``esba.design.OBJECTIVES`` (written out so that building the parser
+#: does not import CasADi; a test checks they agree).
+_DESIGN_METHODS = ("ipopt", "pso", "both")
+_DESIGN_OBJECTIVES = ("stiffness", "angle", "pressure")
+
+
+def _add_design(sub) -> None:
+    p = sub.add_parser("design", help="optimise the chamber (r2, d): IPOPT on the full-space NLP, PSO as in the paper")
+    p.add_argument("--segments", "-n", type=_segments, default=3, help="segment count n >= 1 (default 3)")
+    p.add_argument("--method", choices=_DESIGN_METHODS, default="ipopt", help="ipopt (default), pso, or both side by side")
+    p.add_argument("--objective", choices=_DESIGN_OBJECTIVES, default="stiffness", help="maximise the stiffness (default), the free angle at --max-pressure, or minimise the pressure for --target-angle")
+    p.add_argument("--min-stiffness", type=_float_arg, metavar="K", help="K >= K N/m (required by angle and pressure)")
+    p.add_argument("--max-pressure", type=_float_arg, metavar="P", help="pressure budget, MPa (the pressure of the free angle for --objective angle)")
+    p.add_argument("--target-angle", type=_float_arg, metavar="DEG", help="target unloaded angle of --objective pressure (default 90)")
+    p.add_argument("--min-wall", type=_float_arg, default=0.0, metavar="T", help="thinnest wall r1 - r2 - d, mm (default 0: r2 + d < r1)")
+    p.add_argument("--variant", choices=VARIANTS, default=DEFAULT_VARIANT)
+    p.add_argument("--seed", type=int, default=0, help="PSO seed (default 0)")
+    p.add_argument("--particles", type=int, default=30, help="PSO swarm size (default 30, the paper's)")
+    p.add_argument("--iterations", type=int, default=50, help="PSO iterations (default 50, the paper's)")
+    p.add_argument("--starts", type=int, default=4, help="IPOPT starts (1 to 8, default 4)")
+    p.add_argument("--plot", metavar="FILE", help="write the stiffness map with the design(s) (and the swarm)")
+    p.add_argument("--write-doc", metavar="FILE", help="run the whole study (both methods, every problem) and write it, e.g. docs/design.md")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_cmd_design)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -689,7 +812,7 @@ def _add_sweep(sub) -> None:
 # ---------------------------------------------------------------------------------------------
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_stiffness, _add_pressure, _add_validate, _add_sweep, _add_bench, _add_figures]
+COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_stiffness, _add_pressure, _add_validate, _add_sweep, _add_bench, _add_figures, _add_design]
 
 
 def build_parser() -> argparse.ArgumentParser:
