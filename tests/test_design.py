@@ -410,3 +410,20 @@ def test_design_page_names_its_command_and_the_optimum():
     text = DOC_PATH.read_text(encoding="utf-8")
     assert DOC_COMMAND in text
     assert f"r2 = {OPTIMUM['r2']:.4f} mm, d = 0.0000 mm, K = {OPTIMUM['K']:.4f} N/m" in text
+
+
+# ---------------------------------------------------------------------------------------------
+# the cross-check is not a lucky seed
+
+
+@pytest.mark.slow
+@pytest.mark.ci
+@pytest.mark.parametrize("name", ["paper", "angle", "pressure"])
+def test_pso_agrees_with_ipopt_for_several_seeds(name):
+    problem = DesignProblem() if name == "paper" else CONSTRAINED[name]
+    best = optimise_ipopt(problem)
+    for seed in range(1, 6):
+        r = optimise_pso(problem, pso_options=PSOOptions(seed=seed))
+        assert r.status == "optimal"
+        assert abs(r.r2_mm - best.r2_mm) <= AGREE_MM and abs(r.d_mm - best.d_mm) <= AGREE_MM, (seed, r.r2_mm, r.d_mm)
+        assert abs(r.objective - best.objective) <= AGREE_REL * abs(best.objective)
