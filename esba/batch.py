@@ -587,27 +587,25 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
         stationary = gnorm <= options.stationarity_tol
         jumped = ~(run["jump"] <= math.radians(options.max_jump_deg))
         success = finite & stationary & ~near & pressure_ok & ~jumped
-    messages = []
-    for i in range(len(P)):
+    messages = [""] * len(P)
+    for i in np.flatnonzero(~(success & (stability == "stable"))):
         if not pressure_ok[i]:
-            messages.append(
+            messages[i] = (
                 f"target angle: would need a negative pressure ({P[i]:.4g} MPa)" if np.isfinite(P[i]) else "target angle: outside the model's domain for this actuator"
             )
         elif not finite[i]:
-            messages.append("the Newton path left the model's domain (non-finite values)")
+            messages[i] = "the Newton path left the model's domain (non-finite values)"
         elif near[i]:
-            messages.append("the solve stopped on the model's domain boundary (Eq. 10): not an equilibrium")
+            messages[i] = "the solve stopped on the model's domain boundary (Eq. 10): not an equilibrium"
         elif jumped[i]:
-            messages.append(
+            messages[i] = (
                 f"an angle changed by {math.degrees(run['jump'][i]):.3g} deg in one load step (> max_jump_deg = "
                 f"{options.max_jump_deg:g}): a snap-through or a steep path, for finer continuation to decide"
             )
         elif not stationary[i]:
-            messages.append(f"max |dU/dtheta| = {gnorm[i]:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}")
-        elif stability[i] != "stable":
-            messages.append(f"the equilibrium is {stability[i]}: smallest Hessian eigenvalue {eig[i, 0]:.3g} N mm/rad^2 (largest {eig[i, -1]:.3g})")
+            messages[i] = f"max |dU/dtheta| = {gnorm[i]:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}"
         else:
-            messages.append("")
+            messages[i] = f"the equilibrium is {stability[i]}: smallest Hessian eigenvalue {eig[i, 0]:.3g} N mm/rad^2 (largest {eig[i, -1]:.3g})"
     return success, stability, gnorm, eig, messages, pressure_ok
 
 
