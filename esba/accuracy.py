@@ -14,6 +14,13 @@ figure), and the batch numbers also by ``esba bench batch``. The studies:
   with numeric gradients on the same energy) against esba's IPOPT solve and the batch path.
 
 Timings are medians on a shared machine: compare the ratios within one run.
+
+Examples
+--------
+>>> sorted(CASES), ACCURACY_NS[-1], REFERENCE_N
+(['midlength', 'table2', 'vertical'], 128, 256)
+>>> CASES["midlength"].payloads[0].at
+0.5
 """
 
 from __future__ import annotations
@@ -69,6 +76,9 @@ CASE_LABELS = {
     "vertical": "2 N vertical at the tip",
     "midlength": "2 N horizontal at mid-length",
 }
+
+#: The sweep figures the page shows, written by the ``esba sweep`` commands it names.
+SWEEP_FIGURES = {"fig12": "docs/figures/sweep-fig12.png", "pressure": "docs/figures/sweep-pressure-payload.png"}
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC_PATH = ROOT / "docs" / "accuracy-vs-time.md"
@@ -658,6 +668,27 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
         f"- Speed-up: {b['speedup_vs_naive']:.0f}x the naive script, {b['speedup_vs_ipopt']:.0f}x IPOPT one by one.",
         f"- How the elements were answered: {b['counts']}; backend: {b['backend'].split(', cached')[0]}.",
         f"- Largest difference from IPOPT on {50} sampled elements: {b['max_theta_difference_vs_ipopt']:.2g} rad.",
+        "",
+        "## Sweeps on the batch path",
+        "",
+        "Figures drawn by `esba sweep` (each solved as one batch; every point is ok, or a row that",
+        "says why not):",
+        "",
+        f"- `esba sweep --fig12 {SWEEP_FIGURES['fig12']}`: the paper's Fig. 12, bending angle against",
+        "  r2 for d = 0, 2, 4, 6 mm and against d for r2 = 2, 4, 6 mm, at rho = 10 deg and P = 0.2 MPa.",
+        "  The angle grows with both and faster with r2 (the paper's conclusion), and without bound as",
+        "  the chamber wall r1 - r2 - d thins: the model has no wall-thickness limit.",
+        "",
+        f"  ![Fig. 12]({Path(SWEEP_FIGURES['fig12']).relative_to('docs').as_posix()})",
+        "",
+        f"- `esba sweep --pressure 0:0.2:41 --payload 0,0.5,1,2 --plot {SWEEP_FIGURES['pressure']}`: total angle",
+        "  against pressure for horizontal tip payloads (Table 1). The 2 N curve jumps between two",
+        "  grid pressures (the rows of the same command with `--out FILE.csv` show where) with no jump on",
+        "  either load path: there the actuator is bistable, and the payload ramp at a fixed pressure",
+        "  ends on one branch or the other (the same hysteresis in the payload's direction is in",
+        "  `tests/test_hard_cases.py::test_bistable_directions_show_hysteresis`).",
+        "",
+        f"  ![pressure sweep]({Path(SWEEP_FIGURES['pressure']).relative_to('docs').as_posix()})",
         "",
     ]
     return "\n".join(lines)

@@ -101,6 +101,8 @@ class SweepResult:
         ``ok``, ``infeasible`` (geometry outside the design space, not solved) or ``not ok``.
     messages : tuple of str
         Why a point is not ok (empty when it is).
+    notes : tuple of tuple of str
+        What happened on a point's load path (a jump, noted by the IPOPT fallback).
     batch : BatchResult or None
         The solves of the feasible points (None when there is none).
     """
@@ -116,6 +118,7 @@ class SweepResult:
     stability: np.ndarray
     method: np.ndarray
     batch: BatchResult | None = field(repr=False)
+    notes: tuple[tuple[str, ...], ...] = ()
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -158,6 +161,7 @@ class SweepResult:
             for k in range(n):
                 row[f"theta{k + 1}_deg"] = float(math.degrees(self.theta[i, k])) if feasible else None
             row["message"] = self.messages[i]
+            row["notes"] = " | ".join(self.notes[i])
             out.append(row)
         return out
 
@@ -292,6 +296,7 @@ def sweep(
     stability = np.full(size, "", dtype=object)
     method = np.full(size, "", dtype=object)
     batch = None
+    notes: list[tuple[str, ...]] = [()] * size
     if len(feasible):
         model = base.model()
         values: dict[str, Any] = base.parameters(0.0 if angle_mode else fixed["pressure"])
@@ -311,6 +316,7 @@ def sweep(
         stability[feasible] = batch.stability
         method[feasible] = batch.method
         for j, i in enumerate(feasible):
+            notes[i] = batch.notes[j]
             if not batch.ok[j]:
                 status[i], messages[i] = "not ok", batch.messages[j]
     return SweepResult(
@@ -325,6 +331,7 @@ def sweep(
         stability=stability.astype(str),
         method=method.astype(str),
         batch=batch,
+        notes=tuple(notes),
     )
 
 
@@ -457,7 +464,21 @@ def sweep_figure(result: SweepResult, max_curves: int = 12):
     ax.grid(True, color="0.9", lw=0.6)
     if combos and others:
         ax.legend(fontsize=8)
-    ax.set_title(result.base.describe(), fontsize=7)
+    a, b = result.base.actuator, result.base
+    fixed = [f"L={a.L:g} r1={a.r1:g}" + ("" if "r2" in result.axes else f" r2={a.r2:g}") + ("" if "d" in result.axes else f" d={a.d:g}")]
+    fixed.append(f"rho={a.rho_deg:g} deg E={a.E:g} MPa")
+    if "pressure" not in result.axes:
+        fixed.append(f"P={b.pressure:g} MPa" if b.pressure is not None else f"P for an unloaded {b.target_angle_deg:g} deg")
+    if b.payloads:
+        p = b.payloads[0]
+        fixed.append(
+            "payload"
+            + ("" if "payload" in result.axes else f" {p.force:g} N")
+            + ("" if "payload_angle" in result.axes else f" at {p.angle_deg:g} deg")
+            + f", s={p.at:g}"
+        )
+    fixed.append(f"n={b.segments}")
+    ax.set_title("; ".join(fixed) + " (esba sweep --plot)", fontsize=8)
     return fig
 
 
