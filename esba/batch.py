@@ -75,6 +75,9 @@ SX_SOLVE_MAX_N = 8
 
 _COMPILE_MODES = ("auto", "always", "never")
 
+#: The rest of a batch after its full chunks runs in blocks of this size (padding < TAIL_CHUNK).
+TAIL_CHUNK = 64
+
 #: ``compile="auto"`` compiles only up to this n: beyond it gcc takes tens of seconds (n = 64:
 #: about 30 s) for a gain of 2x or less over the interpreter (MEASUREMENTS.md).
 AUTO_COMPILE_MAX_N = 32
@@ -117,13 +120,16 @@ class BatchOptions:
         ``max_step / n``.
     retry : bool
         Solve the elements that fail again with a denser continuation (4x the steps, 3 Newton
-        iterations each, 8 final).
+        iterations each, 8 final, downhill).
     fallback : bool
         Solve the elements that still fail with :func:`esba.equilibrium.solve` (needs scenes).
     stationarity_tol : float
         Largest accepted max |dU/dtheta_i|, N mm/rad (as :class:`esba.equilibrium.SolverOptions`).
     critical_tol : float
         Relative eigenvalue threshold of the stability verdict (as ``SolverOptions``).
+    downhill : bool
+        Reverse Newton steps that climb (where the Hessian is indefinite), so that an element does
+        not settle on a saddle between two stable branches. About a third slower; the retry uses it.
     max_jump_deg : float
         Largest change of any segment angle in one load step, degrees (as ``SolverOptions``):
         an element that changes more is passed on (retry, then IPOPT, whose finer continuation
@@ -158,6 +164,7 @@ class BatchOptions:
     stationarity_tol: float = DEFAULT_OPTIONS.stationarity_tol
     critical_tol: float = DEFAULT_OPTIONS.critical_tol
     max_jump_deg: float = DEFAULT_OPTIONS.max_jump_deg
+    downhill: bool = False
     progress: bool = False
     cache: str | None = None
 
@@ -176,14 +183,14 @@ class BatchOptions:
                 raise BatchOptionsError(f"{name}={v!r}: expected a finite number > 0")
         if self.cache is not None and not isinstance(self.cache, (str, os.PathLike)):
             raise BatchOptionsError(f"cache={self.cache!r}: expected a folder path or None")
-        for name in ("retry", "fallback", "progress"):
+        for name in ("retry", "fallback", "progress", "downhill"):
             if not isinstance(getattr(self, name), bool):
                 raise BatchOptionsError(f"{name}={getattr(self, name)!r}: expected True or False")
 
     def denser(self) -> BatchOptions:
-        """The retry's settings: four times the continuation steps, 3 Newton iterations each.
+        """The retry's settings: four times the continuation steps, 3 Newton iterations each, downhill.
 
-        Its chunk is at most 64: retries are few, and a chunk is padded to full size.
+        Its chunk is at most 64: retries are few.
         """
         return dataclasses.replace(
             self,
@@ -192,6 +199,7 @@ class BatchOptions:
             load_steps=4 * self.load_steps,
             newton_steps=max(3, self.newton_steps),
             final_steps=max(8, self.final_steps),
+            downhill=True,
         )
 
     def newton_iterations(self, angle_mode: bool, loaded: bool) -> int:
@@ -353,8 +361,12 @@ def _scaled(p, idx: dict, pressure_factor, load_factor, pressure=None):
     return ca.vertcat(*parts)
 
 
-def _newton_step(model: Model, max_step: float) -> ca.Function:
-    """theta -> theta + s dx with H dx = -g, s = min(1, (max_step/n) / max|dx|), kept in the domain."""
+def _newton_step(model: Model, max_step: float, downhill: bool = False) -> ca.Function:
+    """theta -> theta + s dx with H dx = -g, s = min(1, (max_step/n) / max|dx|), kept in the domain.
+
+    With ``downhill`` a step that climbs (g . dx > 0, H indefinite along it) is reversed, so the
+    iteration does not settle on a saddle between two stable branches.
+    """
     n, npar = model.n, len(model.parameters)
     idx = _indices(model)
     sym = ca.SX if n <= SX_SOLVE_MAX_N else ca.MX
@@ -364,6 +376,8 @@ def _newton_step(model: Model, max_step: float) -> ca.Function:
     g = model["gradient"](th, *args)
     h = model["hessian"](th, *args)
     dx = -ca.solve(h, g) if sym is ca.SX else -ca.solve(h, g, "qr")
+    if downhill:
+        dx = dx * (1.0 - 2.0 * (ca.dot(g, dx) > 0))
     scale = ca.fmin(1.0, (max_step / n) / (ca.mmax(ca.fabs(dx)) + 1e-300))
     new = ca.fmax(th + scale * dx, _lower_bound_sym(p, idx, n))
     opts = {"cse": True} if sym is ca.SX else {}
@@ -374,8 +388,8 @@ def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> 
     """One element's load path: (p, target) -> theta, P, grad, hess, tip, largest load-step change."""
     n, npar = model.n, len(model.parameters)
     idx = _indices(model)
-    step = _newton_step(model, options.max_step)
-    free_step = _newton_step(model, 1e6)  # the unloaded problem is nearly quadratic: no limit
+    step = _newton_step(model, options.max_step, options.downhill)
+    free_step = _newton_step(model, 1e6, options.downhill)  # the unloaded problem is nearly quadratic: no limit
     th = ca.SX.sym("theta", n)
     ps = ca.SX.sym("p", npar)
     gh = ca.Function(
@@ -442,7 +456,7 @@ def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
     h = hashlib.sha256()
     h.update(model.path.read_bytes())
     h.update(Path(__file__).read_bytes())
-    settings = (options.chunk, options.pressure_steps, options.load_steps, options.newton_steps, options.final_steps, options.max_step, angle_mode, ca.__version__)  # max_jump_deg is checked in Python
+    settings = (options.chunk, TAIL_CHUNK, options.pressure_steps, options.load_steps, options.newton_steps, options.final_steps, options.max_step, options.downhill, angle_mode, ca.__version__)  # max_jump_deg is checked in Python
     h.update(repr(settings).encode())
     return h.hexdigest()[:20]
 
@@ -450,10 +464,11 @@ def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
 _FUNCTIONS: dict[tuple, ca.Function] = {}
 
 
-def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) -> tuple[ca.Function, str, float, float]:
-    """The mapped element Function for ``options.chunk`` elements, compiled when it pays.
+def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) -> tuple[tuple[ca.Function, ca.Function], str, float, float]:
+    """The element Function mapped over ``options.chunk`` and over ``TAIL_CHUNK`` elements
+    (for the rest of a batch), compiled when it pays.
 
-    Returns the Function, a backend description, the build time and the compile time (s).
+    Returns the two Functions, a backend description, the build time and the compile time (s).
     """
     key = _key(model, options, angle_mode)
     lib = _compiled_dir(options) / f"esba_batch_{key}.so"
@@ -482,27 +497,33 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
     element = _element_function(model, options, angle_mode)
     build_s = time.perf_counter() - t0
     compile_s = 0.0
+    small = min(options.chunk, TAIL_CHUNK)
     if not compiled:
-        fun = element.map(options.chunk, "thread", 2)
+        funs = (element.map(options.chunk, "thread", 2), element.map(small, "thread", 2))
     else:
-        mapped = element.map(f"esba_batch_{key}", "serial", options.chunk, [], [])
+        mapped = (
+            element.map(f"esba_batch_{key}", "serial", options.chunk, [], []),
+            element.map(f"esba_batch_{key}_tail", "serial", small, [], []),
+        )
         if not lib.exists():
             t1 = time.perf_counter()
             _compile(mapped, lib, cc)
             compile_s = time.perf_counter() - t1
-        fun = ca.external(mapped.name(), str(lib))
-    _FUNCTIONS[(key, compiled, str(lib))] = fun
-    return fun, backend, build_s, compile_s
+        funs = tuple(ca.external(f.name(), str(lib)) for f in mapped)
+    _FUNCTIONS[(key, compiled, str(lib))] = funs
+    return funs, backend, build_s, compile_s
 
 
-def _compile(fun: ca.Function, lib: Path, cc: str) -> None:
-    """Generate C for ``fun`` and compile it to the shared library ``lib`` (atomically)."""
+def _compile(funs: Sequence[ca.Function], lib: Path, cc: str) -> None:
+    """Generate C for ``funs`` and compile them into the shared library ``lib`` (atomically)."""
     lib.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="esba-cg-") as tmp:
-        cg = ca.CodeGenerator(f"{fun.name()}.c", {"with_header": False})
-        cg.add(fun)
+        name = lib.stem
+        cg = ca.CodeGenerator(f"{name}.c", {"with_header": False})
+        for fun in funs:
+            cg.add(fun)
         cg.generate(tmp + os.sep)
-        src = Path(tmp) / f"{fun.name()}.c"
+        src = Path(tmp) / f"{name}.c"
         out = Path(tmp) / lib.name
         proc = subprocess.run([cc, "-O2", "-shared", "-fPIC", str(src), "-o", str(out), "-lm"], capture_output=True, text=True)
         if proc.returncode != 0:
@@ -538,15 +559,19 @@ def _stability(eig: np.ndarray, critical_tol: float) -> np.ndarray:
 
 
 def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, options: BatchOptions, bar, size_hint: int = 0) -> dict:
-    fun, backend, build_s, compile_s = _mapped(model, options, angle_mode, max(pv.shape[1], size_hint))
-    n, size, chunk = model.n, pv.shape[1], options.chunk
+    (fun_big, fun_small), backend, build_s, compile_s = _mapped(model, options, angle_mode, max(pv.shape[1], size_hint))
+    n, size = model.n, pv.shape[1]
     outs = {k: [] for k in ("theta", "P", "grad", "hess", "tip", "jump")}
     t0 = time.perf_counter()
-    for start in range(0, size, chunk):
+    full = size - size % options.chunk
+    small = min(options.chunk, TAIL_CHUNK)
+    blocks = [(start, options.chunk, fun_big) for start in range(0, full, options.chunk)]
+    blocks += [(start, small, fun_small) for start in range(full, size, small)]
+    for start, chunk, fun in blocks:
         stop = min(size, start + chunk)
         block = pv[:, start:stop]
         tgt = targets[start:stop]
-        if stop - start < chunk:  # pad the last chunk with copies of its last element
+        if stop - start < chunk:  # pad the last block with copies of its last element
             pad = chunk - (stop - start)
             block = np.hstack([block, np.repeat(block[:, -1:], pad, axis=1)])
             tgt = np.concatenate([tgt, np.repeat(tgt[-1:], pad)])
