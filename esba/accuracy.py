@@ -666,7 +666,7 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
         "## Many solves: the batch path",
         "",
         f"{b['size']} equilibria, n = {b['segments']}: Table 1, pressures 0-0.2 MPa x horizontal tip payloads 0-2 N",
-        "(`esba bench batch` prints the same). Each element follows the load path with Newton steps",
+        "(`esba bench batch` runs this study alone; warm = median of 3 runs). Each element follows the load path with Newton steps",
         "in one CasADi graph mapped over the batch, is verified (stationarity, domain, Hessian",
         "eigenvalues), retried with a denser path or solved by IPOPT when that fails.",
         "",
