@@ -29,17 +29,17 @@ import importlib.util
 import math
 import platform
 import shutil
-import statistics
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
 
+from .bench import median_time
 from .equilibrium import SolverOptions, solve
-from .model import cache_dir, load_model
+from .model import cache_dir
 from .scene import Payload, Scene
 
 __all__ = [
@@ -83,16 +83,6 @@ SWEEP_FIGURES = {"fig12": "docs/figures/sweep-fig12.png", "pressure": "docs/figu
 ROOT = Path(__file__).resolve().parent.parent
 DOC_PATH = ROOT / "docs" / "accuracy-vs-time.md"
 FIGURE_PATH = ROOT / "docs" / "figures" / "accuracy-vs-time.png"
-
-
-def median_time(fn: Callable[[], object], repeat: int) -> float:
-    """Median wall time of ``repeat`` calls, s."""
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -683,7 +673,7 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
         f"| esba.equilibrium.solve (IPOPT), one by one | {b['ipopt_us']:.0f} |",
         f"| naive SciPy BFGS, one by one | {b['naive_us']:.0f} |",
         "",
-        f"- Target: 20 µs or less per equilibrium for n = 3 on 10 000: "
+        "- Target: 20 µs or less per equilibrium for n = 3 on 10 000: "
         + (f"{'met' if b.get('compiled_us', 1e9) <= 20 else 'NOT met'} ({b.get('compiled_us', float('nan')):.1f} µs compiled, warm)." if "compiled_us" in b else "no C compiler here: interpreted only."),
         f"- Speed-up: {b['speedup_vs_naive']:.0f}x the naive script, {b['speedup_vs_ipopt']:.0f}x IPOPT one by one.",
         f"- How the elements were answered: {b['counts']}; backend: {b['backend'].split(', cached')[0]}.",

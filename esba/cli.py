@@ -170,25 +170,29 @@ def _per_payload(flag: str, values: list[float] | None, count: int) -> list[floa
     return values
 
 
+def _scene_changes(args: argparse.Namespace, skip: tuple[str, ...] = ()) -> dict:
+    """The scene fields that the common flags override (flags a command lacks count as unset).
+
+    ``skip`` names flags that mean something else to the command (a sweep's --pressure is a grid).
+    """
+    flags = {"segments": "segments", "pressure": "pressure", "target_angle": "target_angle_deg", "variant": "variant"}
+    changes = {
+        field: getattr(args, flag) for flag, field in flags.items() if flag not in skip and getattr(args, flag, None) is not None
+    }
+    if getattr(args, "gravity", False):
+        changes["gravity"] = True
+    if getattr(args, "no_fibres", False):
+        changes["fibres"] = False
+    return changes
+
+
 def _scene_from_args(args: argparse.Namespace, payloads: bool = True):
     """The scene file (or the main job) with the flags applied; bad values are usage errors."""
     from esba.scene import MAIN_JOB, Payload, SceneError, load_scene
 
     try:
         scene = load_scene(args.scene) if args.scene else MAIN_JOB
-        changes: dict = {}
-        if args.segments is not None:
-            changes["segments"] = args.segments
-        if args.pressure is not None:
-            changes["pressure"] = args.pressure
-        if args.target_angle is not None:
-            changes["target_angle_deg"] = args.target_angle
-        if args.gravity:
-            changes["gravity"] = True
-        if args.no_fibres:
-            changes["fibres"] = False
-        if args.variant is not None:
-            changes["variant"] = args.variant
+        changes = _scene_changes(args)
         if payloads:
             if args.no_payload and (args.payload or args.payload_angle or args.payload_at):
                 raise UsageError("--no-payload cannot be combined with --payload, --payload-angle or --payload-at")
@@ -745,17 +749,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
     try:
         base = load_scene(args.scene) if args.scene else Scene()
-        changes: dict = {}
-        if args.segments is not None:
-            changes["segments"] = args.segments
-        if args.target_angle is not None:
-            changes["target_angle_deg"] = args.target_angle
-        if args.gravity:
-            changes["gravity"] = True
-        if args.no_fibres:
-            changes["fibres"] = False
-        if args.variant is not None:
-            changes["variant"] = args.variant
+        changes = _scene_changes(args, skip=("pressure",))
         base = base.replace(**changes) if changes else base
     except SceneError as exc:
         raise UsageError(str(exc)) from None

@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence

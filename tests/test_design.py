@@ -33,16 +33,7 @@ from esba.equilibrium import pressure_for_angle
 from esba.pso import PSOOptions
 from esba.scene import Actuator, Scene
 from esba.stiffness import secant_stiffness
-
-# -- tolerances of this file (the suite's shared ones are in tests/tolerances.py) ---------------
-#: the issue's cross-check: IPOPT and PSO designs within 0.01 mm, objectives within 0.1 %
-AGREE_MM = 0.01
-AGREE_REL = 1e-3
-#: two exact evaluations of the same stiffness (closed form + Newton ramp vs IPOPT + continuation):
-#: both equilibria are stationary to ~1e-10 N mm/rad, so K agrees to ~1e-8 relative
-SAME_K_REL = 1e-7
-#: a multiplier against a central difference of the optimum over bound steps +-h: O(h^2) error
-SENSITIVITY_REL = 1e-3
+from tests.tolerances import AGREE_MM, AGREE_REL, SAME_K_REL, SENSITIVITY_REL
 
 #: The paper's problem's optimum (n = 3, Table 1, 2 N horizontal, 90 deg), from IPOPT; PSO and the
 #: load-path check confirm it independently below.

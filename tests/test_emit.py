@@ -58,7 +58,7 @@ def test_every_model_file_says_do_not_edit():
 def _generate_in_subprocess(folder: Path, seed: str) -> bytes:
     code = (
         "import sys; from derive.emit import write_model; "
-        f"write_model(4, 'air,axial,radial,fibres,payload:2,gravity', 'printed', sys.argv[1], manifest=False)"
+        "write_model(4, 'air,axial,radial,fibres,payload:2,gravity', 'printed', sys.argv[1], manifest=False)"
     )
     env = dict(os.environ, PYTHONHASHSEED=seed)
     subprocess.run([sys.executable, "-c", code, str(folder)], check=True, env=env, cwd=ROOT)

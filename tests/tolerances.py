@@ -26,3 +26,13 @@ BATCH_THETA_ATOL = 1e-6
 EQUILIBRIUM_GRAD_ATOL = 1e-7
 #: continuity in the loads (issue 5) is bounded by the linear response itself (tests/test_properties.py):
 #: a small load step moves the tip by at most twice J dtheta, with H dtheta = -(dg/dload) dload
+
+#: design (issue 4), the issue's cross-check: IPOPT and PSO designs within 0.01 mm, objectives
+#: within 0.1 %
+AGREE_MM = 0.01
+AGREE_REL = 1e-3
+#: two exact evaluations of the same stiffness (closed form + Newton ramp vs IPOPT + continuation):
+#: both equilibria are stationary to ~1e-10 N mm/rad, so K agrees to ~1e-8 relative
+SAME_K_REL = 1e-7
+#: a multiplier against a central difference of the optimum over bound steps +-h: O(h^2) error
+SENSITIVITY_REL = 1e-3
