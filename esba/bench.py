@@ -185,8 +185,9 @@ def write_generation_page(path, rows: list[GenerationRow], command: str):
             "are symbols of their own, the separable terms are differentiated once per template, and",
             "the payload and gravity potentials use the screw-theory Jacobian, whose off-diagonal",
             "Hessian entries depend on the later joint only. The straight-line program has O(n)",
-            "assignments and O(n^2) references in the Hessian; the first row (n = 1) includes the",
-            "one-off SymPy integrations of the energy terms.",
+            "assignments and O(n^2) references in the Hessian. The medians hide a one-off cost per",
+            "process: the SymPy integrations of the energy terms (a second or two, paid by the first",
+            "model a process generates).",
             "",
         ]
     )
