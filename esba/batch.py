@@ -52,6 +52,7 @@ from typing import Callable, Mapping, Sequence
 import casadi as ca
 import numpy as np
 
+from . import checks
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve
 from .model import Model, cache_dir
 from .scene import Scene
@@ -88,9 +89,7 @@ class BatchOptionsError(ValueError):
 
 
 def _whole(name: str, value, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < low:
-        raise BatchOptionsError(f"{name}={value!r}: expected a whole number >= {low}")
-    return value
+    return checks.whole(name, value, low, BatchOptionsError)
 
 
 @dataclass(frozen=True)

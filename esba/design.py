@@ -67,6 +67,7 @@ import numpy as np
 
 from derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
 
+from . import checks
 from .equilibrium import SolverOptions, solve, stability_verdict
 from .model import Model, load_model
 from .pso import PSOOptions, PSOResult, minimize
@@ -112,18 +113,14 @@ class DesignError(ValueError):
 
 
 def _finite(name: str, value: Any, low: float | None = None, *, open_low: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise DesignError(f"{name}={value!r}: expected a finite number")
-    value = float(value)
+    value = checks.finite(name, value, DesignError)
     if low is not None and (value <= low if open_low else value < low):
         raise DesignError(f"{name}={value:g}: expected a number {'>' if open_low else '>='} {low:g}")
     return value
 
 
 def _whole(name: str, value: Any, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < low:
-        raise DesignError(f"{name}={value!r}: expected a whole number >= {low}")
-    return value
+    return checks.whole(name, value, low, DesignError)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -35,6 +35,7 @@ from typing import Any, Sequence
 import casadi as ca
 import numpy as np
 
+from . import checks
 from .model import Model
 from .scene import Scene
 
@@ -65,9 +66,7 @@ class EquilibriumError(RuntimeError):
 
 
 def _check_int(name: str, value: Any, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < low:
-        raise SolverOptionsError(f"{name}={value!r}: expected a whole number >= {low}")
-    return value
+    return checks.whole(name, value, low, SolverOptionsError)
 
 
 def _check_pos(name: str, value: Any, high: float | None = None) -> float:

@@ -65,6 +65,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from . import checks
+
 __all__ = ["PSOOptions", "PSOOptionsError", "PSOHistory", "PSOResult", "minimize", "CLERC_KENNEDY"]
 
 #: Clerc & Kennedy (2002) constriction, phi = 4.1: (w, c1, c2).
@@ -76,9 +78,7 @@ class PSOOptionsError(ValueError):
 
 
 def _whole(name: str, value, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise PSOOptionsError(f"{name}={value!r}: expected a whole number >= {low}")
-    return int(value)
+    return checks.whole(name, value, low, PSOOptionsError)
 
 
 def _real(name: str, value, low: float, high: float | None = None, *, open_low: bool = False) -> float:

@@ -62,6 +62,7 @@ from typing import Any, Mapping
 
 from derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
 
+from . import checks
 from .model import Model, load_model
 
 if sys.version_info >= (3, 11):
@@ -80,12 +81,7 @@ class SceneError(ValueError):
 
 
 def _number(where: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise SceneError(f"{where}={value!r}: expected a finite number")
-    value = float(value)
-    if not math.isfinite(value):
-        raise SceneError(f"{where}={value!r}: expected a finite number")
-    return value
+    return checks.finite(where, value, SceneError)
 
 
 def _positive(where: str, value: Any) -> float:
