@@ -413,8 +413,7 @@ def _eq10() -> AuditEntry:
     n, t = En.n_sym, S.t
     printed, derived = paper.eq10(n, t), En.delta_r2(n, t)
     conservation = En.volume_conservation(n, t)
-    q = sp.Symbol("q", positive=True)  # (r2 + Delta_r2)^2
-    solved = sp.factor(sp.solve(conservation.subs(En.Delta_r2, sp.sqrt(q) - S.r2), q)[0])
+    solved = En.expanded_radius_squared(n, t)
     steps = (
         Step(
             "Eq. (9): the rubber volume is conserved",
@@ -429,7 +428,8 @@ def _eq10() -> AuditEntry:
             "Eq. (9) solved",
             (S.r2 + En.Delta_r2) ** 2, solved,
             "Eq. (9) is linear in (r2 + Delta_r2)^2; Eq. (10) is its positive square root minus r2.",
-            check=_is_zero(sp.sqrt(solved) - S.r2 - derived),
+            check=_is_zero((conservation.lhs - conservation.rhs).subs(En.Delta_r2, sp.sqrt(solved) - S.r2))
+            and _is_zero(sp.sqrt(solved) - S.r2 - derived),
         ),
     )
     return _entry(
@@ -633,9 +633,8 @@ def _eq15() -> AuditEntry:
 
 
 def _fibre_steps(variant: str) -> tuple[Step, ...]:
-    N = (S.L + S.r1 * En.theta_TOL) / (2 * sp.pi * S.r1 * sp.tan(S.rho))
-    balance = sp.Eq(2 * N * En.eta_r, En.fibre_width(variant) * (S.L + S.r1 * En.theta_TOL) * S.P)
-    er = sp.solve(balance, En.eta_r)[0]
+    balance = En.fibre_balance(variant)
+    er = En.fibre_tension(variant)
     how = "as printed" if variant == "printed" else "on the projected width"
     return (
         Step(
@@ -644,6 +643,7 @@ def _fibre_steps(variant: str) -> tuple[Step, ...]:
             balance.rhs,
             f"N = (L + r1 theta_TOL)/(2 pi r1 tan(rho)) turns per fibre; the chamber width is "
             f"{'the circumference 2 pi r2' if variant == 'printed' else 'the projected width 2 r2'}.",
+            check=_is_zero((balance.lhs - balance.rhs).subs(En.eta_r, er)),
         ),
         Step(
             "Solved for the fibre tension",

@@ -114,14 +114,19 @@ def volume_conservation(n=n_sym, t=S.t) -> sp.Eq:
 
 
 @lru_cache(maxsize=None)
-def delta_r2(n=n_sym, t=S.t) -> sp.Expr:
-    """Eq. (10): Eq. (9) solved for Delta_r2, the root with r2 + Delta_r2 > 0."""
+def expanded_radius_squared(n=n_sym, t=S.t) -> sp.Expr:
+    """Eq. (9) solved for (r2 + Delta_r2)^2, the quantity it is linear in."""
     eq = volume_conservation(n, t)
-    # (r2 + Delta_r2)^2 is what Eq. (9) fixes: solve for it, then take the positive root.
     q = sp.Symbol("q", positive=True)
     sq = sp.solve(eq.subs(Delta_r2, sp.sqrt(q) - S.r2), q)
     assert len(sq) == 1, sq
-    return sp.sqrt(sp.factor(sq[0])) - S.r2
+    return sp.factor(sq[0])
+
+
+@lru_cache(maxsize=None)
+def delta_r2(n=n_sym, t=S.t) -> sp.Expr:
+    """Eq. (10): the positive root of Eq. (9), minus r2."""
+    return sp.sqrt(expanded_radius_squared(n, t)) - S.r2
 
 
 def r1d() -> sp.Expr:
@@ -206,18 +211,27 @@ def fibre_width(variant: str) -> sp.Expr:
     return 2 * sp.pi * S.r2 if variant == "printed" else 2 * S.r2
 
 
+def fibre_balance(variant: str = "paper") -> sp.Eq:
+    """Eq. (16): 2 N eta_r = w (L + r1 theta_TOL) P, with N = (L + r1 theta_TOL)/(2 pi r1 tan rho)
+    turns per fibre and w the chamber width (:func:`fibre_width`)."""
+    N = (S.L + S.r1 * theta_TOL) / (2 * sp.pi * S.r1 * sp.tan(S.rho))
+    return sp.Eq(2 * N * eta_r, fibre_width(variant) * (S.L + S.r1 * theta_TOL) * S.P)
+
+
+@lru_cache(maxsize=None)
+def fibre_tension(variant: str = "paper") -> sp.Expr:
+    """Eq. (16) solved for the radial fibre tension eta_r."""
+    return sp.solve(fibre_balance(variant), eta_r)[0]
+
+
 @lru_cache(maxsize=None)
 def fibres_total(variant: str = "paper") -> sp.Expr:
     """Eq. (18): psi_fbrs as a function of theta_TOL, from the force balance of Eq. (16).
 
-    2 N eta_r = w (L + r1 theta_TOL) P, with N = (L + r1 theta_TOL)/(2 pi r1 tan rho) turns
-    per fibre and w the chamber width (:func:`fibre_width`); 2 eta_a = 2 eta_r tan(rho); the
-    axial displacement is r1 theta_TOL, so psi_fbrs = 2 eta_a r1 theta_TOL.
+    2 eta_a = 2 eta_r tan(rho) (:func:`fibre_tension`); the axial displacement is r1 theta_TOL,
+    so psi_fbrs = 2 eta_a r1 theta_TOL.
     """
-    N = (S.L + S.r1 * theta_TOL) / (2 * sp.pi * S.r1 * sp.tan(S.rho))
-    balance = sp.Eq(2 * N * eta_r, fibre_width(variant) * (S.L + S.r1 * theta_TOL) * S.P)
-    er = sp.solve(balance, eta_r)[0]
-    ea = er * sp.tan(S.rho)
+    ea = fibre_tension(variant) * sp.tan(S.rho)
     return sp.simplify(2 * ea * S.r1 * theta_TOL)
 
 

@@ -3,7 +3,7 @@
 Segments n = 6; effects: air,axial,radial,fibres,payload; variant: printed.
 Regenerate with:
     esba generate --segments 6 --effects air,axial,radial,fibres,payload --variant printed
-(or `esba generate --refresh` for every committed model). Derivation source sha256: 75c5f587426c4103.
+(or `esba generate --refresh` for every committed model). Derivation source sha256: e0832bee32b195f9.
 
 Straight-line program: 947 assignments, 1015 lines.
 CasADi Functions (SX instructions / nodes):

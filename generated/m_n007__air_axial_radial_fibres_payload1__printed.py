@@ -3,7 +3,7 @@
 Segments n = 7; effects: air,axial,radial,fibres,payload; variant: printed.
 Regenerate with:
     esba generate --segments 7 --effects air,axial,radial,fibres,payload --variant printed
-(or `esba generate --refresh` for every committed model). Derivation source sha256: 75c5f587426c4103.
+(or `esba generate --refresh` for every committed model). Derivation source sha256: e0832bee32b195f9.
 
 Straight-line program: 1104 assignments, 1172 lines.
 CasADi Functions (SX instructions / nodes):
