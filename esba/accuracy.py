@@ -25,10 +25,8 @@ Examples
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import platform
-import shutil
 import tempfile
 import time
 from dataclasses import dataclass
@@ -39,7 +37,7 @@ import numpy as np
 
 from .bench import median_time
 from .equilibrium import SolverOptions, solve
-from .model import cache_dir
+from .model import _exec_model, cache_dir
 from .scene import Payload, Scene
 
 __all__ = [
@@ -110,13 +108,6 @@ class ModelCost:
     instructions: dict
 
 
-def _exec_model_file(path: Path) -> dict:
-    spec = importlib.util.spec_from_file_location(f"esba_bench_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)  # type: ignore[union-attr]
-    return module.build()
-
-
 def model_cost(n: int, effects: str, variant: str = "paper", repeat: int = 3) -> ModelCost:
     """Generate the model into a fresh folder (cold), then time building its Functions (warm).
 
@@ -124,18 +115,17 @@ def model_cost(n: int, effects: str, variant: str = "paper", repeat: int = 3) ->
     follow do not generate it a second time (the emission is deterministic: same bytes).
     """
     from derive.effects import EffectSet
-    from derive.emit import write_model
+    from derive.emit import atomic_write, write_model
 
     eff = EffectSet.parse(effects)
     with tempfile.TemporaryDirectory(prefix="esba-bench-") as tmp:
         t0 = time.perf_counter()
         path, entry = write_model(n, eff, variant, Path(tmp), manifest=False)
         generate_s = time.perf_counter() - t0
-        load_s = median_time(lambda: _exec_model_file(path), repeat)
+        load_s = median_time(lambda: _exec_model(path), repeat)
         cached = cache_dir() / path.name
         if not cached.exists():
-            cached.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(path, cached)
+            atomic_write(cached, path.read_text(encoding="utf-8"))
     instr = {k: int(v) for k, v in entry["instructions"].items() if k in ("energy", "gradient", "hessian")}
     return ModelCost(n, eff.spec(), generate_s, load_s, instr)
 

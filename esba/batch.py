@@ -54,7 +54,7 @@ import numpy as np
 
 from . import checks
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve
-from .model import Model, cache_dir
+from .model import Model, cache_dir, domain_lower_bound
 from .scene import Scene
 
 __all__ = [
@@ -345,10 +345,9 @@ def _indices(model: Model) -> dict[str, list[int]]:
 
 
 def _lower_bound_sym(p, idx: dict, n: int):
-    """Eq. (10)'s domain, as :meth:`Model.lower_bounds` (same relative margin 1e-6)."""
+    """Eq. (10)'s domain (:func:`esba.model.domain_lower_bound`) on symbolic parameters."""
     L, r1, r2, d = (p[i] for i in idx["geometry"])
-    lo = ca.fmax(-L * r2**2 / (n * r1**3), -L / (n * (r1 + d)))
-    return lo - 1e-6 * ca.fabs(lo)
+    return domain_lower_bound(n, L, r1, r2, d, maximum=ca.fmax)
 
 
 def _scaled(p, idx: dict, pressure_factor, load_factor, pressure=None):
@@ -540,9 +539,7 @@ def _compile(funs: Sequence[ca.Function], lib: Path, cc: str) -> None:
 def _lower_bounds(model: Model, pv: np.ndarray) -> np.ndarray:
     """:meth:`Model.lower_bounds` for every column of ``pv``."""
     L, r1, r2, d = (pv[i] for i in _indices(model)["geometry"])
-    n = model.n
-    lo = np.maximum(-L * r2**2 / (n * r1**3), -L / (n * (r1 + d)))
-    return np.where(lo < 0, lo * (1.0 - 1e-6), lo)
+    return domain_lower_bound(model.n, L, r1, r2, d)
 
 
 def _stability(eig: np.ndarray, critical_tol: float) -> np.ndarray:

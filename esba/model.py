@@ -49,6 +49,9 @@ __all__ = ["Model", "load_model", "cache_dir", "EffectSet", "EffectError"]
 
 _lock = threading.Lock()
 
+#: Relative distance kept from the edge of the model's domain.
+DOMAIN_MARGIN = 1e-6
+
 
 def cache_dir() -> Path:
     """Folder of models generated on demand for this derivation source."""
@@ -159,15 +162,23 @@ class Model:
         out = f(np.asarray(theta, dtype=float), L, s.reshape(1, -1))
         return np.asarray(out).T
 
-    def lower_bounds(self, values: Mapping[str, float], margin: float = 1e-6) -> np.ndarray:
-        """The model's domain: theta_i above which Eq. (10) is real and L + n (d + r1) theta_i > 0.
-
-        ``L r2^2 + n r1^3 theta_i >= 0`` (the square root of Eq. 10) and
-        ``L + n (r1 + d) theta_i > 0`` (its denominator); ``margin`` keeps a relative distance.
-        """
+    def lower_bounds(self, values: Mapping[str, float], margin: float = DOMAIN_MARGIN) -> np.ndarray:
+        """The model's domain as bounds on theta: :func:`domain_lower_bound` for every segment."""
         L, r1, r2, d = (float(values[k]) for k in ("L", "r1", "r2", "d"))
-        lo = max(-L * r2**2 / (self.n * r1**3), -L / (self.n * (r1 + d)))
-        return np.full(self.n, lo * (1.0 - margin) if lo < 0 else lo)
+        return np.full(self.n, domain_lower_bound(self.n, L, r1, r2, d, margin))
+
+
+def domain_lower_bound(n: int, L, r1, r2, d, margin: float = DOMAIN_MARGIN, maximum=np.maximum):
+    """The lowest segment angle of the model's domain (always < 0), for floats, arrays or symbols.
+
+    ``L r2^2 + n r1^3 theta_i >= 0`` (the square root of Eq. 10) and ``L + n (r1 + d) theta_i > 0``
+    (its denominator), kept ``margin`` (relative) inside. ``maximum`` is ``np.maximum`` for
+    numbers and arrays, ``casadi.fmax`` for CasADi expressions.
+
+    >>> round(float(domain_lower_bound(3, 135.0, 8.0, 3.0, 4.0)), 6)
+    -0.791015
+    """
+    return maximum(-L * r2**2 / (n * r1**3), -L / (n * (r1 + d))) * (1.0 - margin)
 
 
 def _locate_or_generate(n: int, effects: EffectSet, variant: str) -> Path:
