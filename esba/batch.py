@@ -53,7 +53,7 @@ import casadi as ca
 import numpy as np
 
 from . import checks
-from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve
+from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve, stability_verdicts
 from .model import Model, cache_dir, domain_lower_bound
 from .scene import Scene
 
@@ -542,18 +542,6 @@ def _lower_bounds(model: Model, pv: np.ndarray) -> np.ndarray:
     return domain_lower_bound(model.n, L, r1, r2, d)
 
 
-def _stability(eig: np.ndarray, critical_tol: float) -> np.ndarray:
-    """:func:`esba.equilibrium.stability_verdict` per row of eigenvalues (ascending)."""
-    out = np.full(len(eig), "unknown", dtype=object)
-    finite = np.all(np.isfinite(eig), axis=1)
-    scale = np.maximum(np.max(np.abs(np.where(np.isfinite(eig), eig, 0.0)), axis=1), 1e-300)
-    low = np.where(finite, eig[:, 0], 0.0)
-    out[finite] = "critical"
-    out[finite & (low > critical_tol * scale)] = "stable"
-    out[finite & (low < -critical_tol * scale)] = "unstable"
-    return out.astype(str)
-
-
 def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, options: BatchOptions, bar, size_hint: int = 0) -> dict:
     (fun_big, fun_small), backend, build_s, compile_s = _mapped(model, options, angle_mode, max(pv.shape[1], size_hint))
     n, size = model.n, pv.shape[1]
@@ -601,7 +589,7 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
         if finite.any():
             sym = 0.5 * (hess[finite] + np.swapaxes(hess[finite], 1, 2))
             eig[finite] = np.linalg.eigvalsh(sym)
-        stability = _stability(eig, options.critical_tol)
+        stability = stability_verdicts(eig, options.critical_tol)
         lb = _lower_bounds(model, pv)
         near = np.any(theta - lb[:, None] <= 1e-7 * np.maximum(1.0, np.abs(lb))[:, None], axis=1)
         pressure_ok = np.isfinite(P) & (P >= 0)

@@ -164,14 +164,28 @@ def stability_verdict(eigenvalues: Sequence[float], critical_tol: float = DEFAUL
     >>> stability_verdict([2.0, 5.0]), stability_verdict([-1.0, 5.0]), stability_verdict([1e-14, 5.0])
     ('stable', 'unstable', 'critical')
     """
-    ev = np.asarray(eigenvalues, dtype=float)
-    scale = max(float(np.max(np.abs(ev))), 1e-300)
-    low = float(np.min(ev))
-    if low > critical_tol * scale:
-        return "stable"
-    if low < -critical_tol * scale:
-        return "unstable"
-    return "critical"
+    return str(stability_verdicts(np.asarray(eigenvalues, dtype=float)[None, :], critical_tol)[0])
+
+
+def stability_verdicts(eigenvalues: np.ndarray, critical_tol: float = DEFAULT_OPTIONS.critical_tol) -> np.ndarray:
+    """:func:`stability_verdict` for every row of an (m, n) array of eigenvalues.
+
+    The smallest eigenvalue is compared with ``critical_tol`` times the largest magnitude; a row
+    with a non-finite eigenvalue is ``unknown``.
+
+    >>> stability_verdicts(np.array([[2.0, 5.0], [np.nan, 1.0]])).tolist()
+    ['stable', 'unknown']
+    """
+    eig = np.asarray(eigenvalues, dtype=float)
+    out = np.full(len(eig), "unknown", dtype=object)
+    finite = np.all(np.isfinite(eig), axis=1)
+    safe = np.where(finite[:, None], eig, 0.0)
+    scale = np.maximum(np.max(np.abs(safe), axis=1), 1e-300)
+    low = np.min(safe, axis=1)
+    out[finite] = "critical"
+    out[finite & (low > critical_tol * scale)] = "stable"
+    out[finite & (low < -critical_tol * scale)] = "unstable"
+    return out.astype(str)
 
 
 # ---------------------------------------------------------------------------------------------
