@@ -129,11 +129,13 @@ class BatchOptions:
     downhill : bool
         Reverse Newton steps that climb (where the Hessian is indefinite), so that an element does
         not settle on a saddle between two stable branches. About a third slower; the retry uses it.
-    max_jump_deg : float
-        Largest change of any segment angle in one load step, degrees (as ``SolverOptions``):
-        an element that changes more is passed on (retry, then IPOPT, whose finer continuation
-        follows a snap-through and notes it), so that a jump is never taken silently. The
-        unloaded pressure ramp is not checked: its uniform path is unique.
+    unstable_tol : float
+        An element whose Hessian, at any Newton iterate of its load ramp, has a negative LDL^T
+        pivot below ``-unstable_tol`` times the largest (Sylvester's law of inertia: a negative
+        eigenvalue) has left the stable branch it started on: a snap-through at a fold or a
+        buckling at a branch point. It is passed on to :func:`esba.equilibrium.solve`, whose path
+        trace locates the special point and notes the jump, so that a jump is never taken silently.
+        The unloaded pressure ramp is not checked: its uniform path is unique and stable.
     progress : bool
         Show a tqdm progress bar on stderr.
     cache : str or None
@@ -162,7 +164,7 @@ class BatchOptions:
     fallback: bool = True
     stationarity_tol: float = DEFAULT_OPTIONS.stationarity_tol
     critical_tol: float = DEFAULT_OPTIONS.critical_tol
-    max_jump_deg: float = DEFAULT_OPTIONS.max_jump_deg
+    unstable_tol: float = DEFAULT_OPTIONS.critical_tol
     downhill: bool = False
     progress: bool = False
     cache: str | None = None
@@ -176,7 +178,7 @@ class BatchOptions:
         _whole("load_steps", self.load_steps, 1)
         _whole("newton_steps", self.newton_steps, 1)
         _whole("final_steps", self.final_steps, 0)
-        for name in ("max_step", "stationarity_tol", "critical_tol", "max_jump_deg"):
+        for name in ("max_step", "stationarity_tol", "critical_tol", "unstable_tol"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise BatchOptionsError(f"{name}={v!r}: expected a finite number > 0")
@@ -239,7 +241,8 @@ class BatchResult:
     messages : tuple of str
         Why each element is not ok (empty when it is).
     notes : tuple of tuple of str
-        What happened on the way (a jump on the load path, from the IPOPT fallback), per element.
+        What happened on the way (a jump or a buckling on the load path, noted by the path
+        solver that answered the element), per element.
     backend : str
         How the fast path ran: compiled (with the compiler and the cached library) or
         interpreted, and why.
@@ -359,8 +362,27 @@ def _scaled(p, idx: dict, pressure_factor, load_factor, pressure=None):
     return ca.vertcat(*parts)
 
 
+_PIVOTS: dict[int, ca.Function] = {}
+
+
+def _pivot_function(n: int) -> ca.Function:
+    """H -> the smallest LDL^T pivot of H divided by the largest magnitude (SX, cached per n).
+
+    By Sylvester's law of inertia the pivots have the signs of the eigenvalues: the result is < 0
+    exactly when H has a negative eigenvalue.
+    """
+    fun = _PIVOTS.get(n)
+    if fun is None:
+        h = ca.SX.sym("H", n, n)
+        d, _, _ = ca.ldl(0.5 * (h + h.T), False)
+        fun = ca.Function("esba_min_pivot", [h], [ca.mmin(d) / (ca.mmax(ca.fabs(d)) + 1e-300)], ["H"], ["min_pivot"], {"cse": True})
+        _PIVOTS[n] = fun
+    return fun
+
+
 def _newton_step(model: Model, max_step: float, downhill: bool = False) -> ca.Function:
-    """theta -> theta + s dx with H dx = -g, s = min(1, (max_step/n) / max|dx|), kept in the domain.
+    """theta -> theta + s dx with H dx = -g, s = min(1, (max_step/n) / max|dx|), kept in the domain;
+    also the relative smallest LDL^T pivot of H at theta (< 0: H is indefinite there).
 
     With ``downhill`` a step that climbs (g . dx > 0, H indefinite along it) is reversed, so the
     iteration does not settle on a saddle between two stable branches.
@@ -379,11 +401,13 @@ def _newton_step(model: Model, max_step: float, downhill: bool = False) -> ca.Fu
     scale = ca.fmin(1.0, (max_step / n) / (ca.mmax(ca.fabs(dx)) + 1e-300))
     new = ca.fmax(th + scale * dx, _lower_bound_sym(p, idx, n))
     opts = {"cse": True} if sym is ca.SX else {}
-    return ca.Function("esba_newton_step", [th, p], [new], ["theta", "p"], ["theta_new"], opts)
+    pivot = _pivot_function(n)(h)
+    return ca.Function("esba_newton_step", [th, p], [new, pivot], ["theta", "p"], ["theta_new", "min_pivot"], opts)
 
 
 def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> ca.Function:
-    """One element's load path: (p, target) -> theta, P, grad, hess, tip, largest load-step change."""
+    """One element's load path: (p, target) -> theta, P, grad, hess, tip, and the smallest relative
+    LDL^T pivot of the Hessian over the Newton iterates of the load ramp (< 0: it left the stable branch)."""
     n, npar = model.n, len(model.parameters)
     idx = _indices(model)
     step = _newton_step(model, options.max_step, options.downhill)
@@ -410,25 +434,25 @@ def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> 
         for k in range(1, options.pressure_steps + 1):
             pk = _scaled(p_full, idx, k / options.pressure_steps, 0.0)
             for _ in range(options.newton_steps):
-                x = free_step(x, pk)
-    jump = ca.MX(0.0)
+                x = free_step(x, pk)[0]
+    pivot = ca.MX(1.0)
     if loaded:
         for k in range(1, options.load_steps + 1):
             pk = _scaled(p_full, idx, 1.0, k / options.load_steps)
-            before = x
             for _ in range(options.newton_steps):
-                x = step(x, pk)
-            jump = ca.fmax(jump, ca.mmax(ca.fabs(x - before)))
+                x, piv = step(x, pk)
+                pivot = ca.fmin(pivot, piv)
     for _ in range(options.final_steps):
-        x = step(x, p_full)
+        x, piv = step(x, p_full)
+        pivot = ca.fmin(pivot, piv)
     g, h = gh(x, p_full)
     tip = model["kinematics"](x, p[idx["geometry"][0]])[0]
     return ca.Function(
         "esba_batch_element",
         [p, target],
-        [x, pressure, g, ca.vec(h), tip, jump],
+        [x, pressure, g, ca.vec(h), tip, pivot],
         ["p", "target"],
-        ["theta", "P", "grad", "hess", "tip", "jump"],
+        ["theta", "P", "grad", "hess", "tip", "min_pivot"],
     )
 
 
@@ -454,7 +478,7 @@ def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
     h = hashlib.sha256()
     h.update(model.path.read_bytes())
     h.update(Path(__file__).read_bytes())
-    settings = (options.chunk, TAIL_CHUNK, options.pressure_steps, options.load_steps, options.newton_steps, options.final_steps, options.max_step, options.downhill, angle_mode, ca.__version__)  # max_jump_deg is checked in Python
+    settings = (options.chunk, TAIL_CHUNK, options.pressure_steps, options.load_steps, options.newton_steps, options.final_steps, options.max_step, options.downhill, angle_mode, ca.__version__)  # unstable_tol is checked in Python
     h.update(repr(settings).encode())
     return h.hexdigest()[:20]
 
@@ -545,7 +569,7 @@ def _lower_bounds(model: Model, pv: np.ndarray) -> np.ndarray:
 def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, options: BatchOptions, bar, size_hint: int = 0) -> dict:
     (fun_big, fun_small), backend, build_s, compile_s = _mapped(model, options, angle_mode, max(pv.shape[1], size_hint))
     n, size = model.n, pv.shape[1]
-    outs = {k: [] for k in ("theta", "P", "grad", "hess", "tip", "jump")}
+    outs = {k: [] for k in ("theta", "P", "grad", "hess", "tip", "min_pivot")}
     t0 = time.perf_counter()
     full = size - size % options.chunk
     small = min(options.chunk, TAIL_CHUNK)
@@ -571,7 +595,7 @@ def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, op
         "grad": data["grad"].T.reshape(size, n),
         "hess": data["hess"].T.reshape(size, n, n),
         "tip": data["tip"].T.reshape(size, 3),
-        "jump": data["jump"].ravel(),
+        "min_pivot": data["min_pivot"].ravel(),
         "backend": backend,
         "build": build_s,
         "compile": compile_s,
@@ -594,8 +618,8 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
         near = np.any(theta - lb[:, None] <= 1e-7 * np.maximum(1.0, np.abs(lb))[:, None], axis=1)
         pressure_ok = np.isfinite(P) & (P >= 0)
         stationary = gnorm <= options.stationarity_tol
-        jumped = ~(run["jump"] <= math.radians(options.max_jump_deg))
-        success = finite & stationary & ~near & pressure_ok & ~jumped
+        left = ~(run["min_pivot"] >= -options.unstable_tol)
+        success = finite & stationary & ~near & pressure_ok & ~left
     messages = [""] * len(P)
     for i in np.flatnonzero(~(success & (stability == "stable"))):
         if not pressure_ok[i]:
@@ -606,10 +630,10 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
             messages[i] = "the Newton path left the model's domain (non-finite values)"
         elif near[i]:
             messages[i] = "the solve stopped on the model's domain boundary (Eq. 10): not an equilibrium"
-        elif jumped[i]:
+        elif left[i]:
             messages[i] = (
-                f"an angle changed by {math.degrees(run['jump'][i]):.3g} deg in one load step (> max_jump_deg = "
-                f"{options.max_jump_deg:g}): a snap-through or a steep path, for finer continuation to decide"
+                f"the Hessian lost positive definiteness on the load ramp (smallest relative LDL^T pivot "
+                f"{run['min_pivot'][i]:.3g}): the stable branch ended at a fold or a branch point, for the path solver to locate"
             )
         elif not stationary[i]:
             messages[i] = f"max |dU/dtheta| = {gnorm[i]:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}"

@@ -1,12 +1,19 @@
-"""Static equilibria: minimise the total potential energy U(theta), Eq. (3)-(4), with IPOPT.
+"""Static equilibria: minimise the total potential energy U(theta), Eq. (3)-(4).
 
-IPOPT (``casadi.nlpsol``) is given the generated model's exact gradient and Hessian, the model's
-domain as bounds on theta (the square root of Eq. 10 and L + n (d + r1) theta_i > 0), and a start
-on the physical load path: from a known state (the unloaded constant-curvature shape, exact when
-the pressure comes from a target angle, else reached by ramping the pressure from theta = 0),
-payloads and weight are ramped in steps, each solve warm-started from the last, with the step
-halved when a solve fails. After IPOPT a few Newton steps on the exact Hessian polish the
-stationarity to round-off.
+:func:`solve` finds the state an actuator reaches along its *load history*: from a known state
+(the unloaded constant-curvature shape, exact when the pressure comes from a target angle; else
+theta = 0 at P = 0 and the pressure raised quasi-statically), the payloads and weight are raised
+together from 0 to their values. Each ramp is a path trace (:mod:`esba.path`, pseudo-arclength
+continuation on the generated exact gradient and Hessian) that stops exactly at the target. When
+the stable branch ends before the target, at a fold (or a branch point with no stable way on), the
+quasi-static load snaps: :mod:`esba.loading` finds the state it lands in, and the result says
+where it jumped and from which state to which (:attr:`Equilibrium.jumps`). A straight actuator
+that buckles at a branch point goes on along the stable bent branch, and the result says so.
+
+IPOPT (``casadi.nlpsol``, :mod:`esba.minimise`) stays the solver of record: the path supplies
+its start, IPOPT certifies the minimiser with the generated exact gradient and Hessian and the
+model's domain as bounds on theta (the square root of Eq. 10 and L + n (d + r1) theta_i > 0), and
+a few Newton steps polish the stationarity to round-off.
 
 Every result carries a stability verdict from the Hessian's eigenvalues (``stable`` /
 ``unstable`` / ``critical``), IPOPT's return status, iterations and time. A solve that fails,
@@ -17,8 +24,8 @@ Examples
 --------
 >>> from esba.scene import MAIN_JOB
 >>> r = solve(MAIN_JOB)
->>> r.ok, r.stability
-(True, 'stable')
+>>> r.ok, r.stability, r.certificate.split(":")[0]
+(True, 'stable', 'IPOPT Solve_Succeeded')
 >>> [round(t, 2) for t in r.theta_deg]
 [-3.29, 7.17, 21.44]
 >>> [round(v, 2) for v in r.tip_mm]
@@ -32,12 +39,15 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
-import casadi as ca
 import numpy as np
 
 from . import checks
+from .loading import Jump, Ramp, follow
+from .minimise import LINEAR_SOLVERS, minimise
 from .model import Model
+from .path import PathOptions, PathProblem, SpecialPoint
 from .scene import Scene
+from .stability import STABILITY, stability_verdict, stability_verdicts
 
 __all__ = [
     "SolverOptions",
@@ -48,13 +58,9 @@ __all__ = [
     "evaluate",
     "pressure_for_angle",
     "stability_verdict",
+    "stability_verdicts",
     "STABILITY",
 ]
-
-#: The stability verdicts, from the smallest eigenvalue of the Hessian relative to the largest.
-STABILITY = ("stable", "critical", "unstable")
-
-_LINEAR_SOLVERS = ("mumps", "spral")
 
 
 class SolverOptionsError(ValueError):
@@ -90,19 +96,11 @@ class SolverOptions:
     linear_solver : str
         IPOPT's linear solver: ``"mumps"`` or ``"spral"`` (the HSL solvers are not in the wheel).
     continuation : bool
-        Follow the load path (pressure, then payloads and weight) from a known state. When False,
-        or when :func:`solve` is given ``theta0``, one solve at the full load.
-    pressure_steps : int
-        Steps of the pressure ramp from theta = 0, used when the pressure is given (not a target angle).
-    load_steps : int
-        Steps of the payload and weight ramp from the unloaded state.
-    max_halvings : int
-        How often a continuation step may be halved (after a failed solve, or a jump larger than
-        ``max_jump_deg``) before the solve is reported failed (or the jump accepted and noted).
-    max_jump_deg : float
-        Largest change of any segment angle in one continuation step, degrees, before the step is
-        halved; a jump that persists at the smallest step (a snap-through, or a very steep path)
-        is followed and noted.
+        Follow the load history (pressure, then payloads and weight) from a known state by path
+        following. When False, or when :func:`solve` is given ``theta0``, one IPOPT solve at the
+        full load.
+    path : PathOptions
+        Settings of the path traces of the load history (:class:`esba.path.PathOptions`).
     polish : bool
         Newton steps on the exact Hessian after IPOPT (stationarity to round-off).
     stationarity_tol : float
@@ -117,20 +115,17 @@ class SolverOptions:
     --------
     >>> SolverOptions().tol
     1e-10
-    >>> SolverOptions(load_steps=0)
+    >>> SolverOptions(max_iter=0)
     Traceback (most recent call last):
     ...
-    esba.equilibrium.SolverOptionsError: load_steps=0: expected a whole number >= 1
+    esba.equilibrium.SolverOptionsError: max_iter=0: expected a whole number >= 1
     """
 
     tol: float = 1e-10
     max_iter: int = 200
     linear_solver: str = "mumps"
     continuation: bool = True
-    pressure_steps: int = 4
-    load_steps: int = 4
-    max_halvings: int = 6
-    max_jump_deg: float = 15.0
+    path: PathOptions = field(default_factory=PathOptions)
     polish: bool = True
     stationarity_tol: float = 1e-7
     critical_tol: float = 1e-9
@@ -139,53 +134,19 @@ class SolverOptions:
     def __post_init__(self) -> None:
         _check_pos("tol", self.tol, 1.0)
         _check_int("max_iter", self.max_iter, 1)
-        if self.linear_solver not in _LINEAR_SOLVERS:
-            raise SolverOptionsError(f"linear_solver={self.linear_solver!r}: allowed are {', '.join(_LINEAR_SOLVERS)}")
+        if self.linear_solver not in LINEAR_SOLVERS:
+            raise SolverOptionsError(f"linear_solver={self.linear_solver!r}: allowed are {', '.join(LINEAR_SOLVERS)}")
         for name in ("continuation", "polish"):
             if not isinstance(getattr(self, name), bool):
                 raise SolverOptionsError(f"{name}={getattr(self, name)!r}: expected True or False")
-        _check_int("pressure_steps", self.pressure_steps, 1)
-        _check_int("load_steps", self.load_steps, 1)
-        _check_int("max_halvings", self.max_halvings, 0)
-        _check_pos("max_jump_deg", self.max_jump_deg)
+        if not isinstance(self.path, PathOptions):
+            raise SolverOptionsError(f"path={self.path!r}: expected a PathOptions")
         _check_pos("stationarity_tol", self.stationarity_tol)
         _check_pos("critical_tol", self.critical_tol, 1.0)
         _check_int("samples_per_segment", self.samples_per_segment, 1)
 
 
 DEFAULT_OPTIONS = SolverOptions()
-
-
-def stability_verdict(eigenvalues: Sequence[float], critical_tol: float = DEFAULT_OPTIONS.critical_tol) -> str:
-    """``stable``, ``critical`` or ``unstable`` from the Hessian's eigenvalues.
-
-    Examples
-    --------
-    >>> stability_verdict([2.0, 5.0]), stability_verdict([-1.0, 5.0]), stability_verdict([1e-14, 5.0])
-    ('stable', 'unstable', 'critical')
-    """
-    return str(stability_verdicts(np.asarray(eigenvalues, dtype=float)[None, :], critical_tol)[0])
-
-
-def stability_verdicts(eigenvalues: np.ndarray, critical_tol: float = DEFAULT_OPTIONS.critical_tol) -> np.ndarray:
-    """:func:`stability_verdict` for every row of an (m, n) array of eigenvalues.
-
-    The smallest eigenvalue is compared with ``critical_tol`` times the largest magnitude; a row
-    with a non-finite eigenvalue is ``unknown``.
-
-    >>> stability_verdicts(np.array([[2.0, 5.0], [np.nan, 1.0]])).tolist()
-    ['stable', 'unknown']
-    """
-    eig = np.asarray(eigenvalues, dtype=float)
-    out = np.full(len(eig), "unknown", dtype=object)
-    finite = np.all(np.isfinite(eig), axis=1)
-    safe = np.where(finite[:, None], eig, 0.0)
-    scale = np.maximum(np.max(np.abs(safe), axis=1), 1e-300)
-    low = np.min(safe, axis=1)
-    out[finite] = "critical"
-    out[finite & (low > critical_tol * scale)] = "stable"
-    out[finite & (low < -critical_tol * scale)] = "unstable"
-    return out.astype(str)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -225,20 +186,27 @@ class Equilibrium:
     stability : str
         ``stable``, ``critical`` or ``unstable`` (see :func:`stability_verdict`).
     status : str
-        IPOPT's return status of the last solve, or ``Continuation_Failed`` / ``At_Bound`` /
+        IPOPT's return status of the certifying solve, or ``Continuation_Failed`` / ``At_Bound`` /
         ``Not_Stationary``.
     success : bool
         The solver converged to a stationary point inside the domain.
     iterations : int
-        IPOPT iterations over every continuation step.
+        Newton corrector iterations along the load history plus IPOPT iterations.
     steps : int
-        IPOPT solves made (continuation steps, including halved ones).
+        Points traced along the load history plus IPOPT solves (1 without continuation).
     solve_time_s : float
         Wall time of the whole solve, s.
     message : str
         Why the result is not ok (empty when it is).
     notes : tuple of str
-        What happened on the way that the result does not show (a jump on the load path).
+        What happened on the way that the result does not show (a jump, a buckling).
+    jumps : tuple of Jump
+        The snap-throughs of the load history (:class:`esba.loading.Jump`): the fold's lambda and
+        the states before and after.
+    switches : tuple of SpecialPoint
+        Branch points the load history went through along a stable crossing branch (buckling).
+    certificate : str
+        What certified the returned state: IPOPT's status from the path's end, and how far it moved.
     """
 
     scene: Scene
@@ -259,6 +227,9 @@ class Equilibrium:
     solve_time_s: float
     message: str = ""
     notes: tuple[str, ...] = ()
+    jumps: tuple[Jump, ...] = ()
+    switches: tuple[SpecialPoint, ...] = ()
+    certificate: str = ""
 
     @property
     def ok(self) -> bool:
@@ -312,6 +283,12 @@ class Equilibrium:
             "status": self.status,
             "message": self.message,
             "notes": list(self.notes),
+            "jumps": [j.to_dict() for j in self.jumps],
+            "branch_points": [
+                {"lambda": b.lam, "total_angle_deg": b.total_angle_deg, "tip_mm": [float(b.tip[0]), float(b.tip[1])], "status": b.status}
+                for b in self.switches
+            ],
+            "certificate": self.certificate,
             "iterations": self.iterations,
             "steps": self.steps,
             "gradient_norm": self.gradient_norm,
@@ -376,92 +353,7 @@ def pressure_for_angle(scene: Scene, angle_deg: float | None = None) -> float:
 
 
 # ---------------------------------------------------------------------------------------------
-# IPOPT on the generated functions
-
-_SOLVERS: dict[tuple, ca.Function] = {}
-
-
-def _nlp_solver(model: Model, options: SolverOptions) -> ca.Function:
-    """IPOPT for min U(theta; p) with the model's exact gradient and Hessian (cached per model)."""
-    key = (str(model.path), options.tol, options.max_iter, options.linear_solver)
-    solver = _SOLVERS.get(key)
-    if solver is not None:
-        return solver
-    n, npar = model.n, len(model.parameters)
-    x = ca.MX.sym("x", n)
-    p = ca.MX.sym("p", npar)
-    args = [x, *ca.vertsplit(p)] if npar else [x]
-    f = model["energy"](*args)[0]
-    grad = model["gradient"](*args)
-    hess = model["hessian"](*args)
-    lam_f = ca.MX.sym("lam_f")
-    lam_g = ca.MX.sym("lam_g", 0)
-    grad_f = ca.Function("grad_f", [x, p], [f, grad], ["x", "p"], ["f", "grad_f"])
-    hess_lag = ca.Function(
-        "hess_lag", [x, p, lam_f, lam_g], [ca.triu(lam_f * hess)], ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]
-    )
-    opts = {
-        "grad_f": grad_f,
-        "hess_lag": hess_lag,
-        "print_time": False,
-        "calc_lam_p": False,  # no parametric sensitivities (the payload point s_k is not smooth there)
-        "ipopt.print_level": 0,
-        "ipopt.sb": "yes",
-        "ipopt.tol": options.tol,
-        "ipopt.max_iter": options.max_iter,
-        "ipopt.linear_solver": options.linear_solver,
-    }
-    solver = ca.nlpsol("esba_equilibrium", "ipopt", {"x": x, "f": f, "p": p}, opts)
-    _SOLVERS[key] = solver
-    return solver
-
-
-@dataclass
-class _Attempt:
-    theta: np.ndarray
-    status: str
-    success: bool
-    iterations: int
-
-
-def _polish(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray) -> np.ndarray:
-    """A few Newton steps on the exact Hessian while it is positive definite and inside the domain."""
-    for _ in range(4):
-        g = model.gradient(theta, pv)
-        if float(np.max(np.abs(g))) < 1e-13:
-            break
-        h = model.hessian(theta, pv)
-        try:
-            np.linalg.cholesky(h)
-        except np.linalg.LinAlgError:
-            break
-        new = theta - np.linalg.solve(h, g)
-        if np.any(new <= lbx) or not np.all(np.isfinite(new)):
-            break
-        if float(np.max(np.abs(model.gradient(new, pv)))) >= float(np.max(np.abs(g))):
-            break
-        theta = new
-    return theta
-
-
-def _ipopt(model: Model, options: SolverOptions, theta0: np.ndarray, pv: np.ndarray, lbx: np.ndarray) -> _Attempt:
-    solver = _nlp_solver(model, options)
-    x0 = np.maximum(np.asarray(theta0, dtype=float), lbx + 1e-9 * np.maximum(1.0, np.abs(lbx)))
-    sol = solver(x0=x0, p=pv, lbx=lbx)
-    stats = solver.stats()
-    theta = np.asarray(sol["x"], dtype=float).ravel()
-    success = bool(stats.get("success", False))
-    if success and options.polish:
-        theta = _polish(model, theta, pv, lbx)
-    return _Attempt(theta, str(stats.get("return_status", "unknown")), success, int(stats.get("iter_count", 0)))
-
-
-def _accepted(model: Model, options: SolverOptions, attempt: _Attempt, pv: np.ndarray, lbx: np.ndarray) -> bool:
-    if not attempt.success:
-        return False
-    if float(np.max(np.abs(model.gradient(attempt.theta, pv)))) > options.stationarity_tol:
-        return False
-    return stability_verdict(np.linalg.eigvalsh(model.hessian(attempt.theta, pv)), options.critical_tol) == "stable"
+# solving
 
 
 def _near_bound(theta: np.ndarray, lbx: np.ndarray) -> bool:
@@ -491,6 +383,9 @@ def evaluate(
     solve_time_s: float = 0.0,
     message: str = "",
     notes: Sequence[str] = (),
+    jumps: Sequence[Jump] = (),
+    switches: Sequence[SpecialPoint] = (),
+    certificate: str = "",
 ) -> Equilibrium:
     """An :class:`Equilibrium` for given angles: energy, tip, centre-line, stationarity and stability.
 
@@ -549,7 +444,20 @@ def evaluate(
         solve_time_s=solve_time_s,
         message=message,
         notes=tuple(notes),
+        jumps=tuple(jumps),
+        switches=tuple(switches),
+        certificate=certificate,
     )
+
+
+def _load_value(scene: Scene, pressure: float, name: str, lam: float) -> str:
+    """Where on a ramp of solve() lambda lies, in the scene's terms."""
+    if name == "pressure":
+        return f"P = {lam:.6g} MPa (unloaded)"
+    parts = [f"payload {k} = {p.force * lam:.6g} N" for k, p in enumerate(scene.payloads, start=1)]
+    if scene.gravity:
+        parts.append(f"weight {100 * lam:.4g} %")
+    return f"{100 * lam:.6g} % of the loads ({', '.join(parts)}) at P = {pressure:.6g} MPa"
 
 
 def solve(
@@ -559,7 +467,7 @@ def solve(
     pressure: float | None = None,
     theta0: Sequence[float] | None = None,
 ) -> Equilibrium:
-    """The equilibrium of ``scene`` reached along its load path.
+    """The equilibrium of ``scene`` reached along its load history.
 
     Parameters
     ----------
@@ -570,16 +478,17 @@ def solve(
     pressure : float, optional
         Use this pressure (MPa) instead of the scene's (saves the closed form in sweeps).
     theta0 : sequence of float, optional
-        Warm start (rad): one solve at the full load from here, no continuation.
+        Warm start (rad): one IPOPT solve at the full load from here, no load history.
 
     Returns
     -------
     Equilibrium
         Check :attr:`Equilibrium.ok` (or call :meth:`Equilibrium.check`): a failed or unstable
-        solve is returned with ``ok == False`` and a ``message``. A jump on the load path (the
-        angles change by more than ``options.max_jump_deg`` however small the step: a
-        snap-through, or a very steep path) is followed, as the actuator would, and recorded in
-        ``notes``.
+        solve is returned with ``ok == False`` and a ``message``. The load history is: the
+        unloaded state at the pressure (exact for a target angle, else the pressure raised from 0),
+        then the payloads and weight raised together from 0. A snap-through on the way (the stable
+        branch ends at a fold) is followed as the actuator would, and recorded in ``jumps`` and
+        ``notes``; so is buckling at a branch point (``switches``).
     """
     options = DEFAULT_OPTIONS if options is None else options
     if not isinstance(options, SolverOptions):
@@ -592,51 +501,9 @@ def solve(
     lbx = model.lower_bounds(full)
     pv_full = model.param_vector(full)
     loaded = bool(scene.payloads) or scene.gravity
-    max_jump = math.radians(options.max_jump_deg)
 
-    iterations = 0
-    steps = 0
     message = ""
-    notes: list[str] = []
-
-    def attempt(theta_start: np.ndarray, pv: np.ndarray) -> _Attempt:
-        nonlocal iterations, steps
-        a = _ipopt(model, options, theta_start, pv, lbx)
-        iterations += a.iterations
-        steps += 1
-        return a
-
-    def ramp(theta: np.ndarray, pv_at, what: str, n_steps: int) -> tuple[np.ndarray, str]:
-        """Follow factor 0 -> 1 from theta; return the state at 1 (or the last good one and why not)."""
-        base = 1.0 / n_steps
-        smallest = base / 2**options.max_halvings
-        lam, dlam = 0.0, base
-        while lam < 1.0:
-            target = min(1.0, lam + dlam)
-            pv = pv_at(target)
-            a = attempt(theta, pv)
-            good = _accepted(model, options, a, pv, lbx) and not _near_bound(a.theta, lbx)
-            jump = float(np.max(np.abs(a.theta - theta))) if good else math.inf
-            if good and (jump <= max_jump or dlam <= smallest * (1 + 1e-9)):
-                if jump > max_jump:
-                    notes.append(
-                        f"the angles jump by up to {math.degrees(jump):.1f} deg as the {what} goes from "
-                        f"{100 * lam:.4g}% to {100 * target:.4g}% of its value: a snap-through, or a path "
-                        "too steep to follow in the smallest continuation step"
-                    )
-                theta, lam = a.theta, target
-                dlam = min(base, 2.0 * dlam)
-                continue
-            if dlam <= smallest * (1 + 1e-9):
-                reason = a.status if not a.success else ("a domain bound" if _near_bound(a.theta, lbx) else "no stable equilibrium")
-                return theta, (
-                    f"the {what} ramp from the known state stopped at {100 * lam:.4g}% "
-                    f"(the step to {100 * target:.4g}% gave {reason}): the branch followed is lost there "
-                    "or the solver cannot follow it"
-                )
-            dlam /= 2.0
-        return theta, ""
-
+    ramps: list[tuple[str, Ramp]] = []
     if theta0 is not None:
         theta = np.asarray(theta0, dtype=float).ravel()
         if theta.shape != (n,) or not np.all(np.isfinite(theta)):
@@ -644,29 +511,63 @@ def solve(
     elif not options.continuation:
         theta = known_unloaded if known_unloaded is not None else np.zeros(n)
     else:
+        pv_unloaded = model.param_vector(scene.parameters(pressure, load_factor=0.0))
         if known_unloaded is not None:
             theta = known_unloaded
         else:
-            unloaded = scene.parameters(pressure, load_factor=0.0)
-
-            def at_pressure(lam: float) -> np.ndarray:
-                v = dict(unloaded)
-                v["P"] = lam * pressure
-                return model.param_vector(v)
-
-            theta, message = ramp(np.zeros(n), at_pressure, "pressure", options.pressure_steps)
+            p_zero = model.param_vector(scene.parameters(0.0, load_factor=0.0))
+            dp = model.param_vector(scene.parameters(1.0, load_factor=0.0)) - p_zero  # U is linear in P
+            ramp = PathProblem(model, p_zero, dp, "pressure", "MPa", (0.0, math.inf), 0.1, what="pressure")
+            r = follow(ramp, np.zeros(n), 0.0, pressure, options.path, ipopt_tol=options.tol)
+            ramps.append(("pressure", r))
+            theta = r.theta
+            if not r.reached:
+                message = f"the pressure ramp from P = 0 stopped at {_load_value(scene, pressure, 'pressure', r.lam)}: {r.message}"
         if loaded and not message:
-            theta, message = ramp(
-                theta, lambda lam: model.param_vector(scene.parameters(pressure, load_factor=lam)), "load", options.load_steps
-            )
+            ramp = PathProblem.homotopy(model, pv_unloaded, pv_full, name="load", what="payloads and weight")
+            r = follow(ramp, theta, 0.0, 1.0, options.path, ipopt_tol=options.tol)
+            ramps.append(("load", r))
+            theta = r.theta
+            if not r.reached:
+                message = f"the load ramp from the unloaded state stopped at {_load_value(scene, pressure, 'load', r.lam)}: {r.message}"
 
-    final = attempt(theta, pv_full)
-    if message:  # continuation failed: report the full-load solve from the last good state, not as an answer
+    final = minimise(
+        model,
+        theta,
+        pv_full,
+        lbx,
+        tol=options.tol,
+        max_iter=options.max_iter,
+        linear_solver=options.linear_solver,
+        polish_steps=4 if options.polish else 0,
+        warm=bool(ramps) or (known_unloaded is not None and theta0 is None and not loaded),
+    )
+    moved = float(np.max(np.abs(final.theta - theta)))
+    start_from = "the path's end" if ramps else ("the known unloaded state" if known_unloaded is not None and theta0 is None else "the start")
+    certificate = f"IPOPT {final.status}: {final.iterations} iterations from {start_from}, which it moved by {moved:.2g} rad"
+    notes = []
+    jumps: list[Jump] = []
+    switches: list[SpecialPoint] = []
+    for name, r in ramps:
+        for sp in r.switches:
+            switches.append(sp)
+            notes.append(
+                f"the straight-through branch loses stability at a branch point at {_load_value(scene, pressure, name, sp.lam)}: "
+                f"the state goes on along the stable crossing branch (buckling)"
+            )
+        for j in r.jumps:
+            jumps.append(j)
+            notes.append(j.describe(_load_value(scene, pressure, name, j.lam)))
+    if ramps and final.success and moved > 1e-6:
+        notes.append(f"IPOPT moved the path's end by {moved:.3g} rad: the certified state is not the one the path reached")
+    if message:  # the load history failed: report the full-load solve from the last good state, not as an answer
         status, success = "Continuation_Failed", False
     else:
         status, success = final.status, final.success
         if not success:
             message = f"IPOPT did not converge: {final.status}"
+    iterations = final.iterations + sum(r.corrector_iterations + r.ipopt_iterations for _, r in ramps)
+    steps = 1 + sum(r.points for _, r in ramps) + sum(len(r.jumps) for _, r in ramps)
     return evaluate(
         scene,
         final.theta,
@@ -679,4 +580,7 @@ def solve(
         solve_time_s=time.perf_counter() - t_start,
         message=message,
         notes=notes,
+        jumps=tuple(jumps),
+        switches=tuple(switches),
+        certificate=certificate,
     )

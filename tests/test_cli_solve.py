@@ -93,8 +93,8 @@ def test_scene_file_and_plot(capsys, tmp_path, monkeypatch):
 def test_failed_solve_exits_1(capsys):
     code, out, err = run(capsys, "solve", "--no-plot", "--max-iter", "1")
     assert code == EXIT_FAILED
-    assert "NOT OK" in out and "Continuation_Failed" in out
-    assert err.startswith("esba: solve not ok: the load ramp")
+    assert "NOT OK" in out and "Maximum_Iterations_Exceeded" in out
+    assert err.startswith("esba: solve not ok: IPOPT did not converge")
 
 
 def test_failed_solve_json_says_so(capsys):
