@@ -82,9 +82,11 @@ def _split_name(name: str) -> tuple[str, int]:
     """``"omega2"`` -> ("omega", 2); ``"payload"`` -> ("payload", 1)."""
     if not isinstance(name, str):
         raise PathError(f"parameter={name!r}: allowed are {', '.join(PARAMETERS)} (a payload's with its number, e.g. payload2)")
+    if name in PARAMETERS:
+        return name, 1
     base = name.rstrip("0123456789")
     digits = name[len(base) :]
-    if base not in PARAMETERS or (digits and base not in ("payload", "omega", "at")):
+    if not digits or base not in ("payload", "omega", "at"):
         raise PathError(f"parameter={name!r}: allowed are {', '.join(PARAMETERS)} (a payload's with its number, e.g. payload2)")
     k = int(digits) if digits else 1
     if k < 1:

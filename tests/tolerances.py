@@ -36,3 +36,8 @@ AGREE_REL = 1e-3
 SAME_K_REL = 1e-7
 #: a multiplier against a central difference of the optimum over bound steps +-h: O(h^2) error
 SENSITIVITY_REL = 1e-3
+#: path following (issue 8): special points located to this relative accuracy in lambda
+LOCATE_RTOL = 1e-8
+#: a Newton corrector converges quadratically: r_{k+1} <= C r_k^2 (measured C ~ 1e-3 on Table 1,
+#: gradients in N mm/rad); the bound leaves a factor 1e4 for other n and parameters
+QUADRATIC_CONSTANT = 10.0
