@@ -804,9 +804,139 @@ def _add_sweep(sub) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
+# esba path (issue 8): branches, special points, hysteresis
+
+#: Where ``esba path`` writes its branches and figure unless told otherwise (the current folder).
+DEFAULT_PATH_OUT = "esba-path.csv"
+DEFAULT_PATH_FIGURE = "esba-path.png"
+
+#: The parameters of ``esba path --param`` (``esba.path_problem.PARAMETERS``, written out so that
+#: building the parser does not import CasADi; a test checks they agree).
+_PATH_PARAMETERS = ("pressure", "payload", "omega", "at", "load", "r2", "d", "rho", "E", "L", "r1", "M")
+
+
+def _writable(flag: str, path: str, suffixes: tuple[str, ...]) -> str:
+    """``path`` if its folder exists and is writable and its suffix is one of ``suffixes``, else a usage error."""
+    import os
+    from pathlib import Path
+
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise UsageError(f"{flag} {path!r}: expected a file name ending in {', '.join(suffixes)}")
+    folder = p.parent if str(p.parent) else Path(".")
+    if not folder.is_dir():
+        raise UsageError(f"{flag} {path!r}: the folder {str(folder)!r} does not exist")
+    if p.is_dir():
+        raise UsageError(f"{flag} {path!r}: is a folder, expected a file name")
+    if not os.access(folder, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
+        raise UsageError(f"{flag} {path!r}: cannot write there (no permission)")
+    return path
+
+
+def _path_table(d: dict) -> str:
+    unit = d["unit"].split(" ")[0]
+    unit = "" if unit == "1" else f" {unit}"
+    lines = [f"scene: {d['scene']}", f"path in {d['parameter']} from {d['from']:g} to {d['to']:g}{unit}"]
+    head = f"  {'':2} {'point':<13} {d['parameter'] + unit:>16} {'angle deg':>10} {'tip x, y mm':>17}  {'Morse':>5}  status"
+    for b in d["branches"]:
+        lines.append(f"{b['label'] or 'branch'}: {b['points']} points; {b['stop_reason']}")
+        if b["special_points"]:
+            lines.append(head)
+        for sp in b["special_points"]:
+            tip = f"{sp['tip_mm'][0]:7.2f}, {sp['tip_mm'][1]:7.2f}"
+            lines.append(
+                f"  {sp['label']:2} {sp['kind']:<13} {sp['lambda']:16.9g} {sp['total_angle_deg']:10.3f} {tip:>17}  "
+                f"{sp['morse_before']} -> {sp['morse_after']}  {sp['status']}"
+            )
+    for r in d["loading"]:
+        what = f"quasi-static {d['parameter']} {r['from']:g} -> {r['to']:g}{unit}"
+        if not r["jumps"]:
+            lines.append(f"{what}: no jump" + ("" if r["reached"] else f"; NOT reached: {r['message']}"))
+        for j in r["jumps"]:
+            lines.append(
+                f"{what}: jumps at the {j['kind']} {j['lambda']:.9g}{unit}: angle {j['total_angle_before_deg']:.2f} -> "
+                f"{j['total_angle_after_deg']:.2f} deg, tip moves {j['distance_mm']:.1f} mm"
+            )
+    if d.get("hysteresis"):
+        h = d["hysteresis"]
+        lines.append(f"hysteresis: up jumps at {h['up'][0]:.9g}, down at {h['down'][-1]:.9g}{unit}; width {h['width']:.6g}{unit}")
+    for k in ("out", "figure"):
+        if d.get(k):
+            lines.append(f"wrote {d[k]}")
+    return "\n".join(lines)
+
+
+def _cmd_path(args: argparse.Namespace) -> int:
+    import math
+
+    if args.to is None or not math.isfinite(args.to):
+        raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
+    out = None if args.no_out else _writable("--out", args.out or DEFAULT_PATH_OUT, (".csv", ".json"))
+    plot = None if args.no_plot else _writable("--plot", args.plot or DEFAULT_PATH_FIGURE, (".png", ".pdf", ".svg"))
+    from pathlib import Path
+
+    from esba.equilibrium import EquilibriumError
+    from esba.path import PathOptions, write_branches
+    from esba.path_problem import PathError
+    from esba.path_study import study
+
+    scene = _scene_from_args(args)
+    param = args.param
+    if args.payload_index != 1:
+        if param not in ("payload", "omega", "at"):
+            raise UsageError(f"--payload-index {args.payload_index}: only means something with --param payload, omega or at")
+        param = f"{param}{args.payload_index}"
+    try:
+        options = PathOptions(locate=args.locate, max_steps=args.max_steps, ds_max=args.ds_max, ds=min(0.05, args.ds_max))
+        result = study(scene, param, args.to, start=args.start, options=options, switch=not args.no_switch, loading=not args.no_loading)
+    except PathError as exc:
+        raise UsageError(str(exc)) from None
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    data = result.to_dict(points=bool(args.json and args.points))
+    if out:
+        extra = {k: v for k, v in result.to_dict(points=False).items() if k != "branches"}
+        data["out"] = str(write_branches(result.branches, out, extra).resolve())
+    if plot:
+        from esba.path_figures import save_figure, study_figure
+
+        data["figure"] = str(save_figure(study_figure(result, args.y), plot).resolve())
+    _emit(args, data, _path_table)
+    if result.main.stopped not in ("bound", "loop"):
+        print(f"esba: the path stopped before {args.to:g}: {result.main.stop_reason}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _add_path(sub) -> None:
+    p = sub.add_parser(
+        "path",
+        help="trace the equilibria as one parameter changes: folds, branch points, stability, hysteresis (CSV/JSON, figure)",
+    )
+    _add_scene_flags(p)
+    p.add_argument("--param", choices=_PATH_PARAMETERS, default="pressure", help="the parameter to follow (default pressure; payload, omega and at are payload 1's: use --payload-index for another)")
+    p.add_argument("--payload-index", type=_positive_int, default=1, metavar="K", help="which payload --param payload/omega/at means (default 1)")
+    p.add_argument("--to", type=_float_arg, required=True, metavar="VALUE", help="trace to this value (MPa, N, deg, mm, ... as the parameter)")
+    p.add_argument("--from", dest="start", type=_float_arg, metavar="VALUE", help="start here (default: the scene's own value)")
+    p.add_argument("--locate", choices=("extended", "bisection"), default="extended", help="how folds are located (default: the extended system)")
+    p.add_argument("--max-steps", type=_positive_int, default=2000, metavar="N", help="steps per branch (default 2000)")
+    p.add_argument("--ds-max", type=_float_arg, default=0.25, metavar="DS", help="largest step in the scaled arclength (default 0.25)")
+    p.add_argument("--no-switch", action="store_true", help="do not trace the branches crossing at branch points")
+    p.add_argument("--no-loading", action="store_true", help="do not follow quasi-static loading up and down (the hysteresis)")
+    p.add_argument("--y", choices=("total-angle", "tip-x", "tip-y"), default="total-angle", help="what the figure shows against the parameter")
+    p.add_argument("--out", metavar="FILE", help=f"the branches as CSV or JSON (default {DEFAULT_PATH_OUT})")
+    p.add_argument("--no-out", action="store_true", help="write no branch file")
+    p.add_argument("--plot", metavar="FILE", help=f"the figure (default {DEFAULT_PATH_FIGURE})")
+    p.add_argument("--no-plot", action="store_true", help="write no figure")
+    p.add_argument("--points", action="store_true", help="with --json: print every point, not only the special ones")
+    p.set_defaults(func=_cmd_path)
+
+
+# ---------------------------------------------------------------------------------------------
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_stiffness, _add_pressure, _add_validate, _add_sweep, _add_bench, _add_figures, _add_design]
+COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_path, _add_stiffness, _add_pressure, _add_validate, _add_sweep, _add_bench, _add_figures, _add_design]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -12,8 +12,8 @@ fig7b     unloaded bending angle against pressure,         :func:`pressure_angle
           0-0.2 MPa, fibre angles 5, 10, 15, 20 deg
 fig8c     shapes for n = 1..4 under a 2 N horizontal       :func:`payload_shapes`
           tip payload at the 90 deg pressure
-fig10     horizontal tip payload 0-2 N against the tip     :func:`horizontal_payload_sweep`
-          position, n = 3
+fig10     horizontal tip payload 0-2 N against the tip     :func:`payload_branch` (a traced
+          position, n = 3                                  branch, :mod:`esba.path`)
 fig11     secant stiffness against payload (0.5, 1, 2 N    :func:`horizontal_payload_sweep`
           and a fine curve), n = 3
 ========  ==============================================  =================================
@@ -59,6 +59,7 @@ __all__ = [
     "PayloadShapes",
     "payload_shapes",
     "horizontal_payload_sweep",
+    "payload_branch",
     "figure_7b",
     "figure_8c",
     "figure_10",
@@ -329,22 +330,42 @@ def horizontal_payload_sweep(forces: Sequence[float] = FINE_FORCES, segments: in
     return result
 
 
+def payload_branch(segments: int = 3, to: float = 2.0, angle_deg: float = 90.0):
+    """The branch of equilibria as a tip payload grows from 0 to ``to`` N at the 90 degree pressure.
+
+    A path trace (:func:`esba.path.trace`) from the unloaded 90 degree state, with exact points at
+    the paper's payloads (0.5, 1, 2 N); a fold or branch point on the way is located and shown.
+
+    Examples
+    --------
+    >>> b = payload_branch()
+    >>> b.stop_reason, [(p.lam, round(float(p.tip[1]), 2)) for p in b.special if p.kind == "user"]
+    ('reached payload1 = 2 N', [(0.5, 73.75), (1.0, 54.04), (2.0, 10.22)])
+    """
+    from .path import PathOptions, PathProblem, trace
+
+    scene = MAIN_JOB.replace(segments=int(segments), payloads=(Payload(0.0, angle_deg, 1.0),))
+    start = _checked(solve(scene), "unloaded 90 deg state")
+    problem = PathProblem.from_scene(scene, "payload", pressure=start.pressure)
+    return trace(problem, start.theta, 0.0, to=to, milestones=PAPER_FORCES, options=PathOptions(ds_max=0.05))
+
+
 def figure_10(out_dir: str | Path) -> Path:
-    """Fig. 10: horizontal tip payload 0-2 N against the tip position, n = 3."""
-    s = horizontal_payload_sweep()
-    force = np.array((0.0, *s.forces))
-    tips = np.array([s.initial.tip_mm] + [r.tip_mm for r in s.loaded])
+    """Fig. 10: horizontal tip payload 0-2 N against the tip position, n = 3 (a traced branch)."""
+    from .path_figures import draw_branch
+
+    b = payload_branch()
     fig = new_figure(8.0, 4.4)
     ax_y, ax_x = fig.subplots(1, 2, sharey=True)
-    y0 = tips[0, 1]
-    ax_y.plot(tips[:, 1], force, "C0-", lw=1.8, label="esba, n = 3")
-    # the paper's secants K = dF / dy from the unloaded state
+    y0 = b.tip[0, 1]
+    stable = "all stable" if b.stable.all() else "dashed: unstable"
+    draw_branch(ax_y, b, "tip-y", "C0", f"esba, n = 3: traced branch ({stable})", swap=True)
+    # the paper's secants K = dF / dy from the unloaded state, at the exact points of the trace
     lines = ["secant K = ΔF/Δy from 0 N:"]
-    for f in PAPER_FORCES:
-        k = int(np.argmin(np.abs(force - f)))
-        ax_y.plot([y0, tips[k, 1]], [0.0, force[k]], color="0.5", lw=0.8, ls="--")
-        ax_y.plot(tips[k, 1], force[k], "C0o", ms=4)
-        lines.append(f"{f:g} N: {1000 * force[k] / (y0 - tips[k, 1]):.1f} N/m")
+    for f, tip in ((p.lam, p.tip) for p in b.special if p.kind == "user"):
+        ax_y.plot([y0, tip[1]], [0.0, f], color="0.5", lw=0.8, ls="--")
+        ax_y.plot(tip[1], f, "C0o", ms=4)
+        lines.append(f"{f:g} N: {1000 * f / (y0 - tip[1]):.1f} N/m")
     ax_y.text(0.97, 0.04, "\n".join(lines), transform=ax_y.transAxes, ha="right", va="bottom", fontsize=8)
     ax_y.plot(TABLE2_EXP_TIP_MM[1], 2.0, "k*", ms=9, label="experiment, 2 N (Table 2)")
     ax_y.plot(TABLE2_FEM_TIP_MM[1], 2.0, "kx", ms=7, label="FEM, 2 N (Table 2)")
@@ -353,7 +374,7 @@ def figure_10(out_dir: str | Path) -> Path:
     ax_y.set_ylabel("horizontal tip payload F (N)")
     ax_y.set_title("horizontal position y (dashed: secants)", fontsize=9)
     ax_y.legend(loc="upper left", fontsize=7.5)
-    ax_x.plot(tips[:, 0], force, "C1-", lw=1.8, label="esba, n = 3")
+    draw_branch(ax_x, b, "tip-x", "C1", "esba, n = 3 (traced)", swap=True)
     ax_x.plot(TABLE2_EXP_TIP_MM[0], 2.0, "k*", ms=9, label="experiment, 2 N (Table 2)")
     ax_x.plot(TABLE2_FEM_TIP_MM[0], 2.0, "kx", ms=7, label="FEM, 2 N (Table 2)")
     ax_x.set_xlabel("tip x, vertical, downwards (mm)")
@@ -362,8 +383,9 @@ def figure_10(out_dir: str | Path) -> Path:
     for ax in (ax_y, ax_x):
         ax.grid(True, color="0.9", lw=0.6)
         ax.set_ylim(0.0, None)
+    problem_pressure = pressure_for_angle(MAIN_JOB)
     fig.suptitle(
-        f"Tip position under a horizontal tip payload from 90°, P = {s.pressure:.4f} MPa held (cf. paper Fig. 10)",
+        f"Tip position under a horizontal tip payload from 90°, P = {problem_pressure:.4f} MPa held (cf. paper Fig. 10)",
         fontsize=10,
     )
     return save_figure(fig, Path(out_dir) / "fig10.png")

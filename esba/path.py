@@ -386,10 +386,17 @@ def _locate_crossing(eng: _Engine, a: _Point, b: _Point, s_b: float, fold: bool)
     idx = _crossing_index(a.morse, b.morse)
     idx = min(idx, eng.n - 1)
     f_a, f_b = float(a.eig[idx]), float(b.eig[idx])
+    nearer = a if abs(f_a) <= abs(f_b) else b
     if fold and eng.opts.locate == "extended":
-        pt = _fold_newton(eng, a if abs(f_a) <= abs(f_b) else b, idx, a, b)
+        pt = _fold_newton(eng, nearer, idx, a, b)
         if pt is not None:
             return pt, "converged", "extended system (g = 0, H v = 0, v0 . v = 1)"
+    if not fold:
+        # a branch point: the corrector is singular there, so Brent's method may not get close; the
+        # minimally extended system is regular
+        pt = _branch_point_newton(eng, nearer, idx, a, b)
+        if pt is not None:
+            return pt, "converged", "extended system (g + mu phi = 0, H phi = 0, phi . phi = 1, phi . dg/dlambda = 0)"
     if f_a * f_b < 0:
 
         def crit(pt: _Point) -> float:
@@ -442,6 +449,60 @@ def _fold_newton(eng: _Engine, start: _Point, idx: int, a: _Point, b: _Point) ->
     if np.max(np.abs(g)) > 1e3 * tol:
         return None
     # the fold lies on the path between a and b (lambda, extremal there, may lie just beyond both)
+    span = eng.norm(np.concatenate([b.theta - a.theta, [b.lam - a.lam]]))
+    for end in (a, b):
+        if eng.norm(np.concatenate([theta - end.theta, [lam - end.lam]])) > 1.5 * span + 1e-12:
+            return None
+    return _Point(theta, lam, g, h, gl)
+
+
+def _branch_point_newton(eng: _Engine, start: _Point, idx: int, a: _Point, b: _Point) -> _Point | None:
+    """Newton on Moore's extended system for a simple branch point from ``start``:
+    g + mu phi = 0, H phi = 0, phi . phi = 1, phi . dg/dlambda = 0 in (theta, lambda, phi, mu)
+    (regular at a simple branch point, where mu = 0); None when it fails or lands off the bracket."""
+    prob, n = eng.prob, eng.n
+    theta, lam = start.theta.copy(), float(start.lam)
+    phi = start.vec[:, idx].copy()
+    mu = 0.0
+    tol = eng.opts.tol
+    for _ in range(40):
+        if not eng.admissible(theta, lam):
+            return None
+        g, h, gl = eng.evaluate(theta, lam)
+        hv, hv_t, hv_l, vgll = prob.fold_terms(theta, lam, phi)
+        res = np.concatenate([g + mu * phi, hv, [phi @ phi - 1.0, phi @ gl]])
+        if not np.all(np.isfinite(res)):
+            return None
+        hscale = max(1.0, float(np.max(np.abs(h))))
+        if np.max(np.abs(g)) <= tol and np.max(np.abs(hv)) <= 1e-13 * hscale and abs(res[2 * n]) <= 1e-14 and abs(res[-1]) <= tol:
+            break
+        jac = np.zeros((2 * n + 2, 2 * n + 2))
+        jac[:n, :n] = h
+        jac[:n, n] = gl
+        jac[:n, n + 1 : 2 * n + 1] = mu * np.eye(n)
+        jac[:n, 2 * n + 1] = phi
+        jac[n : 2 * n, :n] = hv_t
+        jac[n : 2 * n, n] = hv_l
+        jac[n : 2 * n, n + 1 : 2 * n + 1] = h
+        jac[2 * n, n + 1 : 2 * n + 1] = 2.0 * phi
+        jac[2 * n + 1, :n] = hv_l  # d(phi . g_lambda)/dtheta = (d(H phi)/dlambda) at fixed phi
+        jac[2 * n + 1, n] = vgll
+        jac[2 * n + 1, n + 1 : 2 * n + 1] = gl
+        try:
+            step = np.linalg.solve(jac, -res)
+        except np.linalg.LinAlgError:
+            return None
+        theta = theta + step[:n]
+        lam = lam + float(step[n])
+        phi = phi + step[n + 1 : 2 * n + 1]
+        mu = mu + float(step[-1])
+        if np.max(np.abs(step)) <= 1e-15 * (1.0 + np.max(np.abs(theta)) + abs(lam)):
+            break
+    else:
+        return None
+    g, h, gl = eng.evaluate(theta, lam)
+    if np.max(np.abs(g)) > 1e3 * tol:
+        return None
     span = eng.norm(np.concatenate([b.theta - a.theta, [b.lam - a.lam]]))
     for end in (a, b):
         if eng.norm(np.concatenate([theta - end.theta, [lam - end.lam]])) > 1.5 * span + 1e-12:
@@ -607,8 +668,13 @@ def trace(
                 pt = _locate_value(eng, a, b, s_b, lambda p, v=bound: p.lam - v)
                 if pt is not None:
                     pt = eng.at_lambda(pt.theta, bound) or pt  # exactly on the bound
-                    found.append((_s_of(eng, a, pt), "end", pt, None))
+                    sp = None
+                    if bound in marks:  # a requested value at the end
+                        sp = _special_from(eng, "user", pt, None, a, b, "converged", "at the requested value (Newton at fixed lambda)")
+                    found.append((_s_of(eng, a, pt), "end", pt, sp))
         for m in marks:
+            if m in (lo, hi):
+                continue
             if (a.lam - m) * (b.lam - m) < 0 or (b.lam == m and a.lam != m):
                 pt = _locate_value(eng, a, b, s_b, lambda p, v=m: p.lam - v)
                 if pt is not None:
@@ -644,7 +710,7 @@ def trace(
                 if pt.tangent is None:
                     pt.tangent = a.tangent
                 points.append(pt)
-                kinds.append(kind if kind != "end" else "end")
+                kinds.append(kind)
                 arclength.append(travelled + s_pt)
             else:
                 if pt is b:
@@ -743,41 +809,51 @@ def _branch(
 
 
 def bifurcation_tangents(problem: PathProblem, point: SpecialPoint, branch_tangent: np.ndarray, w: float, sigma: float) -> np.ndarray:
-    """The tangent (theta, lambda) of the branch crossing at a branch point.
+    """The tangent (theta, lambda) of the branch crossing the traced one at a branch point.
 
-    With phi the null vector and t1 the tangent of the traced branch, the crossing directions
-    solve the algebraic bifurcation equation phi . D2g[t, t] = 0 for t = alpha t1 + beta t2,
-    t2 = (phi, 0): a alpha^2 + 2 b alpha beta + c beta^2 = 0, one root being t1 itself. The
-    second derivatives come from d(H phi)/d(theta, lambda) and d2(phi . g)/dlambda2 (AD).
+    Both tangents lie in the plane of t_a = (psi, 1), psi = -H^+ dg/dlambda orthogonal to the null
+    vector phi, and t_b = (phi, 0), and solve the algebraic bifurcation equation
+    phi . D2g[t, t] = a alpha^2 + 2 b alpha beta + c beta^2 = 0 for t = alpha t_a + beta t_b, with
+    the second derivatives from d(H phi)/d(theta, lambda) and d2(phi . g)/dlambda2 (AD). Of its two
+    roots the one farther from ``branch_tangent`` (the traced branch's) is returned, unit in the metric
+    w |dtheta|^2 + (dlambda / sigma)^2.
     """
     n = problem.n
     phi = point.eigenvector / np.linalg.norm(point.eigenvector)
+    _, h, gl = problem.ghl(point.theta, point.lam)
     _, hv_t, hv_l, vgll = problem.fold_terms(point.theta, point.lam, phi)
     m = np.zeros((n + 1, n + 1))
     m[:n, :n] = 0.5 * (hv_t + hv_t.T)
     m[:n, n] = hv_l
     m[n, :n] = hv_l
     m[n, n] = vgll
-    t1 = np.asarray(branch_tangent, dtype=float)
-    t2 = np.concatenate([phi, [0.0]])
-    # the traced direction, made orthogonal to phi (it is, up to round-off, at a branch point)
-    t1 = t1 - (t1[:n] @ phi) * t2
-    a, b, c = t1 @ m @ t1, t1 @ m @ t2, t2 @ m @ t2
+    psi = np.linalg.lstsq(h, -gl, rcond=1e-10)[0]
+    psi = psi - (psi @ phi) * phi
+    t_a = np.concatenate([psi, [1.0]])
+    t_b = np.concatenate([phi, [0.0]])
+    a, b, c = t_a @ m @ t_a, t_a @ m @ t_b, t_b @ m @ t_b
+    disc = b * b - a * c
     scale = max(abs(a), abs(b), abs(c), 1e-300)
-    if abs(b) <= 1e-9 * scale and abs(a) <= 1e-9 * scale:
-        direction = t2  # degenerate (a symmetric pitchfork): along the null vector
-    elif abs(a) <= 1e-9 * scale:
-        direction = -c / (2.0 * b) * t1 + t2
-    else:
-        disc = b * b - a * c
-        if disc < 0:
-            raise PathError(f"branch point at {problem.describe(point.lam)}: no real crossing direction (b^2 - ac = {disc:.3g})")
-        roots = [(-b + math.sqrt(disc)) / a, (-b - math.sqrt(disc)) / a]  # alpha/beta of the two branches
-        # the traced branch has beta = 0 (alpha/beta infinite): the new one is the root of smaller size
-        r = min(roots, key=abs)
-        direction = r * t1 + t2
-    norm = math.sqrt(w * float(direction[:n] @ direction[:n]) + float(direction[n]) ** 2 / sigma**2)
-    return direction / norm
+    if disc < -1e-12 * scale**2:
+        raise PathError(f"branch point at {problem.describe(point.lam)}: no real crossing direction (b^2 - ac = {disc:.3g})")
+    root = math.sqrt(max(disc, 0.0))
+    if abs(a) >= abs(c) and abs(a) > 1e-12 * scale:
+        pairs = [((-b + root) / a, 1.0), ((-b - root) / a, 1.0)]  # (alpha, beta)
+    elif abs(c) > 1e-12 * scale:
+        pairs = [(1.0, (-b + root) / c), (1.0, (-b - root) / c)]
+    else:  # a = c = 0: the two branches are t_a and t_b themselves
+        pairs = [(1.0, 0.0), (0.0, 1.0)]
+
+    def unit(t: np.ndarray) -> np.ndarray:
+        return t / math.sqrt(w * float(t[:n] @ t[:n]) + float(t[n]) ** 2 / sigma**2)
+
+    candidates = [unit(al * t_a + be * t_b) for al, be in pairs]
+    traced = unit(np.asarray(branch_tangent, dtype=float))
+
+    def alignment(t: np.ndarray) -> float:
+        return abs(w * float(t[:n] @ traced[:n]) + float(t[n] * traced[n]) / sigma**2)
+
+    return min(candidates, key=alignment)
 
 
 def bifurcating_branches(

@@ -135,6 +135,16 @@ class SweepResult:
         """Total bending angle per point, degrees (NaN where infeasible: see :attr:`status`)."""
         return np.degrees(np.sum(self.theta, axis=1))
 
+    def scene(self, i: int) -> Scene:
+        """The scene of point ``i`` (the base scene with the point's axis values)."""
+        changes: dict[str, Any] = {"r2": float(self.points["r2"][i]), "d": float(self.points["d"][i])}
+        if "pressure" in self.axes or self.base.pressure is not None:
+            changes["pressure"] = float(self.points["pressure"][i])
+        if "payload" in self.axes or "payload_angle" in self.axes:
+            at = self.base.payloads[0].at if self.base.payloads else 1.0
+            changes["payloads"] = (Payload(float(self.points["payload"][i]), float(self.points["payload_angle"][i]), at),)
+        return self.base.replace(**changes)
+
     def grid(self, values: np.ndarray) -> np.ndarray:
         """A flattened per-point array reshaped to the grid."""
         return np.asarray(values).reshape(self.shape)
@@ -438,10 +448,40 @@ def load_path(scene: Scene, steps: int = 40, jump_mm: float = 2.0, min_step: flo
     return LoadPath(np.array(factors), np.array(thetas), np.array(tips), np.array(eigs), jumps, True)
 
 
-def sweep_figure(result: SweepResult, max_curves: int = 12):
+#: The sweep axes a path can follow (:data:`esba.path_problem.PARAMETERS` names).
+_PATH_OF_AXIS = {"pressure": "pressure", "payload": "payload", "payload_angle": "omega", "r2": "r2", "d": "d"}
+
+
+def _traced(result: SweepResult, idx: np.ndarray, x_name: str):
+    """The branch through the first ok point of a curve, traced over the curve's range; None when
+    the curve cannot be one branch (each design at its own pressure) or has no ok point."""
+    from .path import PathOptions, PathProblem, trace
+
+    if x_name in ("r2", "d") and "pressure" not in result.axes and result.base.pressure is None:
+        return None  # every design at the pressure of its own target angle: not one path
+    ok = [i for i in idx if result.status[i] == "ok"]
+    if not ok:
+        return None
+    i0 = ok[0]
+    xs = result.points[x_name][idx]
+    try:
+        scene = result.scene(int(i0))
+        problem = PathProblem.from_scene(scene, _PATH_OF_AXIS[x_name], pressure=float(result.pressure[i0]))
+        return trace(problem, result.theta[i0], float(result.points[x_name][i0]), to=float(xs.max()), options=PathOptions(ds_max=0.1))
+    except (ValueError, RuntimeError):
+        return None
+
+
+def sweep_figure(result: SweepResult, max_curves: int = 12, traced: bool = True):
     """Total bending angle against the first swept axis with more than one value, one curve per
     combination of the other axes (points that are not ok are left out, not drawn as zero).
+
+    With ``traced`` each curve is the branch of equilibria through its first point, traced over
+    the axis (:mod:`esba.path`): stable solid, unstable dashed, folds marked, so that a bistable
+    range shows its unstable middle and its folds instead of a line through the jump; the grid
+    points themselves are the markers (each solved along the scene's own load history).
     """
+    from .path_figures import draw_branch
     from .plots import new_figure
 
     names = [k for k, v in result.axes.items() if len(v) > 1] or list(result.axes)
@@ -453,17 +493,33 @@ def sweep_figure(result: SweepResult, max_curves: int = 12):
     fig = new_figure(6.5, 4.5)
     ax = fig.subplots()
     angle = np.where(result.ok, result.total_angle_deg, np.nan)
-    for combo in combos:
+    any_traced = any_fold = False
+    for k, combo in enumerate(combos):
         mask = np.ones(len(angle), dtype=bool)
-        for k, v in zip(others, combo):
-            mask &= np.isclose(result.points[k], v)
-        label = ", ".join(f"{k} = {v:g} {AXES[k]}" for k, v in zip(others, combo)) or None
-        ax.plot(result.points[x_name][mask], angle[mask], "o-", ms=3, label=label)
+        for name, v in zip(others, combo):
+            mask &= np.isclose(result.points[name], v)
+        label = ", ".join(f"{name} = {v:g} {AXES[name]}" for name, v in zip(others, combo)) or None
+        idx = np.flatnonzero(mask)
+        idx = idx[np.argsort(result.points[x_name][idx], kind="stable")]
+        branch = _traced(result, idx, x_name) if traced and len(idx) > 1 else None
+        color = f"C{k % 10}"
+        if branch is not None:
+            any_traced = True
+            any_fold = any_fold or bool(branch.folds)
+            draw_branch(ax, branch, "total-angle", color, label)
+            ax.plot(result.points[x_name][idx], angle[idx], "o", color=color, ms=3)
+        else:
+            ax.plot(result.points[x_name][idx], angle[idx], "o-", color=color, ms=3, label=label)
     ax.set_xlabel(f"{x_name} ({AXES[x_name]})")
     ax.set_ylabel("total bending angle (deg)")
     ax.grid(True, color="0.9", lw=0.6)
-    if combos and others:
-        ax.legend(fontsize=8)
+    if any_traced:
+        ax.plot([], [], "o", color="0.4", ms=3, label="grid points (each along its load history)")
+        ax.plot([], [], color="0.4", ls="--", label="unstable (traced branch)")
+        if any_fold:
+            ax.plot([], [], "o", mfc="white", mec="0.4", label="fold")
+    if (combos and others) or any_traced:
+        ax.legend(fontsize=7)
     a, b = result.base.actuator, result.base
     fixed = [f"L={a.L:g} r1={a.r1:g}" + ("" if "r2" in result.axes else f" r2={a.r2:g}") + ("" if "d" in result.axes else f" d={a.d:g}")]
     fixed.append(f"rho={a.rho_deg:g} deg E={a.E:g} MPa")

@@ -114,7 +114,10 @@ def test_transcritical_buckling_one_side_folds():
     f_cr = column_buckling_load(2)
     problem = PathProblem.from_scene(column(2, 1.0), "payload")
     b = trace(problem, np.zeros(2), 1.0, to=12.0)
-    plus, minus = bifurcating_branches(problem, b.branch_points[0], bounds=(1.0, 12.0))
+    sides = bifurcating_branches(problem, b.branch_points[0], bounds=(1.0, 12.0))
+    plus = next(side for side in sides if side.folds)
+    minus = next(side for side in sides if side is not plus)
+    assert np.sum(plus.theta[1]) > 0 > np.sum(minus.theta[1])  # towards the chamber side, and away
     (fold,) = plus.folds
     assert 2.70 < fold.lam < 2.75 and (fold.morse_before, fold.morse_after) == (1, 0)
     assert plus.morse[1] == 1 and np.all(plus.lam[1:5] < f_cr)  # subcritical: unstable, less load

@@ -95,8 +95,11 @@ def test_fig12_trends_are_the_papers():
 
 def test_sweep_figure(tmp_path):
     s = sweep(Scene(pressure=0.1), payload=[0.0, 1.0, 2.0], payload_angle=[0.0, 90.0], options=INTERPRETED)
-    fig = sweep_figure(s)
-    assert len(fig.axes[0].lines) == 2
+    assert len(sweep_figure(s, traced=False).axes[0].lines) == 2  # one line per curve
+    fig = sweep_figure(s)  # each curve a traced branch, the grid points as markers
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels[:2] == ["payload_angle = 0 deg", "payload_angle = 90 deg"]
+    assert "grid points (each along its load history)" in labels
     big = sweep(Scene(), pressure=[0.05, 0.1], payload=[0.0, 1.0], payload_angle=[0.0, 90.0, 180.0], options=INTERPRETED)
     with pytest.raises(SweepError, match="6 curves"):
         sweep_figure(big, max_curves=4)

@@ -1,0 +1,76 @@
+"""The command line: esba path (issue 8): special points, branch files, the figure, bad input."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from esba.cli import _PATH_PARAMETERS, DEFAULT_PATH_FIGURE, DEFAULT_PATH_OUT, EXIT_OK, EXIT_USAGE, main
+from esba.path_problem import PARAMETERS
+
+from .tolerances import LOCATE_RTOL
+
+
+def run(capsys, *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_parser_knows_every_path_parameter():
+    assert set(_PATH_PARAMETERS) == set(PARAMETERS)
+
+
+def test_pressure_path_prints_folds_and_hysteresis(capsys, tmp_path):
+    out_json, fig = tmp_path / "b.json", tmp_path / "b.png"
+    code, out, err = run(capsys, "path", "--param", "pressure", "--from", "0", "--to", "0.3", "--payload", "2", "--out", str(out_json), "--plot", str(fig))
+    assert code == EXIT_OK, err
+    assert out.count("LP fold") == 2 and "hysteresis:" in out and "jumps at the fold" in out
+    assert f"wrote {out_json}" in out and f"wrote {fig}" in out
+    assert fig.stat().st_size > 20_000
+    data = json.loads(out_json.read_text())
+    (main_branch,) = data["branches"]
+    folds = [sp for sp in main_branch["special_points"] if sp["kind"] == "fold"]
+    assert [sp["label"] for sp in folds] == ["LP", "LP"] and all(sp["status"] == "converged" for sp in folds)
+    assert data["hysteresis"]["width"] == pytest.approx(folds[0]["lambda"] - folds[1]["lambda"], rel=LOCATE_RTOL)
+    assert len(main_branch["lambda"]) == main_branch["points"]
+
+
+def test_json_and_csv(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, "path", "--param", "payload", "--pressure", "0", "--payload", "1", "--payload-angle", "180", "--to", "5", "-n", "2", "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)  # strict JSON: no NaN
+    labels = [sp["label"] for b in d["branches"] for sp in b["special_points"]]
+    assert labels.count("BP") == 1 and len(d["branches"]) == 3  # the straight branch and both sides of the crossing one
+    assert (tmp_path / DEFAULT_PATH_OUT).exists() and (tmp_path / DEFAULT_PATH_FIGURE).exists()
+    rows = list(csv.DictReader((tmp_path / DEFAULT_PATH_OUT).open()))
+    assert {"branch", "kind", "payload1 (N)", "total_angle_deg", "morse_index", "stable", "theta1_deg"} <= set(rows[0])
+    assert {r["branch"] for r in rows} == {"main", "BP1 +", "BP1 -"}
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--param", "pressure"], "the following arguments are required: --to"),
+        (["--to", "nan"], "--to nan: expected the finite value"),
+        (["--param", "presure", "--to", "1"], "argument --param: invalid choice: 'presure'"),
+        (["--to", "0.3", "--out", "x.txt"], "--out 'x.txt': expected a file name ending in .csv, .json"),
+        (["--to", "0.3", "--out", "missing/x.csv"], "the folder 'missing' does not exist"),
+        (["--to", "0.3", "--plot", "x.xyz"], "--plot 'x.xyz': expected a file name ending in .png, .pdf, .svg"),
+        (["--to", "0.3", "--from", "-1"], "--from=-1.0: outside the range of pressure, 0 to inf MPa"),
+        (["--param", "payload", "--no-payload", "--to", "1"], "the scene has 0 payloads"),
+        (["--param", "omega", "--payload-index", "2", "--to", "100"], "the scene has 1 payload"),
+        (["--param", "r2", "--payload-index", "2", "--to", "2"], "--payload-index 2: only means something with --param payload, omega or at"),
+        (["--param", "M", "--to", "0.1"], "the mass only acts with gravity"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, tmp_path, monkeypatch, args, message):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, "path", *args)
+    assert code == EXIT_USAGE
+    assert err.count("\n") == 1 and err.startswith("esba: error: ") and message in err, err
+    assert "Traceback" not in err and out == ""
+    assert not (tmp_path / DEFAULT_PATH_OUT).exists()  # refused before anything was computed or written
