@@ -333,11 +333,11 @@ def effect_study(n: int = 16, repeat: int = 5) -> list[dict]:
     return rows
 
 
-def _naive_solve(model, pv: np.ndarray, n: int):
-    """What a first script does: SciPy BFGS from theta = 0 with finite-difference gradients."""
+def naive_solve(model, pv: np.ndarray, n: int, theta0: np.ndarray | None = None):
+    """What a first script does: SciPy BFGS from theta = 0 (or ``theta0``) with finite-difference gradients."""
     from scipy.optimize import minimize
 
-    return minimize(lambda th: model.energy(th, pv), np.zeros(n), method="BFGS")
+    return minimize(lambda th: model.energy(th, pv), np.zeros(n) if theta0 is None else theta0, method="BFGS")
 
 
 def naive_study(ns: Sequence[int] = (3, 8, 16), repeat: int = 5, case: str = "table2") -> list[dict]:
@@ -354,9 +354,9 @@ def naive_study(ns: Sequence[int] = (3, 8, 16), repeat: int = 5, case: str = "ta
         t_single, _ = _solve_time(scene, repeat, SolverOptions(continuation=False))
         model = scene.model()
         pv = model.param_vector(scene.parameters(r.pressure))
-        _naive_solve(model, pv, n)  # warm-up (SciPy's first call imports and sets up)
-        t_naive = median_time(lambda: _naive_solve(model, pv, n), repeat)
-        res = _naive_solve(model, pv, n)
+        naive_solve(model, pv, n)  # warm-up (SciPy's first call imports and sets up)
+        t_naive = median_time(lambda: naive_solve(model, pv, n), repeat)
+        res = naive_solve(model, pv, n)
         tip = model.tip(res.x, scene.actuator.L)
         rows.append(
             {
@@ -426,10 +426,10 @@ def batch_study(size: int = 10_000, segments: int = 3, naive_repeat: int = 5, ip
     agree = [float(np.max(np.abs(r.theta - result.theta[i]))) for r, i in zip(refs, sample) if r.ok and result.ok[i]]
     out["max_theta_difference_vs_ipopt"] = max(agree) if agree else float("nan")
     pv = [model.param_vector({**{k: (v if np.ndim(v) == 0 else v[i]) for k, v in vals.items()}}) for i in sample[:naive_repeat]]
-    _naive_solve(model, pv[0], segments)  # warm-up (SciPy's first call imports and sets up)
+    naive_solve(model, pv[0], segments)  # warm-up (SciPy's first call imports and sets up)
     t0 = time.perf_counter()
     for p in pv:
-        _naive_solve(model, p, segments)
+        naive_solve(model, p, segments)
     out["naive_us"] = 1e6 * (time.perf_counter() - t0) / len(pv)
     best_us = out.get("compiled_us", out["interpreted_us"])
     out["speedup_vs_naive"] = out["naive_us"] / best_us
@@ -682,11 +682,11 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
         f"  ![Fig. 12]({Path(SWEEP_FIGURES['fig12']).relative_to('docs').as_posix()})",
         "",
         f"- `esba sweep --pressure 0:0.2:41 --payload 0,0.5,1,2 --plot {SWEEP_FIGURES['pressure']}`: total angle",
-        "  against pressure for horizontal tip payloads (Table 1). The 2 N curve jumps between two",
-        "  grid pressures (the rows of the same command with `--out FILE.csv` show where) with no jump on",
-        "  either load path: there the actuator is bistable, and the payload ramp at a fixed pressure",
-        "  ends on one branch or the other (the same hysteresis in the payload's direction is in",
-        "  `tests/test_hard_cases.py::test_bistable_directions_show_hysteresis`).",
+        "  against pressure for horizontal tip payloads (Table 1). Each curve is the branch traced through",
+        "  its first grid point (stable solid, unstable dashed, folds circled); the dots are the grid",
+        "  points, each solved along its own load history (inflate, then load). The 2 N curve is an S:",
+        "  between its two folds the actuator is bistable, and the grid points switch branch where that",
+        "  history starts to reach the upper state (`docs/paths.md` has the folds and the hysteresis).",
         "",
         f"  ![pressure sweep]({Path(SWEEP_FIGURES['pressure']).relative_to('docs').as_posix()})",
         "",

@@ -64,6 +64,7 @@ __all__ = [
     "solve_arrays",
     "solve_scenes",
     "compiler",
+    "compile_library",
     "METHODS",
 ]
 
@@ -529,14 +530,14 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
         )
         if not lib.exists():
             t1 = time.perf_counter()
-            _compile(mapped, lib, cc)
+            compile_library(mapped, lib, cc)
             compile_s = time.perf_counter() - t1
         funs = tuple(ca.external(f.name(), str(lib)) for f in mapped)
     _FUNCTIONS[(key, compiled, str(lib))] = funs
     return funs, backend, build_s, compile_s
 
 
-def _compile(funs: Sequence[ca.Function], lib: Path, cc: str) -> None:
+def compile_library(funs: Sequence[ca.Function], lib: Path, cc: str) -> None:
     """Generate C for ``funs`` and compile them into the shared library ``lib`` (atomically)."""
     lib.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="esba-cg-") as tmp:

@@ -154,19 +154,23 @@ def generation_table(rows: list[GenerationRow]) -> str:
     return "\n".join(lines)
 
 
+#: The page of the benchmarks, and its title.
+PERFORMANCE_PAGE = "docs/performance.md"
+PERFORMANCE_TITLE = "# Performance"
+
+
 def write_generation_page(path, rows: list[GenerationRow], command: str):
-    """Write the generation benchmark as a Markdown page (``docs/performance.md``)."""
+    """Write the generation benchmark as the ``generation`` section of a Markdown page (``docs/performance.md``)."""
     import platform
-    from pathlib import Path
 
     import casadi
     import sympy
 
-    text = "\n".join(
+    from .pages import write_section
+
+    body = "\n".join(
         [
-            "# Performance: generating the models",
-            "",
-            f"<!-- Written by `{command}`; rerun it to refresh. -->",
+            "## Generating the models",
             "",
             "What the symbolic route costs against the segment count n, for the default effects",
             "(air, axial, radial, fibres, one payload), variant `paper`: derivation (SymPy), emission",
@@ -188,10 +192,6 @@ def write_generation_page(path, rows: list[GenerationRow], command: str):
             "assignments and O(n^2) references in the Hessian. The medians hide a one-off cost per",
             "process: the SymPy integrations of the energy terms (a second or two, paid by the first",
             "model a process generates).",
-            "",
         ]
     )
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text, encoding="utf-8")
-    return out
+    return write_section(path, "generation", body, command, PERFORMANCE_TITLE)

@@ -144,6 +144,8 @@ class Branch:
         Corrector iterations per point.
     residuals : tuple of tuple of float
         The corrector's max |g| before each iteration, per point (its convergence history).
+    evaluations : int
+        Evaluations of g, H and dg/dlambda the trace made (correctors, tangents, locating).
     beyond : (float, ndarray) or None
         When the trace stopped at the end of a stable branch: (lambda, theta) of the step past
         it, on the unstable side (which way a snap-through starts).
@@ -166,6 +168,7 @@ class Branch:
     critical_tol: float = CRITICAL_TOL
     label: str = ""
     beyond: tuple[float, np.ndarray] | None = field(repr=False, default=None)
+    evaluations: int = 0
 
     def __len__(self) -> int:
         return len(self.lam)

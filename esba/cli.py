@@ -504,6 +504,27 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_bench_path(args: argparse.Namespace) -> int:
+    from esba import bench, bench_path
+    from esba.pages import write_section
+
+    if args.markdown:
+        _writable("--markdown", args.markdown, (".md",))
+
+    def progress(n):
+        if not args.json:
+            print(f"  n = {n} done", file=sys.stderr)
+
+    rows = bench_path.path_benchmark(repeat=args.repeat, progress=progress)
+    data = {"rows": [dict(r.__dict__, points_per_s=r.points_per_s, floor_s=r.floor_s) for r in rows]}
+    _emit(args, data, lambda d: bench_path.path_table(rows))
+    if args.markdown:
+        command = f"esba bench path --repeat {args.repeat} --markdown {args.markdown}"
+        path = write_section(args.markdown, "path", bench_path.path_section(rows), command, bench.PERFORMANCE_TITLE)
+        print(f"wrote {path}", file=sys.stderr)
+    return EXIT_OK
+
+
 def _cmd_bench_batch(args: argparse.Namespace) -> int:
     from esba import accuracy as acc
 
@@ -553,6 +574,11 @@ def _add_bench(sub) -> None:
     a.add_argument("--no-write", action="store_true", help="print only; write no page or figure")
     a.add_argument("--json", action="store_true")
     a.set_defaults(func=_cmd_bench_accuracy)
+    pa = bsub.add_parser("path", help="time to trace the 2 N pressure path 0 -> 0.3 MPa (n = 3, 32) against the IPOPT ramp and naive BFGS")
+    pa.add_argument("--repeat", type=_segments, default=5, help="runs per timing, median reported (default 5)")
+    pa.add_argument("--markdown", metavar="FILE", help="also write the path section of a docs page (docs/performance.md)")
+    pa.add_argument("--json", action="store_true")
+    pa.set_defaults(func=_cmd_bench_path)
     b = bsub.add_parser("batch", help="us per equilibrium of the batch path against IPOPT and naive BFGS")
     b.add_argument("--size", type=_segments, default=10_000, help="batch size (default 10000)")
     b.add_argument("--segments", "-n", type=_segments, default=3, help="segment count (default 3)")
@@ -866,10 +892,32 @@ def _path_table(d: dict) -> str:
     return "\n".join(lines)
 
 
+def _path_write_doc(args: argparse.Namespace) -> int:
+    """``esba path --write-doc FILE``: the whole study of docs/paths.md (no other path flags)."""
+    given = [flag for flag, v in (("--to", args.to), ("--from", args.start), ("--out", args.out), ("--plot", args.plot), ("SCENE.toml", args.scene)) if v is not None]
+    if given:
+        raise UsageError(f"--write-doc runs its own studies of the Table 1 actuator: give no {', '.join(given)} with it")
+    _writable("--write-doc", args.write_doc, (".md",))
+    from esba.paths_report import paths_data, write_page
+
+    def say(msg):
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    data = paths_data(progress=say)
+    page = write_page(args.write_doc, data, f"esba path --write-doc {args.write_doc}")
+    _emit(args, {"page": str(page.resolve())}, lambda d: f"wrote {d['page']}")
+    return EXIT_OK
+
+
 def _cmd_path(args: argparse.Namespace) -> int:
     import math
 
-    if args.to is None or not math.isfinite(args.to):
+    if args.write_doc:
+        return _path_write_doc(args)
+    if args.to is None:
+        raise UsageError("the following arguments are required: --to")
+    if not math.isfinite(args.to):
         raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
     out = None if args.no_out else _writable("--out", args.out or DEFAULT_PATH_OUT, (".csv", ".json"))
     plot = None if args.no_plot else _writable("--plot", args.plot or DEFAULT_PATH_FIGURE, (".png", ".pdf", ".svg"))
@@ -917,11 +965,11 @@ def _add_path(sub) -> None:
     _add_scene_flags(p)
     p.add_argument("--param", choices=_PATH_PARAMETERS, default="pressure", help="the parameter to follow (default pressure; payload, omega and at are payload 1's: use --payload-index for another)")
     p.add_argument("--payload-index", type=_positive_int, default=1, metavar="K", help="which payload --param payload/omega/at means (default 1)")
-    p.add_argument("--to", type=_float_arg, required=True, metavar="VALUE", help="trace to this value (MPa, N, deg, mm, ... as the parameter)")
+    p.add_argument("--to", type=_float_arg, metavar="VALUE", help="trace to this value (MPa, N, deg, mm, ... as the parameter; required)")
     p.add_argument("--from", dest="start", type=_float_arg, metavar="VALUE", help="start here (default: the scene's own value)")
     p.add_argument("--locate", choices=("extended", "bisection"), default="extended", help="how folds are located (default: the extended system)")
     p.add_argument("--max-steps", type=_positive_int, default=2000, metavar="N", help="steps per branch (default 2000)")
-    p.add_argument("--ds-max", type=_float_arg, default=0.25, metavar="DS", help="largest step in the scaled arclength (default 0.25)")
+    p.add_argument("--ds-max", type=_float_arg, default=0.1, metavar="DS", help="largest step in the scaled arclength (default 0.1)")
     p.add_argument("--no-switch", action="store_true", help="do not trace the branches crossing at branch points")
     p.add_argument("--no-loading", action="store_true", help="do not follow quasi-static loading up and down (the hysteresis)")
     p.add_argument("--y", choices=("total-angle", "tip-x", "tip-y"), default="total-angle", help="what the figure shows against the parameter")
@@ -930,6 +978,7 @@ def _add_path(sub) -> None:
     p.add_argument("--plot", metavar="FILE", help=f"the figure (default {DEFAULT_PATH_FIGURE})")
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--points", action="store_true", help="with --json: print every point, not only the special ones")
+    p.add_argument("--write-doc", metavar="FILE", help="run the studies of docs/paths.md (Table 1: bistable ranges, buckling for n = 1..8) and write the page and its figures (about a minute)")
     p.set_defaults(func=_cmd_path)
 
 

@@ -801,6 +801,7 @@ def _branch(
         critical_tol=eng.opts.critical_tol,
         label=label,
         beyond=beyond,
+        evaluations=eng.evaluations,
     )
 
 

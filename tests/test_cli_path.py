@@ -74,3 +74,23 @@ def test_bad_input_is_one_line_and_exit_2(capsys, tmp_path, monkeypatch, args, m
     assert err.count("\n") == 1 and err.startswith("esba: error: ") and message in err, err
     assert "Traceback" not in err and out == ""
     assert not (tmp_path / DEFAULT_PATH_OUT).exists()  # refused before anything was computed or written
+
+
+def test_write_doc_writes_the_page_and_its_figures(capsys, tmp_path):
+    page = tmp_path / "docs" / "paths.md"
+    page.parent.mkdir()
+    code, out, err = run(capsys, "path", "--write-doc", str(page))
+    assert code == EXIT_OK, err
+    text = page.read_text()
+    for heading in ("## Pressure under the 2 N horizontal tip payload", "## Payload direction", "## The straight actuator", "## What a designer"):
+        assert heading in text
+    assert f"esba path --write-doc {page}" in text
+    for name in ("path-pressure-2N.png", "path-omega-2N.png", "path-column-n4.png"):
+        assert (tmp_path / "docs" / "figures" / name).stat().st_size > 20_000
+        assert f"figures/{name}" in text
+    assert "nan" not in text.lower()
+
+
+def test_write_doc_refuses_other_flags(capsys, tmp_path):
+    code, out, err = run(capsys, "path", "--write-doc", str(tmp_path / "p.md"), "--to", "0.3")
+    assert code == EXIT_USAGE and "give no --to with it" in err

@@ -1,0 +1,60 @@
+"""Docs pages made of sections, each written by its own command.
+
+``docs/performance.md`` gathers several benchmarks (generation, path following, single solves);
+each command rewrites only its own section, delimited by HTML comments that name the section and
+the command, and leaves the others as they are.
+
+Examples
+--------
+>>> import tempfile, pathlib
+>>> page = pathlib.Path(tempfile.mkdtemp()) / "p.md"
+>>> _ = write_section(page, "a", "## A\\n\\none", "esba a", title="# Page")
+>>> _ = write_section(page, "b", "## B\\n\\ntwo", "esba b", title="# Page")
+>>> _ = write_section(page, "a", "## A\\n\\nthree", "esba a", title="# Page")
+>>> text = page.read_text()
+>>> text.index("three") < text.index("two"), "one" in text
+(True, False)
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+__all__ = ["write_section", "read_sections"]
+
+
+def _markers(key: str) -> tuple[str, str]:
+    return f"<!-- section {key} -->", f"<!-- end of section {key} -->"
+
+
+def read_sections(text: str) -> tuple[str, list[tuple[str, str]]]:
+    """The page's head (before the first section) and its sections as (key, block) in order."""
+    pattern = re.compile(r"<!-- section (\S+) -->\n.*?<!-- end of section \1 -->\n?", re.S)
+    sections = [(m.group(1), m.group(0)) for m in pattern.finditer(text)]
+    first = pattern.search(text)
+    head = text[: first.start()] if first else text
+    return head, sections
+
+
+def write_section(path: str | Path, key: str, body: str, command: str, title: str) -> Path:
+    """Replace (or append) section ``key`` of the page at ``path``; create the page with ``title``.
+
+    The section records the command that wrote it; other sections are kept verbatim and in order.
+    """
+    path = Path(path)
+    text = path.read_text(encoding="utf-8") if path.exists() else ""
+    head, sections = read_sections(text)
+    if not head.strip():
+        head = f"{title}\n\nEach section below is written by the command it names; rerun that command to refresh it.\n\n"
+    start, end = _markers(key)
+    block = f"{start}\n<!-- Written by `{command}`; rerun it to refresh. -->\n\n{body.rstrip()}\n\n{end}\n"
+    keys = [k for k, _ in sections]
+    if key in keys:
+        sections[keys.index(key)] = (key, block)
+    else:
+        sections.append((key, block))
+    out = head.rstrip("\n") + "\n\n" + "\n".join(b.rstrip("\n") + "\n" for _, b in sections)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(out, encoding="utf-8")
+    return path
