@@ -691,14 +691,17 @@ def trace(
                 idx = int(np.argmin(np.abs(pt.eig)))
             sp = _special_from(eng, kind, pt, idx, a, b, status, method)
             found.append((_s_of(eng, a, pt), kind, pt, sp))
-        for f_ev, name in ((event, "event"), (None if total_event is None else (lambda lam, th: float(np.sum(th)) - total_event), "total angle")):
+        for f_ev, name in (
+            (event, "the user event"),
+            (None if total_event is None else (lambda lam, th: float(np.sum(th)) - total_event), f"the total angle of {float(opts.stop_total_angle_deg or 0.0):g} deg"),
+        ):
             if f_ev is None:
                 continue
             fa, fb = f_ev(a.lam, a.theta), f_ev(b.lam, b.theta)
             if fa * fb < 0 or (fb == 0 and fa != 0):
                 pt = _locate_value(eng, a, b, s_b, lambda p, fe=f_ev: fe(p.lam, p.theta))
                 if pt is not None:
-                    sp = _special_from(eng, "event", pt, None, a, b, "converged", f"{name} event (Brent's method on the arclength)")
+                    sp = _special_from(eng, "event", pt, None, a, b, "converged", f"{name} (Brent's method on the arclength)")
                     found.append((_s_of(eng, a, pt), "event", pt, sp))
         found.sort(key=lambda item: item[0])
         stop_here = None
@@ -723,7 +726,7 @@ def trace(
                 stop_here = ("bound", f"reached {problem.describe(pt.lam)}")
                 break
             if kind == "event":
-                stop_here = ("event", f"stopped at the event ({sp.method.split(' (')[0]}) at {problem.describe(pt.lam)}")
+                stop_here = ("event", f"stopped at {sp.method.split(' (')[0]} at {problem.describe(pt.lam)}")
                 break
             if stop_on_instability and kind in ("fold", "branch point") and sp.morse_before == 0 and sp.morse_after > 0:
                 stop_here = ("instability", f"the stable branch ends at a {kind} at {problem.describe(pt.lam)}")

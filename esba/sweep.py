@@ -6,8 +6,8 @@ tip), ``payload_angle`` (degrees), ``r2`` and ``d`` (mm), and solves every point
 Cartesian product. Geometries outside the design space (r2 + d >= r1) are rows marked
 ``infeasible`` and not solved; every other row is ok or says why not.
 
-:func:`load_path` follows one scene's payload from 0 to its full magnitude in small steps, each
-warm-started from the last, and reports where the path jumps (a snap-through) instead of
+:func:`load_path` follows one scene's payloads from 0 to their full magnitude by path tracing
+(:mod:`esba.loading`) and reports where the path jumps (a snap-through at a fold) instead of
 connecting the two branches silently.
 
 :func:`fig12` draws the paper's Fig. 12: the bending angle against r2 for d = 0, 2, 4, 6 mm and
@@ -38,7 +38,9 @@ from typing import Any
 import numpy as np
 
 from .batch import BatchOptions, BatchResult, solve_arrays
-from .equilibrium import SolverOptions, solve
+from .equilibrium import solve
+from .loading import follow
+from .path import PathOptions, PathProblem
 from .scene import Payload, Scene, SceneError
 
 __all__ = ["AXES", "SweepResult", "LoadPath", "sweep", "load_path", "fig12", "sweep_figure", "parse_values", "SweepError"]
@@ -356,17 +358,21 @@ class LoadPath:
     Attributes
     ----------
     factors : ndarray
-        Load factors reached (0 ... 1).
+        Load factors of the points (0 ... 1), in the order the ramp met them.
     theta : ndarray, shape (k, n)
-        Angles at each factor, rad.
+        Angles at each point, rad.
     tip : ndarray, shape (k, 3)
-        Tip pose at each factor.
+        Tip pose at each point.
     min_eigenvalue : ndarray
-        Smallest Hessian eigenvalue at each factor (it tends to 0 before a snap-through).
+        Smallest Hessian eigenvalue at each point (it falls to 0 at a fold, where the path snaps).
+    kind : ndarray of str
+        What each point is (``start``, ``regular``, ``fold``, ``branch point``, ``end``; see
+        :class:`esba.branch.Branch`).
     jumps : list of dict
-        Each jump: the factors before and after, the tip before and after (mm) and the distance.
+        Each jump: the load factor of the fold and just after it, the tip before and after (mm),
+        the distance, and the kind of special point.
     ok : bool
-        Every step converged to a stable equilibrium.
+        The ramp reached the full load on a stable equilibrium.
     message : str
         What went wrong, when ``ok`` is False.
     """
@@ -375,6 +381,7 @@ class LoadPath:
     theta: np.ndarray
     tip: np.ndarray
     min_eigenvalue: np.ndarray
+    kind: np.ndarray
     jumps: list[dict]
     ok: bool
     message: str = ""
@@ -385,67 +392,50 @@ class LoadPath:
         return not self.jumps
 
 
-def load_path(scene: Scene, steps: int = 40, jump_mm: float = 2.0, min_step: float = 1e-4, options: SolverOptions | None = None) -> LoadPath:
-    """Follow ``scene``'s payloads (and weight) from 0 to full, warm-starting each solve.
+def load_path(scene: Scene, options: PathOptions | None = None) -> LoadPath:
+    """Follow ``scene``'s payloads (and weight) from 0 to full, quasi-statically.
 
-    A step whose tip moves more than ``jump_mm`` is halved until either it moves less (the path
-    is continuous there) or the step falls below ``min_step``: then the path jumps, and the jump
-    is recorded (a snap-through to another branch), not smoothed over.
+    The load factor is followed by path tracing (:func:`esba.loading.follow`): every fold where
+    the stable branch ends is located, and the jump from it is recorded (a snap-through to another
+    branch), not smoothed over.
 
     Examples
     --------
     >>> from esba.scene import Scene, Payload
-    >>> p = load_path(Scene(target_angle_deg=90.0, payloads=(Payload(2.0),)), steps=8)
+    >>> p = load_path(Scene(target_angle_deg=90.0, payloads=(Payload(2.0),)))
     >>> p.ok, p.continuous, round(float(p.tip[-1, 1]), 2)
     (True, True, 10.22)
     """
-    opts = options if options is not None else SolverOptions()
     unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False))
-    pressure = unloaded.pressure
-    factors, thetas, tips, eigs, jumps = [0.0], [unloaded.theta], [unloaded.tip], [float(unloaded.eigenvalues[0])], []
-    if not unloaded.ok:
-        return LoadPath(np.array(factors), np.array(thetas), np.array(tips), np.array(eigs), jumps, False, unloaded.message)
-
-    def at(lam: float, theta0) -> Any:
-        s = scene.replace(payloads=tuple(p.scaled(lam) for p in scene.payloads), g=scene.g * lam)
-        return solve(s, opts, pressure=pressure, theta0=theta0)
-
-    lam, dlam = 0.0, 1.0 / steps
-    while lam < 1.0 - 1e-12:
-        target = min(1.0, lam + dlam)
-        r = at(target, thetas[-1])
-        moved = float(np.hypot(*(r.tip[:2] - tips[-1][:2]))) if r.ok else math.inf
-        if r.ok and moved <= jump_mm:
-            lam = target
-            factors.append(lam)
-            thetas.append(r.theta)
-            tips.append(r.tip)
-            eigs.append(float(r.eigenvalues[0]))
-            dlam = min(1.0 / steps, 2 * dlam)
-            continue
-        if dlam / 2 >= min_step:
-            dlam /= 2
-            continue
-        if not r.ok:
-            msg = f"no stable equilibrium after load factor {lam:.4g} ({r.message or r.status})"
-            return LoadPath(np.array(factors), np.array(thetas), np.array(tips), np.array(eigs), jumps, False, msg)
-        jumps.append(
-            {
-                "from_factor": lam,
-                "to_factor": target,
-                "tip_before_mm": [float(v) for v in tips[-1][:2]],
-                "tip_after_mm": [float(v) for v in r.tip[:2]],
-                "distance_mm": moved,
-                "min_eigenvalue_before": eigs[-1],
-            }
-        )
-        lam = target
-        factors.append(lam)
-        thetas.append(r.theta)
-        tips.append(r.tip)
-        eigs.append(float(r.eigenvalues[0]))
-        dlam = 1.0 / steps
-    return LoadPath(np.array(factors), np.array(thetas), np.array(tips), np.array(eigs), jumps, True)
+    if not unloaded.ok or not (scene.payloads or scene.gravity):
+        one = np.array([0.0])
+        kind = np.array(["start"])
+        return LoadPath(one, unloaded.theta[None, :], unloaded.tip[None, :], np.array([unloaded.eigenvalues[0]]), kind, [], unloaded.ok, unloaded.message)
+    problem = PathProblem.from_scene(scene, "load", pressure=unloaded.pressure)
+    ramp = follow(problem, unloaded.theta, 0.0, 1.0, options)
+    pieces = ramp.pieces
+    jumps = [
+        {
+            "kind": j.kind,
+            "from_factor": j.lam,
+            "to_factor": j.lam_after,
+            "tip_before_mm": [float(v) for v in j.tip_before[:2]],
+            "tip_after_mm": [float(v) for v in j.tip_after[:2]],
+            "distance_mm": j.distance_mm,
+            "min_eigenvalue_before": j.point.eigenvalue,
+        }
+        for j in ramp.jumps
+    ]
+    return LoadPath(
+        factors=np.concatenate([b.lam for b in pieces]),
+        theta=np.vstack([b.theta for b in pieces]),
+        tip=np.vstack([b.tip for b in pieces]),
+        min_eigenvalue=np.concatenate([b.eigenvalues[:, 0] for b in pieces]),
+        kind=np.concatenate([b.kind for b in pieces]),
+        jumps=jumps,
+        ok=ramp.reached,
+        message=ramp.message,
+    )
 
 
 #: The sweep axes a path can follow (:data:`esba.path_problem.PARAMETERS` names).

@@ -307,3 +307,44 @@ def test_design_parameter_path_stops_at_the_design_space_edge():
     b = trace(problem, start.theta, 3.0, to=10.0)
     assert b.stopped in ("bound", "domain"), b.stop_reason
     assert b.lam[-1] <= 4.0 and np.all(np.diff(b.total_angle_deg) > 0)
+
+
+# ---------------------------------------------------------------------------------------------
+# stopping rules and the other parameters
+
+
+@pytest.fixture(scope="module")
+def direction_start():
+    scene = Scene(payloads=(Payload(2.0, 90.0),))
+    return PathProblem.from_scene(scene, "omega"), solve(scene)
+
+
+def test_a_full_turn_of_the_payload_returns_to_the_start(direction_start):
+    problem, start = direction_start
+    b = trace(problem, start.theta, 90.0, bounds=(-1000.0, 1000.0))
+    assert b.stopped == "loop" and "returned to the start" in b.stop_reason
+    assert b.lam[-1] == pytest.approx(450.0, abs=1.0)  # one turn of the direction later
+    np.testing.assert_allclose(b.theta[-1], start.theta, atol=0.02)
+    assert len(b.folds) == 2 and b.unit == "deg"
+
+
+def test_total_angle_and_user_events_stop_exactly(direction_start):
+    problem, start = direction_start
+    b = trace(problem, start.theta, 90.0, to=150.0, options=PathOptions(stop_total_angle_deg=100.0))
+    assert b.stopped == "event" and "total angle of 100 deg" in b.stop_reason
+    assert b.total_angle_deg[-1] == pytest.approx(100.0, abs=1e-9)
+    assert b.special[-1].kind == "event" and b.folds  # the fold came first, on the way up to 100 deg
+    b = trace(problem, start.theta, 90.0, to=150.0, event=lambda lam, theta: problem.tip(theta, lam)[1] - 60.0)
+    assert b.stopped == "event" and "user event" in b.stop_reason
+    assert b.tip[-1, 1] == pytest.approx(60.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("parameter, to", [("at", 0.3), ("E", 1.0), ("rho", 30.0), ("d", 0.0), ("L", 100.0), ("r1", 10.0), ("payload", 0.0)])
+def test_every_kind_of_parameter_can_be_followed(direction_start, parameter, to):
+    _, start = direction_start
+    problem = PathProblem.from_scene(start.scene, parameter, pressure=start.pressure)
+    b = trace(problem, start.theta, problem.lam0, to=to)
+    assert b.stopped == "bound" and b.lam[-1] == to
+    assert_equilibria(problem, b)
+    end = solve(problem.scene_at(to), pressure=start.pressure, theta0=b.theta[-1])  # IPOPT agrees at the end
+    np.testing.assert_allclose(end.theta, b.theta[-1], atol=1e-7)
