@@ -56,6 +56,7 @@ from . import checks
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve, stability_verdicts
 from .model import Model, cache_dir, domain_lower_bound
 from .scene import Scene
+from .threads import single_threaded
 
 __all__ = [
     "BatchOptions",
@@ -643,6 +644,7 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
     return success, stability, gnorm, eig, messages, pressure_ok
 
 
+@single_threaded
 def solve_arrays(
     model: Model,
     values: Mapping[str, float | Sequence[float] | np.ndarray],

@@ -13,7 +13,6 @@ same generated g, H and dg/dlambda compiled to C (no Python, no linear algebra).
 from __future__ import annotations
 
 import tempfile
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence

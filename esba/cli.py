@@ -921,8 +921,6 @@ def _cmd_path(args: argparse.Namespace) -> int:
         raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
     out = None if args.no_out else _writable("--out", args.out or DEFAULT_PATH_OUT, (".csv", ".json"))
     plot = None if args.no_plot else _writable("--plot", args.plot or DEFAULT_PATH_FIGURE, (".png", ".pdf", ".svg"))
-    from pathlib import Path
-
     from esba.equilibrium import EquilibriumError
     from esba.path import PathOptions, write_branches
     from esba.path_problem import PathError

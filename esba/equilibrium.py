@@ -46,8 +46,10 @@ from .loading import Jump, Ramp, follow
 from .minimise import LINEAR_SOLVERS, minimise
 from .model import Model
 from .path import PathOptions, PathProblem, SpecialPoint
+from .ramp import FINAL, NEWTON, STEPS, run_ramp
 from .scene import Scene
 from .stability import STABILITY, stability_verdict, stability_verdicts
+from .threads import single_threaded
 
 __all__ = [
     "SolverOptions",
@@ -101,6 +103,10 @@ class SolverOptions:
         full load.
     path : PathOptions
         Settings of the path traces of the load history (:class:`esba.path.PathOptions`).
+    fast : bool
+        Try each ramp of the load history first as one compiled natural-parameter continuation
+        (:mod:`esba.ramp`), accepted only when it provably stayed on one stable branch; otherwise,
+        and always when False, the adaptive path trace of :mod:`esba.loading` follows it.
     polish : bool
         Newton steps on the exact Hessian after IPOPT (stationarity to round-off).
     stationarity_tol : float
@@ -126,6 +132,7 @@ class SolverOptions:
     linear_solver: str = "mumps"
     continuation: bool = True
     path: PathOptions = field(default_factory=PathOptions)
+    fast: bool = True
     polish: bool = True
     stationarity_tol: float = 1e-7
     critical_tol: float = 1e-9
@@ -136,7 +143,7 @@ class SolverOptions:
         _check_int("max_iter", self.max_iter, 1)
         if self.linear_solver not in LINEAR_SOLVERS:
             raise SolverOptionsError(f"linear_solver={self.linear_solver!r}: allowed are {', '.join(LINEAR_SOLVERS)}")
-        for name in ("continuation", "polish"):
+        for name in ("continuation", "polish", "fast"):
             if not isinstance(getattr(self, name), bool):
                 raise SolverOptionsError(f"{name}={getattr(self, name)!r}: expected True or False")
         if not isinstance(self.path, PathOptions):
@@ -147,6 +154,9 @@ class SolverOptions:
 
 
 DEFAULT_OPTIONS = SolverOptions()
+
+#: Points and Newton iterations of one fast ramp (:mod:`esba.ramp`), for ``steps`` and ``iterations``.
+RAMP_STEPS, RAMP_ITERATIONS = STEPS, STEPS * NEWTON + FINAL
 
 
 # ---------------------------------------------------------------------------------------------
@@ -370,6 +380,7 @@ def _resolve_pressure(scene: Scene, pressure: float | None) -> tuple[float, np.n
     return p, np.full(scene.segments, math.radians(scene.target_angle_deg) / scene.segments)
 
 
+@single_threaded
 def evaluate(
     scene: Scene,
     theta: Sequence[float],
@@ -412,9 +423,9 @@ def evaluate(
     pv = model.param_vector(full)
     if np.any(theta < lbx):
         raise EquilibriumError(f"theta={np.degrees(theta).round(3).tolist()} deg lies outside the model's domain (Eq. 10)")
-    grad = model.gradient(theta, pv)
-    gnorm = float(np.max(np.abs(grad)))
-    eig = np.sort(np.linalg.eigvalsh(model.hessian(theta, pv)))
+    state = model.state(theta, pv)
+    gnorm = float(np.max(np.abs(state["gradient"])))
+    eig = np.sort(np.linalg.eigvalsh(state["hessian"]))
     verdict = stability_verdict(eig, options.critical_tol)
     if success and _near_bound(theta, lbx):
         success, status = False, "At_Bound"
@@ -424,16 +435,16 @@ def evaluate(
         message = f"max |dU/dtheta| = {gnorm:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}"
     if success and verdict != "stable":
         message = f"the equilibrium is {verdict}: smallest Hessian eigenvalue {eig[0]:.3g} N mm/rad^2 (largest {eig[-1]:.3g})"
-    cl = model.centreline(theta, full["L"], samples=scene.segments * options.samples_per_segment + 1)
+    cl = model.centreline(theta, full["L"], samples=scene.segments * options.samples_per_segment + 1, points=state["points"])
     return Equilibrium(
         scene=scene,
         model=model,
         pressure=pressure,
         theta=theta,
-        tip=model.tip(theta, full["L"]),
+        tip=state["tip"],
         centreline=cl,
-        energy=model.energy(theta, pv),
-        terms=model.energy_terms(theta, pv),
+        energy=state["energy"],
+        terms=state["terms"],
         gradient_norm=gnorm,
         eigenvalues=eig,
         stability=verdict,
@@ -460,6 +471,7 @@ def _load_value(scene: Scene, pressure: float, name: str, lam: float) -> str:
     return f"{100 * lam:.6g} % of the loads ({', '.join(parts)}) at P = {pressure:.6g} MPa"
 
 
+@single_threaded
 def solve(
     scene: Scene,
     options: SolverOptions | None = None,
@@ -504,6 +516,7 @@ def solve(
 
     message = ""
     ramps: list[tuple[str, Ramp]] = []
+    fast_ramps = 0
     if theta0 is not None:
         theta = np.asarray(theta0, dtype=float).ravel()
         if theta.shape != (n,) or not np.all(np.isfinite(theta)):
@@ -517,19 +530,27 @@ def solve(
         else:
             p_zero = model.param_vector(scene.parameters(0.0, load_factor=0.0))
             dp = model.param_vector(scene.parameters(1.0, load_factor=0.0)) - p_zero  # U is linear in P
-            ramp = PathProblem(model, p_zero, dp, "pressure", "MPa", (0.0, math.inf), 0.1, what="pressure")
-            r = follow(ramp, np.zeros(n), 0.0, pressure, options.path, ipopt_tol=options.tol)
-            ramps.append(("pressure", r))
-            theta = r.theta
-            if not r.reached:
-                message = f"the pressure ramp from P = 0 stopped at {_load_value(scene, pressure, 'pressure', r.lam)}: {r.message}"
+            fast = run_ramp(model, np.zeros(n), p_zero, dp, pressure) if options.fast else None
+            if fast is not None and fast.accepted(critical_tol=options.critical_tol):
+                theta, fast_ramps = fast.theta, fast_ramps + 1
+            else:
+                ramp = PathProblem(model, p_zero, dp, "pressure", "MPa", (0.0, math.inf), 0.1, what="pressure")
+                r = follow(ramp, np.zeros(n), 0.0, pressure, options.path, ipopt_tol=options.tol)
+                ramps.append(("pressure", r))
+                theta = r.theta
+                if not r.reached:
+                    message = f"the pressure ramp from P = 0 stopped at {_load_value(scene, pressure, 'pressure', r.lam)}: {r.message}"
         if loaded and not message:
-            ramp = PathProblem.homotopy(model, pv_unloaded, pv_full, name="load", what="payloads and weight")
-            r = follow(ramp, theta, 0.0, 1.0, options.path, ipopt_tol=options.tol)
-            ramps.append(("load", r))
-            theta = r.theta
-            if not r.reached:
-                message = f"the load ramp from the unloaded state stopped at {_load_value(scene, pressure, 'load', r.lam)}: {r.message}"
+            fast = run_ramp(model, theta, pv_unloaded, pv_full - pv_unloaded, 1.0) if options.fast else None
+            if fast is not None and fast.accepted(critical_tol=options.critical_tol):
+                theta, fast_ramps = fast.theta, fast_ramps + 1
+            else:
+                ramp = PathProblem.homotopy(model, pv_unloaded, pv_full, name="load", what="payloads and weight")
+                r = follow(ramp, theta, 0.0, 1.0, options.path, ipopt_tol=options.tol)
+                ramps.append(("load", r))
+                theta = r.theta
+                if not r.reached:
+                    message = f"the load ramp from the unloaded state stopped at {_load_value(scene, pressure, 'load', r.lam)}: {r.message}"
 
     final = minimise(
         model,
@@ -540,10 +561,13 @@ def solve(
         max_iter=options.max_iter,
         linear_solver=options.linear_solver,
         polish_steps=4 if options.polish else 0,
-        warm=bool(ramps) or (known_unloaded is not None and theta0 is None and not loaded),
+        warm=bool(ramps) or fast_ramps > 0 or (known_unloaded is not None and theta0 is None and not loaded),
     )
     moved = float(np.max(np.abs(final.theta - theta)))
-    start_from = "the path's end" if ramps else ("the known unloaded state" if known_unloaded is not None and theta0 is None else "the start")
+    if ramps or fast_ramps:
+        start_from = "the path's end"
+    else:
+        start_from = "the known unloaded state" if known_unloaded is not None and theta0 is None else "the start"
     certificate = f"IPOPT {final.status}: {final.iterations} iterations from {start_from}, which it moved by {moved:.2g} rad"
     notes = []
     jumps: list[Jump] = []
@@ -558,7 +582,7 @@ def solve(
         for j in r.jumps:
             jumps.append(j)
             notes.append(j.describe(_load_value(scene, pressure, name, j.lam)))
-    if ramps and final.success and moved > 1e-6:
+    if (ramps or fast_ramps) and final.success and moved > 1e-6:
         notes.append(f"IPOPT moved the path's end by {moved:.3g} rad: the certified state is not the one the path reached")
     if message:  # the load history failed: report the full-load solve from the last good state, not as an answer
         status, success = "Continuation_Failed", False
@@ -566,8 +590,8 @@ def solve(
         status, success = final.status, final.success
         if not success:
             message = f"IPOPT did not converge: {final.status}"
-    iterations = final.iterations + sum(r.corrector_iterations + r.ipopt_iterations for _, r in ramps)
-    steps = 1 + sum(r.points for _, r in ramps) + sum(len(r.jumps) for _, r in ramps)
+    iterations = final.iterations + sum(r.corrector_iterations + r.ipopt_iterations for _, r in ramps) + fast_ramps * RAMP_ITERATIONS
+    steps = 1 + sum(r.points for _, r in ramps) + sum(len(r.jumps) for _, r in ramps) + fast_ramps * RAMP_STEPS
     return evaluate(
         scene,
         final.theta,

@@ -52,6 +52,7 @@ from .path import (
     trace,
 )
 from .stability import morse_index
+from .threads import single_threaded
 
 __all__ = ["Jump", "Ramp", "follow", "history"]
 
@@ -244,6 +245,7 @@ def _switch(problem: PathProblem, piece: Branch, sp: SpecialPoint, direction: fl
     return None
 
 
+@single_threaded
 def follow(
     problem: PathProblem,
     theta0: Sequence[float],

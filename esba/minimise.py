@@ -27,6 +27,7 @@ import casadi as ca
 import numpy as np
 
 from .model import Model
+from .ramp import newton_parts
 
 __all__ = ["Minimum", "minimise", "ipopt_solver", "LINEAR_SOLVERS"]
 
@@ -95,22 +96,22 @@ class Minimum:
 
 def polish(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, steps: int = 4) -> np.ndarray:
     """A few Newton steps on the exact Hessian while it is positive definite, inside the domain and
-    each step reduces max |dU/dtheta|."""
+    each step reduces max |dU/dtheta| (one call per step: g, the step and the smallest pivot, solved
+    in O(n) from the Hessian's structure, :func:`esba.ramp.newton_parts`)."""
+    parts = newton_parts(model)
+    zero = np.zeros(len(pv))
+    g, step, _, pivot = (np.asarray(v, dtype=float).ravel() for v in parts(theta, pv, zero))
     for _ in range(steps):
-        g = model.gradient(theta, pv)
-        if float(np.max(np.abs(g))) < 1e-13:
+        gnorm = float(np.max(np.abs(g)))
+        if not gnorm >= 1e-13 or not pivot[0] > 0:  # stationary to round-off, not finite, or not convex here
             break
-        h = model.hessian(theta, pv)
-        try:
-            np.linalg.cholesky(h)
-        except np.linalg.LinAlgError:
-            break
-        new = theta - np.linalg.solve(h, g)
+        new = theta - step
         if np.any(new <= lbx) or not np.all(np.isfinite(new)):
             break
-        if float(np.max(np.abs(model.gradient(new, pv)))) >= float(np.max(np.abs(g))):
+        g2, step2, _, pivot2 = (np.asarray(v, dtype=float).ravel() for v in parts(new, pv, zero))
+        if not float(np.max(np.abs(g2))) < gnorm:
             break
-        theta = new
+        theta, g, step, pivot = new, g2, step2, pivot2
     return theta
 
 

@@ -49,6 +49,9 @@ __all__ = ["Model", "load_model", "cache_dir", "EffectSet", "EffectError"]
 
 _lock = threading.Lock()
 
+#: The combined Function of :meth:`Model.state`, per model file.
+_STATE: dict[str, ca.Function] = {}
+
 #: Relative distance kept from the edge of the model's domain.
 DOMAIN_MARGIN = 1e-6
 
@@ -147,6 +150,33 @@ class Model:
         """d2U/dtheta2 (N*mm/rad^2)."""
         return np.asarray(self._call("hessian", theta, params))
 
+    def state(self, theta, params) -> dict[str, np.ndarray | float | dict]:
+        """U, its terms, gradient, Hessian, tip and segment end points at theta, in one call.
+
+        Keys ``energy`` (N*mm), ``terms`` (by name), ``gradient``, ``hessian``, ``tip`` and
+        ``points`` (as the single-purpose methods return them).
+        """
+        p = params if isinstance(params, np.ndarray) else self.param_vector(params)
+        fun = _STATE.get(str(self.path))
+        if fun is None:
+            th = ca.SX.sym("theta", self.n)
+            ps = ca.SX.sym("p", len(self.parameters))
+            args = ca.vertsplit(ps) if len(self.parameters) else []
+            u, terms = self.functions["energy"](th, *args)
+            length = ps[self.parameters.index("L")]
+            tip, points = self.functions["kinematics"](th, length)
+            outs = [u, terms, self.functions["gradient"](th, *args), self.functions["hessian"](th, *args), tip, points]
+            fun = _STATE[str(self.path)] = ca.Function("esba_state", [th, ps], outs, {"cse": True})
+        u, terms, g, h, tip, points = fun(np.asarray(theta, dtype=float), p)
+        return {
+            "energy": float(u),
+            "terms": dict(zip(self.terms, map(float, np.asarray(terms).ravel()))),
+            "gradient": np.asarray(g).ravel(),
+            "hessian": np.asarray(h),
+            "tip": np.asarray(tip).ravel(),
+            "points": np.asarray(points),
+        }
+
     def tip(self, theta, L: float) -> np.ndarray:
         """Tip pose [x, y, angle] (mm, mm, rad)."""
         return np.asarray(self.functions["kinematics"](np.asarray(theta, dtype=float), L)[0]).ravel()
@@ -155,12 +185,29 @@ class Model:
         """The n + 1 segment end points, shape (2, n + 1), mm."""
         return np.asarray(self.functions["kinematics"](np.asarray(theta, dtype=float), L)[1])
 
-    def centreline(self, theta, L: float, samples: int = 101) -> np.ndarray:
-        """Points [x, y, heading] at ``samples`` equally spaced fractions of L, shape (samples, 3)."""
+    def centreline(self, theta, L: float, samples: int = 101, points: np.ndarray | None = None) -> np.ndarray:
+        """Points [x, y, heading] at ``samples`` equally spaced fractions of L, shape (samples, 3).
+
+        Each segment is a circular arc (Eq. 1): the point at fraction sigma of segment i is
+        p_i + R(phi_i) (L/n) sigma [sinc(sigma theta_i), versinc(sigma theta_i)], heading
+        phi_i + sigma theta_i, from the segment end points of the generated ``kinematics``; NumPy
+        does the sampling (the generated ``centreline`` Function gives the same points one at a time).
+        """
+        theta = np.asarray(theta, dtype=float).ravel()
+        n = self.n
+        ends = self.points(theta, L) if points is None else points  # (2, n + 1)
         s = np.linspace(0.0, 1.0, samples)
-        f = self.functions["centreline"].map(samples)
-        out = f(np.asarray(theta, dtype=float), L, s.reshape(1, -1))
-        return np.asarray(out).T
+        seg = np.minimum((s * n).astype(int), n - 1)
+        sigma = s * n - seg
+        phi = np.concatenate([[0.0], np.cumsum(theta)])[seg]
+        u = sigma * theta[seg]
+        sinc = np.sinc(u / np.pi)
+        versinc = 0.5 * u * np.sinc(u / (2.0 * np.pi)) ** 2
+        length = (L / n) * sigma
+        cx, cy = length * sinc, length * versinc
+        x = ends[0, seg] + np.cos(phi) * cx - np.sin(phi) * cy
+        y = ends[1, seg] + np.sin(phi) * cx + np.cos(phi) * cy
+        return np.column_stack([x, y, phi + u])
 
     def lower_bounds(self, values: Mapping[str, float], margin: float = DOMAIN_MARGIN) -> np.ndarray:
         """The model's domain as bounds on theta: :func:`domain_lower_bound` for every segment."""

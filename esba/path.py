@@ -66,6 +66,7 @@ from . import checks
 from .branch import Branch, SpecialPoint, branches_csv, write_branches
 from .path_problem import PARAMETERS, PathError, PathProblem
 from .stability import CRITICAL_TOL, morse_index
+from .threads import single_threaded
 
 __all__ = [
     "PathError",
@@ -528,6 +529,7 @@ def _lam_delta(problem: PathProblem, d: float) -> float:
     return (d + 0.5 * p) % p - 0.5 * p
 
 
+@single_threaded
 def trace(
     problem: PathProblem,
     theta0: Sequence[float],
@@ -860,6 +862,7 @@ def bifurcation_tangents(problem: PathProblem, point: SpecialPoint, branch_tange
     return min(candidates, key=alignment)
 
 
+@single_threaded
 def bifurcating_branches(
     problem: PathProblem,
     point: SpecialPoint,

@@ -182,7 +182,7 @@ def write_page(path: str | Path, data: PathsData, command: str, figures: str | P
         "",
         "## Pressure under the 2 N horizontal tip payload",
         "",
-        f"Inflating the actuator under Table 2's load, the stable branch bends on until the fold at",
+        "Inflating the actuator under Table 2's load, the stable branch bends on until the fold at",
         f"**P = {up:.5f} MPa**, where it snaps by {jumps_p[0].distance_mm:.0f} mm"
         f" (total angle {math.degrees(np.sum(jumps_p[0].theta_before)):.1f} -> {math.degrees(np.sum(jumps_p[0].theta_after)):.1f} deg)",
         f"to the far branch. Deflating from there it holds on until the other fold at **P = {down:.5f} MPa**"
@@ -232,12 +232,12 @@ def write_page(path: str | Path, data: PathsData, command: str, figures: str | P
         "",
         "## Payload direction at the 90 degree pressure",
         "",
-        f"With the pressure held at its 90 degree value and a 2 N tip payload turned from 90 to 150 degrees",
+        "With the pressure held at its 90 degree value and a 2 N tip payload turned from 90 to 150 degrees",
         f"(Omega from the vertical), the branch folds at **{d_folds[1]:.3f} deg** (turning up, the actuator",
         f"snaps by {jumps_d[0].distance_mm:.0f} mm) and at **{d_folds[0]:.3f} deg** (turning back, it snaps back):",
         f"a hysteresis of **{dh['width']:.2f} deg**.",
         "",
-        f"![direction path](" + str(fig_rel / rel["direction"]) + ")",
+        "![direction path](" + str(fig_rel / rel["direction"]) + ")",
         "",
         "`esba path --param omega --to 150` draws this figure.",
         "",
@@ -284,7 +284,7 @@ def write_page(path: str | Path, data: PathsData, command: str, figures: str | P
         "",
         f"- Under a 2 N side load the Table 1 actuator has a bistable window of {1000 * h['width']:.1f} kPa",
         f"  ({down:.4f} to {up:.4f} MPa): commanding a pressure in that window does not determine the shape;",
-        f"  the history does. A controller that ramps the pressure through it sees the tip jump by",
+        "  the history does. A controller that ramps the pressure through it sees the tip jump by",
         f"  {min(j.distance_mm for j in jumps_p):.0f} mm or more. Larger payloads widen the window (the table above)"
         + (f"; below about {data.cusp_n:.2f} N there is none." if data.cusp_n else "."),
         f"- A 2 N side load turned past {d_folds[1]:.1f} degrees from the vertical flips the actuator the same way, and it",

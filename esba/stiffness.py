@@ -41,6 +41,7 @@ from .equilibrium import (
 )
 from .model import Model
 from .scene import Payload, Scene, SceneError
+from .threads import single_threaded
 
 __all__ = [
     "TangentStiffness",
@@ -113,6 +114,7 @@ class TangentStiffness:
         }
 
 
+@single_threaded
 def tangent_stiffness(result: Equilibrium) -> TangentStiffness:
     """The 2x2 tangent stiffness of the tip at an equilibrium, from the generated Hessian.
 
@@ -194,6 +196,7 @@ class SecantStiffness:
         }
 
 
+@single_threaded
 def secant_stiffness(
     scene: Scene,
     forces: Sequence[float] = PAPER_FORCES,
@@ -297,6 +300,7 @@ class PressureTarget:
         return out
 
 
+@single_threaded
 def pressure_for_target(
     scene: Scene,
     *,
