@@ -478,6 +478,7 @@ def solve(
     *,
     pressure: float | None = None,
     theta0: Sequence[float] | None = None,
+    unloaded: Sequence[float] | None = None,
 ) -> Equilibrium:
     """The equilibrium of ``scene`` reached along its load history.
 
@@ -491,6 +492,9 @@ def solve(
         Use this pressure (MPa) instead of the scene's (saves the closed form in sweeps).
     theta0 : sequence of float, optional
         Warm start (rad): one IPOPT solve at the full load from here, no load history.
+    unloaded : sequence of float, optional
+        The unloaded equilibrium at this pressure (rad), when it is already known (a stiffness
+        study solves several payloads at one pressure): the load ramp starts there.
 
     Returns
     -------
@@ -509,6 +513,10 @@ def solve(
     t_start = time.perf_counter()
     n = scene.segments
     pressure, known_unloaded = _resolve_pressure(scene, pressure)
+    if unloaded is not None:
+        known_unloaded = np.asarray(unloaded, dtype=float).ravel()
+        if known_unloaded.shape != (n,) or not np.all(np.isfinite(known_unloaded)):
+            raise SolverOptionsError(f"unloaded has shape {known_unloaded.shape}: expected {n} finite angles (rad)")
     full = scene.parameters(pressure)
     lbx = model.lower_bounds(full)
     pv_full = model.param_vector(full)

@@ -74,6 +74,11 @@ def tip_jacobian(model: Model, theta: Sequence[float], L: float) -> np.ndarray:
     return np.asarray(fun(np.asarray(theta, dtype=float), float(L)), dtype=float).reshape(2, model.n)
 
 
+def _uniform(scene: Scene) -> np.ndarray:
+    """The unloaded state of a scene given by its target angle: every segment at Theta / n (exact)."""
+    return np.full(scene.segments, math.radians(scene.target_angle_deg) / scene.segments)
+
+
 def _unit(angle_deg: float) -> np.ndarray:
     """Unit vector of a force at Omega from the vertical: (cos Omega, -sin Omega), Eq. (14)."""
     om = math.radians(angle_deg)
@@ -232,11 +237,14 @@ def secant_stiffness(
     base = scene.replace(payloads=(Payload(0.0, angle_deg, 1.0),))
     if pressure is None:
         pressure = scene.pressure if scene.pressure is not None else pressure_for_angle(scene)
-    initial = solve(base, options, pressure=pressure)
+        initial = solve(base, options, pressure=pressure, unloaded=None if scene.pressure is not None else _uniform(scene))
+    else:
+        initial = solve(base, options, pressure=pressure)
     u = _unit(angle_deg)
     loaded, disp, stiff = [], [], []
+    start = initial.theta if initial.ok else None  # every payload ramps from the same unloaded state
     for f in forces:
-        r = solve(base.replace(payloads=(Payload(f, angle_deg, 1.0),)), options, pressure=pressure)
+        r = solve(base.replace(payloads=(Payload(f, angle_deg, 1.0),)), options, pressure=pressure, unloaded=start)
         delta = float(u @ (r.tip[:2] - initial.tip[:2]))
         loaded.append(r)
         disp.append(delta)

@@ -91,7 +91,7 @@ def test_scene_file_and_plot(capsys, tmp_path, monkeypatch):
 
 
 def test_failed_solve_exits_1(capsys):
-    code, out, err = run(capsys, "solve", "--no-plot", "--max-iter", "1")
+    code, out, err = run(capsys, "solve", "--no-plot", "--max-iter", "1", "--no-continuation")
     assert code == EXIT_FAILED
     assert "NOT OK" in out and "Maximum_Iterations_Exceeded" in out
     assert err.startswith("esba: solve not ok: IPOPT did not converge")

@@ -250,7 +250,7 @@ def test_failure_is_reported_not_answered():
     assert "max_steps = 2" in r.message
     with pytest.raises(EquilibriumError, match="ramp"):
         r.check()
-    r1 = solve(MAIN_JOB, SolverOptions(max_iter=1))
+    r1 = solve(MAIN_JOB, SolverOptions(max_iter=1), theta0=[0.0, 0.0, 0.0])
     assert not r1.ok and r1.status == "Maximum_Iterations_Exceeded" and "IPOPT did not converge" in r1.message
     r2 = solve(MAIN_JOB, SolverOptions(max_iter=1, continuation=False))
     assert not r2.ok and r2.status == "Maximum_Iterations_Exceeded"
