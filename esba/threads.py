@@ -20,12 +20,14 @@ Examples
 from __future__ import annotations
 
 import functools
+import threading
 from contextlib import contextmanager
 from typing import Callable, Iterator, TypeVar
 
 __all__ = ["single_threaded", "blas_one_thread"]
 
 _CONTROLLER = None
+_STATE = threading.local()  # depth of nested esba entry points in this thread: only the outermost sets the limit
 T = TypeVar("T")
 
 
@@ -40,9 +42,17 @@ def _controller():
 
 @contextmanager
 def blas_one_thread() -> Iterator[None]:
-    """One BLAS thread inside the ``with`` block (about 7 us to enter and leave)."""
-    with _controller().limit(limits=1, user_api="blas"):
-        yield
+    """One BLAS thread inside the ``with`` block (about 7 us to enter and leave; nothing when nested)."""
+    depth = getattr(_STATE, "depth", 0)
+    _STATE.depth = depth + 1
+    try:
+        if depth:
+            yield
+        else:
+            with _controller().limit(limits=1, user_api="blas"):
+                yield
+    finally:
+        _STATE.depth = depth
 
 
 def single_threaded(fn: Callable[..., T]) -> Callable[..., T]:
