@@ -504,6 +504,26 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_bench_solve(args: argparse.Namespace) -> int:
+    from esba import bench, bench_solve
+    from esba.pages import write_section
+
+    if args.markdown:
+        _writable("--markdown", args.markdown, (".md",))
+
+    def progress(msg):
+        if not args.json:
+            print(f"  {msg} done", file=sys.stderr)
+
+    data = bench_solve.solve_benchmark(repeat=args.repeat, progress=progress)
+    _emit(args, data, bench_solve.solve_table)
+    if args.markdown:
+        command = f"esba bench solve --repeat {args.repeat} --markdown {args.markdown}"
+        path = write_section(args.markdown, "solve", bench_solve.solve_section(data), command, bench.PERFORMANCE_TITLE)
+        print(f"wrote {path}", file=sys.stderr)
+    return EXIT_OK
+
+
 def _cmd_bench_path(args: argparse.Namespace) -> int:
     from esba import bench, bench_path
     from esba.pages import write_section
@@ -574,6 +594,11 @@ def _add_bench(sub) -> None:
     a.add_argument("--no-write", action="store_true", help="print only; write no page or figure")
     a.add_argument("--json", action="store_true")
     a.set_defaults(func=_cmd_bench_accuracy)
+    so = bsub.add_parser("solve", help="single-scene calls (solve for n = 3..128, stiffness, design, model load, CLI) against naive SciPy and the compiled limit")
+    so.add_argument("--repeat", type=_segments, default=11, help="runs per timing, median reported (default 11)")
+    so.add_argument("--markdown", metavar="FILE", help="also write the solve section of a docs page (docs/performance.md)")
+    so.add_argument("--json", action="store_true")
+    so.set_defaults(func=_cmd_bench_solve)
     pa = bsub.add_parser("path", help="time to trace the 2 N pressure path 0 -> 0.3 MPa (n = 3, 32) against the IPOPT ramp and naive BFGS")
     pa.add_argument("--repeat", type=_segments, default=5, help="runs per timing, median reported (default 5)")
     pa.add_argument("--markdown", metavar="FILE", help="also write the path section of a docs page (docs/performance.md)")

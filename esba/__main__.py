@@ -1,0 +1,7 @@
+"""``python -m esba``: the command line (the same as the ``esba`` script)."""
+
+import sys
+
+from esba.cli import main
+
+sys.exit(main())
