@@ -230,7 +230,7 @@ def _solve_table(d: dict) -> str:
         ("tip x, y", f"{d['tip_mm'][0]:.3f}, {d['tip_mm'][1]:.3f} mm (orientation {d['tip_angle_deg']:.2f} deg)"),
         ("energy", f"{d['energy_nmm']:.4f} N mm ({terms})"),
         ("stability", f"{d['stability']} (Hessian eigenvalues {_fmt(d['eigenvalues'], 3)} N mm/rad^2)"),
-        ("solver", f"IPOPT {d['status']}, {d['iterations']} iterations in {d['steps']} solves, {d['solve_time_s']:.3f} s"),
+        ("solver", f"{d['certificate'] or 'IPOPT ' + d['status']}; {d['steps']} path points and solves, {d['iterations']} iterations in all, {d['solve_time_s']:.3f} s"),
     ]
     if d.get("message"):
         rows.append(("NOT OK", d["message"]))

@@ -60,7 +60,6 @@ from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
 
 import numpy as np
-from scipy.optimize import brentq
 
 from . import checks
 from .branch import Branch, SpecialPoint, branches_csv, write_branches
@@ -367,6 +366,8 @@ def _brent_on_segment(eng: _Engine, a: _Point, s_b: float, f: Callable[[_Point],
         if pt is None:
             raise _SegmentError
         return f(pt)
+
+    from scipy.optimize import brentq  # SciPy's optimize takes ~0.2 s to import: only when a point is located
 
     try:
         s_star = brentq(fs, 0.0, s_b, xtol=1e-15 * max(1.0, s_b), rtol=1e-15, maxiter=200)
