@@ -694,7 +694,8 @@ def _design_table(d: dict) -> str:
 
 
 def _cmd_design(args: argparse.Namespace) -> int:
-    from esba.design import DesignError, DesignOptions, DesignProblem, compare, optimise_ipopt, optimise_pso, write_doc
+    from esba.design import DesignError, DesignOptions, DesignProblem, compare, optimise_ipopt, optimise_pso
+    from esba.design_report import write_doc
     from esba.pso import PSOOptions, PSOOptionsError
 
     try:

@@ -14,8 +14,6 @@ import pytest
 
 from esba import cli
 from esba.design import (
-    DOC_COMMAND,
-    DOC_PATH,
     METHODS,
     OBJECTIVES,
     DesignError,
@@ -29,6 +27,7 @@ from esba.design import (
     optimise_pso,
     term_curvatures,
 )
+from esba.design_report import DOC_COMMAND, DOC_PATH
 from esba.equilibrium import pressure_for_angle
 from esba.pso import PSOOptions
 from esba.scene import Actuator, Scene
