@@ -146,7 +146,7 @@ def design_report(
     L.append("")
     L.append("## The NLP (full space, IPOPT with exact second derivatives)")
     L.append("")
-    L.append("One NLP in CasADi's dict form `{\"x\", \"f\", \"g\"}` (`esba/design.py`):")
+    L.append("One NLP in CasADi's dict form `{\"x\", \"f\", \"g\"}` (`esba/design_nlp.py`):")
     L.append("")
     L.append("| | |")
     L.append("|---|---|")
