@@ -19,81 +19,32 @@ objective is one of
 * ``pressure``: minimise the pressure that bends the unloaded actuator to ``target_angle_deg``
   (a state theta_t at a pressure P_t), usually with K >= K_min.
 
-The active constraints at a solution are reported with their multipliers turned into
+The NLP is built with :class:`esba.eqnlp.EquilibriumNLP`, the builder the fit to measurements
+(:mod:`esba.fit`) shares. The active constraints at a solution are reported with their multipliers turned into
 sensitivities (:class:`ActiveConstraint`). Solving and checking is :func:`esba.design.optimise_ipopt`.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from .design_batch import Evaluation, _pieces
 from .design_problem import _OBJECTIVE_SCALING, _START_FRACTIONS, DesignOptions, DesignProblem
+from .eqnlp import ActiveConstraint, EquilibriumNLP
 
-__all__ = ["ActiveConstraint"]
-
-
-@dataclass(frozen=True)
-class ActiveConstraint:
-    """One constraint or bound that holds at the optimum.
-
-    Attributes
-    ----------
-    name : str
-        ``d_min`` (d >= 0), ``r2_min``, ``wall`` (r1 - r2 - d >= wall), ``min_stiffness``,
-        ``max_pressure`` (start state), ``max_pressure_target``, ``domain_sqrt[i]``,
-        ``domain_denominator[i]``.
-    description : str
-        The constraint in words.
-    value : float
-        The constrained quantity at the optimum (in ``unit``).
-    bound : float
-        Its bound (in ``unit``).
-    unit : str
-    multiplier : float or None
-        IPOPT's multiplier (CasADi's sign convention: > 0 at an upper bound, < 0 at a lower one),
-        for the NLP as scaled; None for PSO.
-    sensitivity : float or None
-        d(objective*) / d(bound), in the objective's unit per ``unit``: what moving the bound by
-        one unit would change the optimum by (first order). None for PSO.
-    """
-
-    name: str
-    description: str
-    value: float
-    bound: float
-    unit: str
-    multiplier: float | None
-    sensitivity: float | None
-
-    def to_dict(self) -> dict:
-        """JSON-ready form."""
-        return dataclasses.asdict(self)
+__all__ = ["ActiveConstraint"]  # (from esba.eqnlp, the builder this NLP is made with)
 
 
 # ---------------------------------------------------------------------------------------------
 # IPOPT on the full-space NLP
 
 
-@dataclass
-class _Constraint:
-    name: str
-    description: str
-    unit: str
-    lb: float
-    ub: float
-    report: bool  # an inequality whose multiplier is worth reporting
-    scale: float = 1.0  # the expression in g is (quantity) / scale
-
-
 class _NLP:
-    """The full-space NLP of one problem: layout, bounds, the IPOPT solver (built once)."""
+    """The full-space NLP of one problem: layout, bounds, the IPOPT solver (built once by :mod:`esba.eqnlp`)."""
 
     def __init__(self, problem: DesignProblem, options: DesignOptions):
         t0 = time.perf_counter()
@@ -101,97 +52,52 @@ class _NLP:
         self.problem, self.options, self.pieces = problem, options, pc
         n, r1, L = pc.n, pc.r1, pc.L
         F = problem.payload_n
-        sizes = [("r2", 1), ("d", 1), ("P", 1), ("theta_s", n), ("theta_l", n)]
-        if problem.objective == "angle":
-            sizes.append(("theta_f", n))
-        if problem.objective == "pressure":
-            sizes += [("P_t", 1), ("theta_t", n)]
-        self.slices: dict[str, slice] = {}
-        k = 0
-        for name, size in sizes:
-            self.slices[name] = slice(k, k + size)
-            k += size
-        x = ca.SX.sym("x", k)
-        v = {name: x[s] for name, s in self.slices.items()}
-        r2, d, P = v["r2"], v["d"], v["P"]
-        g, cons = [], []
-
-        def add(expr, con: _Constraint):
-            g.append(expr)
-            cons.append(con)
-
-        def equilibrium(theta, pressure, force, label):
-            grad = pc.grad(theta, r2, d, pressure, force)
-            for i in range(n):
-                add(grad[i], _Constraint(f"equilibrium_{label}[{i}]", f"dU/dtheta_{i + 1} = 0 ({label})", "N mm/rad", 0.0, 0.0, False))
-
-        equilibrium(v["theta_s"], P, 0.0, "start")
-        start = math.radians(problem.start_angle_deg)
-        add(ca.sum1(v["theta_s"]) - start, _Constraint("start_angle", f"unloaded angle = {problem.start_angle_deg:g} deg", "rad", 0.0, 0.0, False))
-        equilibrium(v["theta_l"], P, F, "loaded")
-        add(
-            r1 - r2 - d,
-            _Constraint("wall", f"wall r1 - r2 - d >= {problem.wall:g} mm", "mm", problem.wall, math.inf, True),
+        pmax = problem.max_pressure
+        b = EquilibriumNLP("esba_design")
+        r2 = b.variable("r2", lb=options.r2_min, lower=("r2_min", f"r2 >= {options.r2_min:g} mm", "mm"))
+        d = b.variable("d", lb=0.0, lower=("d_min", "d >= 0 mm", "mm"))
+        P = b.variable(
+            "P", lb=0.0, ub=math.inf if pmax is None else pmax,
+            lower=("min_pressure", "P >= 0 MPa", "MPa"), upper=("max_pressure", f"P <= {pmax} MPa (the 90 deg state)", "MPa"),
         )
-        # Eq. (10): L r2^2 + n r1^3 theta_i >= 0 and L + n (r1 + d) theta_i > 0, as ratios (1e-6 margin)
-        for i in range(n):
-            th = v["theta_l"][i]
-            add(1.0 + n * r1**3 * th / (L * r2**2), _Constraint(f"domain_sqrt[{i}]", f"Eq. (10) square root of segment {i + 1} (loaded) >= 0", "1", 1e-6, math.inf, True))
-            add(1.0 + n * (r1 + d) * th / L, _Constraint(f"domain_denominator[{i}]", f"Eq. (10) denominator of segment {i + 1} (loaded) > 0", "1", 1e-6, math.inf, True))
-        K = pc.stiffness_expr(v["theta_s"], v["theta_l"])
-        if problem.min_stiffness is not None and problem.objective != "stiffness":
-            add(K, _Constraint("min_stiffness", f"K >= {problem.min_stiffness:g} N/m", "N/m", problem.min_stiffness, math.inf, True))
+        theta_s = b.variable("theta_s", n)
+        theta_l = b.variable("theta_l", n)
         if problem.objective == "angle":
-            equilibrium(v["theta_f"], problem.max_pressure, 0.0, "free")
-            J = ca.sum1(v["theta_f"]) * 180.0 / math.pi
-            cap = options.max_free_angle_deg
-            add(J, _Constraint("max_free_angle", f"free angle <= {cap:g} deg (the search range)", "deg", -math.inf, cap, True))
-        elif problem.objective == "pressure":
-            equilibrium(v["theta_t"], v["P_t"], 0.0, "target")
-            add(
-                ca.sum1(v["theta_t"]) - math.radians(problem.target),
-                _Constraint("target_angle", f"unloaded angle = {problem.target:g} deg", "rad", 0.0, 0.0, False),
+            theta_f = b.variable("theta_f", n)
+        if problem.objective == "pressure":
+            P_t = b.variable(
+                "P_t", lb=0.0, ub=math.inf if pmax is None else pmax,
+                lower=("min_pressure_target", "P_t >= 0 MPa", "MPa"),
+                upper=("max_pressure_target", f"P_t <= {pmax} MPa (the target state)", "MPa"),
             )
-            J = v["P_t"]
+            theta_t = b.variable("theta_t", n)
+
+        b.equilibrium(pc.grad(theta_s, r2, d, P, 0.0), "start")
+        start = math.radians(problem.start_angle_deg)
+        b.constraint(ca.sum1(theta_s) - start, "start_angle", f"unloaded angle = {problem.start_angle_deg:g} deg", "rad", 0.0, 0.0)
+        b.equilibrium(pc.grad(theta_l, r2, d, P, F), "loaded")
+        b.constraint(r1 - r2 - d, "wall", f"wall r1 - r2 - d >= {problem.wall:g} mm", "mm", problem.wall, math.inf, True)
+        b.domain(theta_l, L, r1, r2, d, "loaded")
+        K = pc.stiffness_expr(theta_s, theta_l)
+        if problem.min_stiffness is not None and problem.objective != "stiffness":
+            b.constraint(K, "min_stiffness", f"K >= {problem.min_stiffness:g} N/m", "N/m", problem.min_stiffness, math.inf, True)
+        if problem.objective == "angle":
+            b.equilibrium(pc.grad(theta_f, r2, d, problem.max_pressure, 0.0), "free")
+            J = ca.sum1(theta_f) * 180.0 / math.pi
+            cap = options.max_free_angle_deg
+            b.constraint(J, "max_free_angle", f"free angle <= {cap:g} deg (the search range)", "deg", -math.inf, cap, True)
+        elif problem.objective == "pressure":
+            b.equilibrium(pc.grad(theta_t, r2, d, P_t, 0.0), "target")
+            b.constraint(ca.sum1(theta_t) - math.radians(problem.target), "target_angle", f"unloaded angle = {problem.target:g} deg", "rad", 0.0, 0.0)
+            J = P_t
         else:
             J = K
         sign, scale = _OBJECTIVE_SCALING[problem.objective]
         self.sign, self.scale = sign, scale
-        self.constraints = cons
-        self.lbg = np.array([c.lb for c in cons])
-        self.ubg = np.array([c.ub for c in cons])
-        inf = math.inf
-        lbx, ubx = np.full(k, -inf), np.full(k, inf)
-        lbx[self.slices["r2"]] = options.r2_min
-        lbx[self.slices["d"]] = 0.0
-        lbx[self.slices["P"]] = 0.0
-        pmax = problem.max_pressure
-        if pmax is not None:
-            ubx[self.slices["P"]] = pmax
-        if "P_t" in self.slices:
-            lbx[self.slices["P_t"]] = 0.0
-            if pmax is not None:
-                ubx[self.slices["P_t"]] = pmax
-        self.lbx, self.ubx = lbx, ubx
-        self.bound_names = {
-            ("r2", "lower"): ("r2_min", f"r2 >= {options.r2_min:g} mm", "mm"),
-            ("d", "lower"): ("d_min", "d >= 0 mm", "mm"),
-            ("P", "lower"): ("min_pressure", "P >= 0 MPa", "MPa"),
-            ("P", "upper"): ("max_pressure", f"P <= {pmax} MPa (the 90 deg state)", "MPa"),
-            ("P_t", "lower"): ("min_pressure_target", "P_t >= 0 MPa", "MPa"),
-            ("P_t", "upper"): ("max_pressure_target", f"P_t <= {pmax} MPa (the target state)", "MPa"),
-        }
-        self.nlp = {"x": x, "f": sign * J / scale, "g": ca.vertcat(*g)}
-        self.K_fun = ca.Function("K", [x], [K], ["x"], ["K"])
-        self.solver = ca.nlpsol(
-            "esba_design",
-            "ipopt",
-            self.nlp,
+        self.built = b.build(
+            sign * J / scale,
             {
-                "print_time": False,
                 "show_eval_warnings": False,  # IPOPT backs off from a NaN (outside Eq. 10's domain) itself
-                "ipopt.print_level": 0,
-                "ipopt.sb": "yes",
                 "ipopt.tol": options.tol,
                 "ipopt.max_iter": options.max_iter,
                 "ipopt.linear_solver": options.linear_solver,
@@ -199,6 +105,9 @@ class _NLP:
                 "ipopt.bound_relax_factor": 1e-10,
             },
         )
+        self.slices, self.solver = self.built.slices, self.built.solver
+        self.lbx, self.ubx, self.lbg, self.ubg = self.built.lbx, self.built.ubx, self.built.lbg, self.built.ubg
+        self.K_fun = ca.Function("K", [self.built.nlp["x"]], [K], ["x"], ["K"])
         self.build_time = time.perf_counter() - t0
 
     def x0(self, e: Evaluation, i: int, extra: dict) -> np.ndarray:
@@ -215,28 +124,8 @@ class _NLP:
 
     def active(self, z: np.ndarray, g: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray) -> tuple[ActiveConstraint, ...]:
         """Inequalities and bounds at their bound, with multipliers and sensitivities."""
-        tol = self.options.active_tol
-        out = []
-        factor = -self.sign * self.scale  # dJ*/d(bound) = -lambda * scale * sign
-
-        def scaled_tol(bound):
-            return tol * max(1.0, abs(bound))
-
-        for c, value, lam in zip(self.constraints, g, lam_g):
-            if not c.report:
-                continue
-            for kind, bound in (("lower", c.lb), ("upper", c.ub)):
-                if math.isfinite(bound) and abs(value - bound) <= scaled_tol(bound):
-                    out.append(ActiveConstraint(c.name, c.description, float(value), float(bound), c.unit, float(lam), float(factor * lam)))
-        for var, s in self.slices.items():
-            if s.stop - s.start != 1:
-                continue
-            value, lam = float(z[s][0]), float(lam_x[s][0])
-            for kind, bound in (("lower", self.lbx[s][0]), ("upper", self.ubx[s][0])):
-                if math.isfinite(bound) and abs(value - bound) <= scaled_tol(bound) and (var, kind) in self.bound_names:
-                    name, desc, unit = self.bound_names[(var, kind)]
-                    out.append(ActiveConstraint(name, desc, value, float(bound), unit, lam, float(factor * lam)))
-        return tuple(out)
+        # dJ*/d(bound) = -lambda * scale * sign
+        return self.built.active(z, g, lam_g, lam_x, self.options.active_tol, -self.sign * self.scale)
 
 
 _NLPS: dict[tuple, _NLP] = {}
