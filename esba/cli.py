@@ -236,9 +236,53 @@ def _solve_table(d: dict) -> str:
         rows.append(("NOT OK", d["message"]))
     for note in d.get("notes", []):
         rows.append(("note", note))
+    if d.get("sensitivities"):
+        rows += _sensitivity_rows(d)
+    if d.get("uncertainty"):
+        rows += _uncertainty_rows(d)
     if d.get("figure"):
         rows.append(("figure", f"wrote {d['figure']}"))
     return "\n".join(f"{k:>12}: {v}" for k, v in rows)
+
+
+def _sensitivity_rows(d: dict) -> list[tuple[str, str]]:
+    s = d["sensitivities"]
+    if s["status"] != "ok":
+        return [("sensitivity", s["message"])]
+    rows = [("sensitivity", "per unit of each parameter (implicit function theorem, exact AD); fold: linear estimate of the change that reaches it")]
+    rows.append(("", f"{'parameter':<14} {'value':>10} {'unit':<6} {'d angle (deg)':>14} {'d tip x (mm)':>13} {'d tip y (mm)':>13} {'fold':>10}"))
+    for name, r in s["parameters"].items():
+        fold = "-" if r["fold_distance"] is None else f"{r['fold_distance']:+.3g}"
+        rows.append(("", f"{name:<14} {r['value']:>10.5g} {r['unit']:<6} {r['dtotal_angle_deg_per_unit']:>14.5g} "
+                         f"{r['dtip_mm_per_unit'][0]:>13.5g} {r['dtip_mm_per_unit'][1]:>13.5g} {fold:>10}"))
+    return rows
+
+
+def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
+    u = d["uncertainty"]
+    given = ", ".join(f"{s['name']} {s['sigma']:.4g} {s['unit']}" + (" (uniform)" if s["distribution"] == "uniform" else "") for s in u["sigmas"])
+    rows = [("sigmas", given)]
+    if u["std_total_angle_deg"] is None:
+        rows.append(("uncertainty", f"{u['status']}: {u['message']}"))
+        return rows
+    e = u["tip_ellipse_95"]
+    rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
+                                f"95 % tip ellipse {e['semi_axes_mm'][0]:.3g} x {e['semi_axes_mm'][1]:.3g} mm at {e['angle_deg']:.1f} deg from x"))
+    if u["status"] != "ok":
+        rows.append(("NOT LINEAR", u["message"]))
+    mc = d.get("monte_carlo")
+    if mc:
+        c = mc["counts"]
+        std = mc["std"]
+
+        def num(v):
+            return "-" if v is None else f"{v:.4g}"
+
+        rows.append(("Monte Carlo", f"{c['samples']} samples (seed {mc['seed']}, {mc['backend']}): {c['ok']} solved, {c['invalid']} outside the scene's rules, "
+                                    f"{c['not_ok']} without a stable equilibrium; std total angle {num(std['total_angle'])} deg, tip x, y "
+                                    f"{num(std['tip_x'])}, {num(std['tip_y'])} mm"))
+        rows.append(("agreement", d["agreement"]["verdict"]))
+    return rows
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
@@ -247,6 +291,9 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     from esba.equilibrium import SolverOptions
 
     scene = _scene_from_args(args)
+    sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
+    if args.monte_carlo is not None and not sigmas:
+        raise UsageError("--monte-carlo needs uncertain parameters: --sigma NAME=SIGMA or an [uncertainty] table in the scene file")
     options = SolverOptions(max_iter=args.max_iter, continuation=not args.no_continuation)
     try:
         result = solve(scene, options)
@@ -255,6 +302,20 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         return EXIT_FAILED
     data = result.to_dict()
     data["scene"] = scene.describe()
+    propagation = mc = None
+    if args.sensitivities:
+        from esba.sensitivity import sensitivities
+
+        data["sensitivities"] = sensitivities(result).to_dict()
+    if sigmas:
+        from esba.uncertainty import MonteCarloOptions, compare, monte_carlo, propagate
+
+        propagation = propagate(result, sigmas)
+        data["uncertainty"] = propagation.to_dict()
+        if args.monte_carlo is not None:
+            mc = monte_carlo(scene, sigmas, MonteCarloOptions(samples=args.monte_carlo, seed=args.seed))
+            data["monte_carlo"] = mc.to_dict()
+            data["agreement"] = compare(propagation, mc).to_dict()
     plot = args.plot
     if plot is None and args.scene is None and not args.no_plot:
         plot = DEFAULT_SOLVE_FIGURE
@@ -262,12 +323,46 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         from esba.plots import save_figure, solve_figure
 
         unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False), pressure=result.pressure)
-        data["figure"] = str(save_figure(solve_figure(result, unloaded), plot).resolve())
+        cov = propagation.cov_tip if propagation is not None and propagation.has_numbers else None
+        tips = mc.tip[mc.ok] if mc is not None else None
+        data["figure"] = str(save_figure(solve_figure(result, unloaded, tip_cov=cov, samples=tips), plot).resolve())
     _emit(args, data, _solve_table)
     if not result.ok:
         print(f"esba: solve not ok: {result.message or result.status}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
+
+
+def _sigmas_for(args: argparse.Namespace, scene) -> tuple:
+    """The scene file's [uncertainty] table, then --sigma flags (a flag replaces the file's entry)."""
+    from esba.uncertainty import UncertaintyError, load_sigmas, parse_sigma, resolve_sigmas
+
+    try:
+        specs = list(load_sigmas(args.scene)) if args.scene else []
+        specs += [parse_sigma(text) for text in args.sigma or ()]
+        return resolve_sigmas(scene, specs) if specs else ()
+    except UncertaintyError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _sample_count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 10:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of samples >= 10")
+    return value
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number >= 0")
+    return value
 
 
 def _add_solve(sub) -> None:
@@ -277,6 +372,10 @@ def _add_solve(sub) -> None:
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--max-iter", type=_positive_int, default=200, metavar="N", help="IPOPT iterations per solve (default 200)")
     p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
+    p.add_argument("--sensitivities", action="store_true", help="d(angles, tip)/d(parameter) for every scene parameter (exact, implicit function theorem)")
+    p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="uncertain parameter: E=0.05 (in its unit), E=10%%, r2=±0.1 (a tolerance); repeatable; propagated to first order")
+    p.add_argument("--monte-carlo", type=_sample_count, metavar="N", help="check the first-order uncertainty with N Monte Carlo samples on the batch path (e.g. 10000)")
+    p.add_argument("--seed", type=_seed, default=0, help="seed of the Monte Carlo samples (default 0)")
     p.set_defaults(func=_cmd_solve)
 
 

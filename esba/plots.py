@@ -27,7 +27,7 @@ from matplotlib.figure import Figure
 
 from .equilibrium import Equilibrium
 
-__all__ = ["new_figure", "save_figure", "draw_shape", "draw_payloads", "setup_frame_axes", "solve_figure", "shapes_figure"]
+__all__ = ["new_figure", "save_figure", "draw_shape", "draw_payloads", "draw_tip_ellipse", "setup_frame_axes", "solve_figure", "shapes_figure"]
 
 
 def new_figure(width: float = 5.5, height: float = 5.0) -> Figure:
@@ -89,8 +89,22 @@ def draw_payloads(ax: Axes, result: Equilibrium, length_mm: float = 25.0, color:
         ax.annotate(f"{p.force:g} N", xy=(pt[1] - dy, pt[0] - dx), color=color, fontsize=8, ha="center", va="bottom")
 
 
-def solve_figure(result: Equilibrium, unloaded: Equilibrium | None = None) -> Figure:
-    """The deformed shape of ``result`` next to the unloaded one (same pressure), with its payloads."""
+def draw_tip_ellipse(ax: Axes, centre: Sequence[float], cov: np.ndarray, level: float = 0.95, label: str | None = None, **style) -> None:
+    """The ``level`` ellipse of a 2x2 tip covariance (mm^2, x down, y horizontal) around ``centre`` [x, y]."""
+    k = math.sqrt(-2.0 * math.log(1.0 - level))
+    w, v = np.linalg.eigh(0.5 * (np.asarray(cov) + np.asarray(cov).T))
+    t = np.linspace(0.0, 2.0 * math.pi, 181)
+    pts = (v * (k * np.sqrt(np.maximum(w, 0.0)))) @ np.vstack([np.cos(t), np.sin(t)])
+    style.setdefault("color", "C1")
+    ax.plot(centre[1] + pts[1], centre[0] + pts[0], label=label, **style)
+
+
+def solve_figure(result: Equilibrium, unloaded: Equilibrium | None = None, tip_cov: np.ndarray | None = None, samples: np.ndarray | None = None) -> Figure:
+    """The deformed shape of ``result`` next to the unloaded one (same pressure), with its payloads.
+
+    With ``tip_cov`` (2x2, mm^2, from :func:`esba.uncertainty.propagate`) the tip's 95 % covariance
+    ellipse is drawn; with ``samples`` (k x 2 tip positions, mm, from a Monte Carlo) the samples too.
+    """
     fig = new_figure()
     ax = fig.add_subplot()
     setup_frame_axes(ax)
@@ -99,6 +113,10 @@ def solve_figure(result: Equilibrium, unloaded: Equilibrium | None = None) -> Fi
     verdict = "" if result.ok else f" [{result.stability}, {result.status}]"
     draw_shape(ax, result, label=f"loaded: {result.total_angle_deg:.1f} deg{verdict}", color="C0", lw=2)
     draw_payloads(ax, result)
+    if samples is not None and len(samples):
+        ax.plot(samples[:, 1], samples[:, 0], ".", ms=1.0, color="C2", alpha=0.3, label=f"Monte Carlo tips ({len(samples)})", zorder=1)
+    if tip_cov is not None and np.all(np.isfinite(tip_cov)):
+        draw_tip_ellipse(ax, result.tip[:2], tip_cov, 0.95, label="tip, 95 % ellipse (first order)", lw=1.5)
     s = result.scene
     ax.set_title(f"n = {s.segments}, P = {result.pressure:.4f} MPa, {s.variant} model", fontsize=10)
     ax.legend(loc="upper right", fontsize=8)

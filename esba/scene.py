@@ -38,6 +38,9 @@ A scene file is TOML; every key is optional::
     angle_deg = 90.0          # Omega from the vertical: 0 down, 90 horizontal against the bend
     at = 1.0                  # point of application, fraction of L from the base (1 = tip)
 
+    [uncertainty]             # optional: standard deviations (see esba.uncertainty)
+    E = "10%"                 # relative; 0.05 (MPa) absolute; "±0.1" a tolerance
+
 Examples
 --------
 >>> s = Scene(payloads=(Payload(2.0),))
@@ -358,7 +361,8 @@ MAIN_JOB = Scene(target_angle_deg=90.0, payloads=(Payload(2.0, 90.0, 1.0),), seg
 # ---------------------------------------------------------------------------------------------
 # TOML
 
-_TOP_KEYS = {"segments", "variant", "gravity", "fibres", "actuator", "loads", "payloads"}
+#: ``uncertainty`` (standard deviations of the parameters) is read by :func:`esba.uncertainty.load_sigmas`.
+_TOP_KEYS = {"segments", "variant", "gravity", "fibres", "actuator", "loads", "payloads", "uncertainty"}
 _LOAD_KEYS = {"pressure", "target_angle_deg", "g"}
 _PAYLOAD_KEYS = {"force", "angle_deg", "at"}
 

@@ -41,3 +41,19 @@ LOCATE_RTOL = 1e-8
 #: a Newton corrector converges quadratically: r_{k+1} <= C r_k^2 (measured C ~ 1e-3 on Table 1,
 #: gradients in N mm/rad); the bound leaves a factor 1e4 for other n and parameters
 QUADRATIC_CONSTANT = 10.0
+
+#: sensitivities (issue 10) against central differences of solves, d theta/dp ~ (theta(p+h) - theta(p-h)) / 2h
+#: with h = 1e-5 max(1, |p|): truncation O(h^2) ~ 1e-10 relative; each solve is stationary to round-off
+#: after the Newton polish (theta to ~1e-12 rad), so round-off ~ 1e-12 / 1e-5 = 1e-7 relative
+SENS_FD_STEP = 1e-5
+SENS_FD_RTOL = 1e-5
+#: ... relative to the column's size, or to these floors where a column is ~0 (rho at a target angle):
+#: the differences' own noise is ~1e-12 rad / h, ~1e-7 rad and ~1e-5 mm per unit
+SENS_FD_FLOOR_RAD = 1e-3
+SENS_FD_FLOOR_MM = 0.1
+#: the payload point's closed-form column against central differences of the generated gradient
+#: (no solve: round-off only, h = 1e-6)
+SENS_S_RTOL = 1e-6
+#: first order against Monte Carlo at small sigma: the standard deviations of 10 000 samples have a
+#: standard error of 0.7 %, and the nonlinearity at sigma = 1 % of E changes them by < 0.5 %
+MC_AGREE_REL = 0.02
