@@ -10,7 +10,9 @@ keeps the simplified difference and the ratio ``derived / printed``.
 
 Each entry also carries the intermediate steps of its derivation (the integrals of Eq. 6-7, Eq. 9
 solved, the vanishing lemma of Eq. 13, the fibre force balance of Eq. 16, ...), each with the
-computed check it rests on. :func:`write_page` renders everything as ``docs/derivations.md``;
+computed check it rests on. The results tables are checked too (:func:`table_checks`: the rows of
+Table 3 that must agree with each other, and with Table 2). :func:`write_page` renders everything
+as ``docs/derivations.md``;
 ``esba audit`` writes it and ``esba audit --check`` fails when the committed page is stale.
 
 Examples
@@ -771,6 +773,49 @@ def _appendix_a() -> AuditEntry:
     )
 
 
+# ---------------------------------------------------------------------------------------------
+# The paper's results tables: rows that must agree
+
+#: The EXP and FEM columns of the results tables, degrees, as printed: the first row
+#: (theta_EXP / theta_FEM) and the theta_TOL row. For these columns both rows are the same measured
+#: total angle (Table 2 prints it twice). Table 2: 2 N horizontal tip payload; Table 3: 2 N vertical.
+PAPER_TABLES: dict[str, dict[str, tuple[float, float]]] = {
+    "Table 2": {"first row": (28.8, 32.4), "theta_TOL": (28.8, 32.4)},
+    "Table 3": {"first row": (28.8, 32.4), "theta_TOL": (53.2, 50.2)},
+}
+
+
+@dataclass(frozen=True)
+class TableCheck:
+    """One consistency check of the results tables: what is compared and whether it holds."""
+
+    title: str
+    holds: bool
+
+
+def table_checks() -> tuple[TableCheck, ...]:
+    """The first row against the theta_TOL row in each table, and Table 3's first row against Table 2's."""
+    t2, t3 = PAPER_TABLES["Table 2"], PAPER_TABLES["Table 3"]
+    return (
+        TableCheck("Table 2: first row (θ_EXP, θ_FEM) = θ_TOL row", t2["first row"] == t2["theta_TOL"]),
+        TableCheck("Table 3: first row (θ_EXP, θ_FEM) = θ_TOL row", t3["first row"] == t3["theta_TOL"]),
+        TableCheck("Table 3's first row = Table 2's first row (the horizontal case's angles)", t3["first row"] == t2["first row"]),
+    )
+
+
+def _render_tables() -> str:
+    t3 = PAPER_TABLES["Table 3"]
+    out = ["## The paper's tables", "",
+           "For the EXP and FEM columns of the results tables the first row (θ_EXP / θ_FEM) and the θ_TOL row are the same measured "
+           "total angle: Table 2 prints it twice. Checks:", ""]
+    out += [f"- {c.title}: {'holds' if c.holds else '**fails**'}." for c in table_checks()]
+    out += ["",
+            f"**Table 3 has a copy error**: its first row repeats Table 2's horizontal case ({t3['first row'][0]:g}°, "
+            f"{t3['first row'][1]:g}°), while its θ_TOL row gives the vertical case ({t3['theta_TOL'][0]:g}°, {t3['theta_TOL'][1]:g}°); the "
+            "first row should read the same as θ_TOL. `docs/experiments.md` uses the vertical values.", ""]
+    return "\n".join(out)
+
+
 _BUILDERS = (_eq1, _eq2, _eq5, _eq8, _eq10, _eq11, _eq13, _eq14, _eq15, _eq18, _eq18_paper, _appendix_a)
 
 
@@ -863,6 +908,7 @@ def render() -> str:
     items = entries()
     parts = [_INTRO, "## Summary", "", _summary(items), ""]
     parts += [_render_entry(e) for e in items]
+    parts.append(_render_tables())
     return "\n".join(parts).rstrip("\n") + "\n"
 
 

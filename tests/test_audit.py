@@ -267,3 +267,13 @@ def test_cli_writes_page(tmp_path, capsys):
 def test_committed_page_is_current():
     assert audit.DOC_PATH.is_file(), "run `esba audit` and commit docs/derivations.md"
     assert cli.main(["audit", "--check"]) == 0
+
+
+def test_table3_copy_error_is_found_and_on_the_page():
+    """Table 3's first row repeats Table 2's (the horizontal case); its theta_TOL row is the vertical case."""
+    checks = {c.title.split(":")[0] if ":" in c.title else c.title: c.holds for c in audit.table_checks()}
+    assert checks["Table 2"] is True
+    assert checks["Table 3"] is False
+    assert audit.table_checks()[2].holds  # the copy
+    text = audit.render()
+    assert "## The paper's tables" in text and "**Table 3 has a copy error**" in text and "53.2" in text
