@@ -57,3 +57,9 @@ SENS_S_RTOL = 1e-6
 #: first order against Monte Carlo at small sigma: the standard deviations of 10 000 samples have a
 #: standard error of 0.7 %, and the nonlinearity at sigma = 1 % of E changes them by < 0.5 %
 MC_AGREE_REL = 0.02
+#: a fit to the model's own values (no noise) recovers the parameters to IPOPT's accuracy (tol 1e-10 on a
+#: scaled problem): 1e-6 relative leaves room for the flat directions of the objective
+FIT_EXACT_REL = 1e-6
+#: the fit's implicit-function-theorem Jacobian against central differences of solves (step 1e-5 relative):
+#: truncation ~1e-10, solve round-off ~1e-12 / 1e-5
+FIT_JACOBIAN_RTOL = 1e-5
