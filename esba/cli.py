@@ -1217,9 +1217,64 @@ def _add_fit(sub) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
+# esba experiments (issue 10): the paper's EXP and FEM values, docs/experiments.md
+
+
+def _experiments_table(d: dict) -> str:
+    lines = [f"{'column':<6} {'measurement':<22} {'quantity':<12} {'paper':>9} {'esba':>9} {'esba - paper':>13}"]
+    for col in d["columns"]:
+        for p in col["nominal"]:
+            lines.append(f"{col['name']:<6} {p['row'][:22]:<22} {p['quantity']:<12} {p['measured']:>9.4g} {p['predicted']:>9.4g} {p['error']:>+13.3f}")
+    for col in d["columns"]:
+        for key in ("fit_e", "fit_both"):
+            f = col[key]
+            est = ", ".join(f"{n} = {v['estimate']:.5g} +- {'-' if v['std_error'] is None else format(v['std_error'], '.2g')} {v['unit']}"
+                            for n, v in f["parameters"].items())
+            lines.append(f"{col['name']} fit: {est}" + (f" ({'; '.join(f['warnings'])})" if f["warnings"] else ""))
+    lines.append(f"E +-20 % on the main job: {d['modulus']['verdict']}")
+    if d.get("page"):
+        lines.append(f"wrote {d['page']} and its figure")
+    return "\n".join(lines)
+
+
+def _cmd_experiments(args: argparse.Namespace) -> int:
+    from esba import experiments_page
+
+    if args.check:
+        if experiments_page.check_page(args.check):
+            print(f"esba: {args.check} is stale: run `{experiments_page.DOC_COMMAND}` and commit it", file=sys.stderr)
+            return EXIT_FAILED
+        print("experiments page is up to date")
+        return EXIT_OK
+    from esba.experiments import run_study
+
+    study = run_study()
+    data = {
+        "columns": [
+            {"name": c.name, "nominal": [p.to_dict() for p in c.nominal], "fit_e": c.fit_e.to_dict(), "fit_both": c.fit_both.to_dict()}
+            for c in study.columns
+        ],
+        "modulus": study.modulus_agreement.to_dict(),
+    }
+    if args.write_doc:
+        path, _ = experiments_page.write_page(args.write_doc, study)
+        data["page"] = str(path)
+    _emit(args, data, _experiments_table)
+    return EXIT_OK
+
+
+def _add_experiments(sub) -> None:
+    p = sub.add_parser("experiments", help="the paper's EXP and FEM values against the model, fits and cross-validation (docs/experiments.md)")
+    p.add_argument("--write-doc", metavar="FILE", help="write the page (e.g. docs/experiments.md) and figures/experiments.png beside it")
+    p.add_argument("--check", metavar="FILE", help="exit 1 when the page FILE differs from what --write-doc would write")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_cmd_experiments)
+
+
+# ---------------------------------------------------------------------------------------------
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_path, _add_stiffness, _add_pressure, _add_validate, _add_sweep, _add_bench, _add_figures, _add_design, _add_fit]
+COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_path, _add_stiffness, _add_pressure, _add_validate, _add_sweep, _add_bench, _add_figures, _add_design, _add_fit, _add_experiments]
 
 
 def build_parser() -> argparse.ArgumentParser:
