@@ -1110,6 +1110,30 @@ def _add_path(sub) -> None:
 # esba fit (issue 10): parameters from measurements
 
 
+def _output_file(*suffixes: str) -> Callable[[str], str]:
+    """An argparse type for a file to write: the suffix allowed, not a folder, its folder creatable.
+
+    Checked when the flags are parsed, before any computation.
+    """
+    import os
+    from pathlib import Path
+
+    def check(text: str) -> str:
+        path = Path(text)
+        if path.suffix.lower() not in suffixes:
+            raise argparse.ArgumentTypeError(f"{text!r}: expected a file ending in {', '.join(suffixes)}")
+        if path.is_dir():
+            raise argparse.ArgumentTypeError(f"{text!r} is a folder: expected a file")
+        ancestor = path.resolve().parent
+        while not ancestor.exists():
+            ancestor = ancestor.parent
+        if not ancestor.is_dir() or not os.access(ancestor, os.W_OK):
+            raise argparse.ArgumentTypeError(f"{text!r}: cannot write there ({ancestor} is not a writable folder)")
+        return text
+
+    return check
+
+
 def _free_arg(text: str) -> list[str]:
     names = [s.strip() for s in text.split(",") if s.strip()]
     if not names:
@@ -1192,7 +1216,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
             Series("start: " + ", ".join(f"{n} = {v:g}" for n, v in zip(result.free, result.start)), start, sds, "s", "0.5"),
             Series("fitted: " + ", ".join(f"{n} = {v:.4g}" for n, v in result.params().items()) + " (95 %)", fitted, sds, "o", "C0"),
         ], title=f"{data.source}: measured against predicted")
-        out["figure"] = str(save_figure(fig, args.plot).resolve())
+        try:
+            out["figure"] = str(save_figure(fig, args.plot).resolve())
+        except OSError as exc:
+            raise UsageError(f"--plot {args.plot!r}: cannot write: {exc}") from None
     _emit(args, out, _fit_table)
     for w in result.warnings:
         if w.startswith("not identifiable"):
@@ -1211,7 +1238,7 @@ def _add_fit(sub) -> None:
     p.add_argument("--segments", "-n", type=_segments, help="segment count n >= 1 (overrides the scene's)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant (overrides the scene's)")
     p.add_argument("--level", type=_level_arg, default=0.95, help="confidence level of the intervals (default 0.95)")
-    p.add_argument("--plot", metavar="FILE", help="write measured against predicted, with error bars")
+    p.add_argument("--plot", type=_output_file(".png", ".pdf", ".svg"), metavar="FILE", help="write measured against predicted, with error bars (.png, .pdf, .svg)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_fit)
 
@@ -1257,7 +1284,10 @@ def _cmd_experiments(args: argparse.Namespace) -> int:
         "modulus": study.modulus_agreement.to_dict(),
     }
     if args.write_doc:
-        path, _ = experiments_page.write_page(args.write_doc, study)
+        try:
+            path, _ = experiments_page.write_page(args.write_doc, study)
+        except OSError as exc:
+            raise UsageError(f"--write-doc {args.write_doc!r}: cannot write: {exc}") from None
         data["page"] = str(path)
     _emit(args, data, _experiments_table)
     return EXIT_OK
@@ -1265,7 +1295,7 @@ def _cmd_experiments(args: argparse.Namespace) -> int:
 
 def _add_experiments(sub) -> None:
     p = sub.add_parser("experiments", help="the paper's EXP and FEM values against the model, fits and cross-validation (docs/experiments.md)")
-    p.add_argument("--write-doc", metavar="FILE", help="write the page (e.g. docs/experiments.md) and figures/experiments.png beside it")
+    p.add_argument("--write-doc", type=_output_file(".md"), metavar="FILE", help="write the page (e.g. docs/experiments.md) and figures/experiments.png beside it")
     p.add_argument("--check", metavar="FILE", help="exit 1 when the page FILE differs from what --write-doc would write")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_experiments)

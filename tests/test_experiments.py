@@ -98,3 +98,9 @@ def test_cli_writes_and_checks_the_page(tmp_path, capsys, study, monkeypatch):
     page.write_text("stale\n", encoding="utf-8")
     assert main(["experiments", "--check", str(page)]) == EXIT_FAILED
     assert "is stale" in capsys.readouterr().err
+
+
+def test_cli_refuses_a_bad_page_path(capsys, tmp_path):
+    assert main(["experiments", "--write-doc", str(tmp_path / "page.txt")]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "expected a file ending in .md" in err

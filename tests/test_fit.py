@@ -236,3 +236,15 @@ def test_cli_fit_warns_when_not_identifiable(tmp_path, capsys, clean):
     assert main(["fit", str(path)]) == EXIT_OK
     out, err = capsys.readouterr()
     assert "WARNING: not identifiable" in out and err.startswith("esba: warning: not identifiable")
+
+
+@pytest.mark.parametrize("plot, needle", [("out.xyz", "expected a file ending in .png, .pdf, .svg"), (".", "expected a file ending in")])
+def test_cli_fit_refuses_a_bad_figure_path_before_fitting(tmp_path, capsys, plot, needle):
+    path = tmp_path / "m.csv"
+    path.write_text("pressure_mpa,total_angle_deg\n0.1,40\n", encoding="utf-8")
+    assert main(["fit", str(path), "--free", "E", "--plot", plot]) == EXIT_USAGE
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and needle in err
+    (tmp_path / "dir.png").mkdir()
+    assert main(["fit", str(path), "--free", "E", "--plot", str(tmp_path / "dir.png")]) == EXIT_USAGE
+    assert "is a folder" in capsys.readouterr().err
