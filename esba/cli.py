@@ -295,6 +295,14 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
         raise UsageError("--monte-carlo needs uncertain parameters: --sigma NAME=SIGMA or an [uncertainty] table in the scene file")
+    mc_options = None
+    if args.monte_carlo is not None:
+        from esba.uncertainty import MonteCarloOptions, UncertaintyError
+
+        try:
+            mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=args.seed)
+        except UncertaintyError as exc:
+            raise UsageError(f"--monte-carlo: {exc}") from None
     options = SolverOptions(max_iter=args.max_iter, continuation=not args.no_continuation)
     try:
         result = solve(scene, options)
@@ -309,12 +317,12 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
         data["sensitivities"] = sensitivities(result).to_dict()
     if sigmas:
-        from esba.uncertainty import MonteCarloOptions, compare, monte_carlo, propagate
+        from esba.uncertainty import compare, monte_carlo, propagate
 
         propagation = propagate(result, sigmas)
         data["uncertainty"] = propagation.to_dict()
-        if args.monte_carlo is not None:
-            mc = monte_carlo(scene, sigmas, MonteCarloOptions(samples=args.monte_carlo, seed=args.seed))
+        if mc_options is not None:
+            mc = monte_carlo(scene, sigmas, mc_options)
             data["monte_carlo"] = mc.to_dict()
             data["agreement"] = compare(propagation, mc).to_dict()
     plot = args.plot

@@ -515,6 +515,8 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
     """
     options = FitOptions() if options is None else options
     solver_options = SolverOptions() if solver_options is None else solver_options
+    if not isinstance(options, FitOptions) or not isinstance(solver_options, SolverOptions):
+        raise FitError("fit(data, free, options, solver_options): expected FitOptions and SolverOptions")
     if not isinstance(data, MeasurementSet):
         raise FitError(f"data={data!r}: expected a MeasurementSet (esba.measurements.load_measurements)")
     free = check_free(data, free)

@@ -82,6 +82,9 @@ __all__ = [
     "CHI2_2D_95",
 ]
 
+#: The most Monte Carlo samples one run may draw (they are all held in memory).
+MAX_SAMPLES = 1_000_000
+
 #: The 95 % quantile of the chi-square distribution with 2 degrees of freedom: -2 ln(0.05).
 CHI2_2D_95 = -2.0 * math.log(0.05)
 
@@ -249,6 +252,22 @@ def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec]) -> tuple[Sigma, ...
     return tuple(out)
 
 
+def _checked_sigmas(scene: Scene | None, sigmas: Sequence[Sigma]) -> tuple[Sigma, ...]:
+    """``sigmas`` as a tuple if they are resolved sigmas of parameters of ``scene``."""
+    sigmas = tuple(sigmas)
+    if not sigmas:
+        raise UncertaintyError("sigmas: give at least one uncertain parameter (e.g. --sigma E=0.05)")
+    for s in sigmas:
+        if not isinstance(s, Sigma):
+            raise UncertaintyError(f"sigmas: expected Sigma (from resolve_sigmas), got {s!r}")
+    if scene is not None:
+        try:
+            check_names(scene, [s.name for s in sigmas], "sigma of")
+        except SensitivityError as exc:
+            raise UncertaintyError(str(exc)) from None
+    return sigmas
+
+
 # ---------------------------------------------------------------------------------------------
 # first order
 
@@ -360,9 +379,7 @@ def propagate(result: Equilibrium, sigmas: Sequence[Sigma], options: Sensitivity
         From :func:`resolve_sigmas` for ``result.scene``.
     options : SensitivityOptions, optional
     """
-    sigmas = tuple(sigmas)
-    if not sigmas:
-        raise UncertaintyError("sigmas: give at least one uncertain parameter (e.g. --sigma E=0.05)")
+    sigmas = _checked_sigmas(result.scene if isinstance(result, Equilibrium) else None, sigmas)
     names = [s.name for s in sigmas]
     sens = sensitivities(result, names, options)
     n = result.scene.segments
@@ -402,7 +419,7 @@ class MonteCarloOptions:
     Parameters
     ----------
     samples : int
-        Parameter sets drawn (>= 10; the issue's check uses 10 000).
+        Parameter sets drawn (10 to ``MAX_SAMPLES``; 10 000 is the usual check).
     seed : int
         Seed of NumPy's generator (>= 0): the same seed, the same samples, whatever the chunking.
     chunk : int
@@ -428,6 +445,8 @@ class MonteCarloOptions:
 
     def __post_init__(self) -> None:
         checks.whole("samples", self.samples, 10, UncertaintyError)
+        if self.samples > MAX_SAMPLES:
+            raise UncertaintyError(f"samples={self.samples}: at most {MAX_SAMPLES} (split a larger study into runs with other seeds)")
         checks.whole("seed", self.seed, 0, UncertaintyError)
         checks.whole("chunk", self.chunk, 1, UncertaintyError)
         v = self.agree_rel
@@ -610,9 +629,11 @@ def monte_carlo(
         gives the same result.
     """
     options = MonteCarloOptions() if options is None else options
-    sigmas = tuple(sigmas)
-    if not sigmas:
-        raise UncertaintyError("sigmas: give at least one uncertain parameter (e.g. --sigma E=0.05)")
+    if not isinstance(options, MonteCarloOptions):
+        raise UncertaintyError(f"options={options!r}: expected MonteCarloOptions")
+    if not isinstance(scene, Scene):
+        raise UncertaintyError(f"scene={scene!r}: expected a Scene")
+    sigmas = _checked_sigmas(scene, sigmas)
     names = tuple(s.name for s in sigmas)
     values = draw_samples(sigmas, options.samples, options.seed)
     N = options.samples

@@ -183,6 +183,18 @@ def test_samples_outside_the_scene_are_counted_not_solved():
     assert "outside the scene's rules" in a.verdict
 
 
+def test_sigmas_must_belong_to_the_scene():
+    sig = resolve_sigmas(NEAR_FOLD, [parse_sigma("P=1e-4")])
+    with pytest.raises(UncertaintyError, match="'P' is not a parameter of this scene"):
+        monte_carlo(MAIN_JOB, sig, MonteCarloOptions(samples=10))
+    with pytest.raises(UncertaintyError, match="'P' is not a parameter of this scene"):
+        propagate(solve(MAIN_JOB), sig)
+    with pytest.raises(UncertaintyError, match="expected Sigma"):
+        propagate(solve(MAIN_JOB), ["E=0.1"])
+    with pytest.raises(UncertaintyError, match="at least one"):
+        monte_carlo(MAIN_JOB, [])
+
+
 def test_monte_carlo_options_are_checked():
     with pytest.raises(UncertaintyError, match="seed=-1"):
         MonteCarloOptions(seed=-1)
@@ -223,6 +235,7 @@ def test_cli_scene_file_sigmas_and_table(capsys, tmp_path):
         (["--monte-carlo", "1000"], "--monte-carlo needs uncertain parameters"),
         (["--sigma", "E=1", "--monte-carlo", "3"], "samples >= 10"),
         (["--sigma", "E=1", "--monte-carlo", "100", "--seed", "-2"], "--seed"),
+        (["--sigma", "E=1", "--monte-carlo", "2000000"], "at most 1000000"),
     ],
 )
 def test_cli_bad_uncertainty_input_is_one_line_exit_2(capsys, argv, needle):
