@@ -242,6 +242,17 @@ class _FitNLP:
 
 _NLPS: dict[tuple, _FitNLP] = {}
 
+#: Solvers and row functions kept for reuse (the oldest go first): one per layout of the data.
+CACHE_SIZE = 32
+
+
+def _remember(cache: dict, key: tuple, value):
+    """Keep ``value`` under ``key``, forgetting the oldest entry beyond :data:`CACHE_SIZE`."""
+    cache[key] = value
+    while len(cache) > CACHE_SIZE:
+        cache.pop(next(iter(cache)))
+    return value
+
 
 def _layout_key(data: MeasurementSet, free: tuple[str, ...], options: FitOptions) -> tuple:
     rows = tuple((m.scene, tuple(q for q in QUANTITIES if q in m.values), m.own) for m in data.rows)
@@ -294,7 +305,7 @@ def _nlp(data: MeasurementSet, free: tuple[str, ...], options: FitOptions) -> _F
         "ipopt.max_iter": options.max_iter,
         "ipopt.linear_solver": options.linear_solver,
     })
-    nlp = _NLPS[key] = _FitNLP(built, rows, free, scale)
+    nlp = _remember(_NLPS, key, _FitNLP(built, rows, free, scale))
     return nlp
 
 
@@ -702,8 +713,8 @@ def _rows_at(data: MeasurementSet, free: tuple[str, ...], p: np.ndarray, solver_
         if row is None:
             n = m.scene.segments
             z = ca.SX.sym("z", len(free))
-            row = _ROW_FUNCTIONS[key] = _Row(m, free, z, np.ones(len(free)), ca.SX.sym("theta_l", n),
-                                              ca.SX.sym("theta_u", n) if "stiffness" in m.values else None)
+            row = _remember(_ROW_FUNCTIONS, key, _Row(m, free, z, np.ones(len(free)), ca.SX.sym("theta_l", n),
+                                                      ca.SX.sym("theta_u", n) if "stiffness" in m.values else None))
         y, dy, _ = row.evaluate(p, theta_l, theta_u)
         yield m, quantities, y, dy, ""
 
