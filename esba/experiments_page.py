@@ -233,8 +233,8 @@ def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
         f"Over both columns and both directions, {inside} of {total} held-out errors fall inside the uncertainty propagated from the "
         f"fitted E, and {band} of {total} inside the prediction bands. The two groups of rows want different moduli ({split}). "
         + ("The parameter's own uncertainty is far too small to explain the held-out errors: what limits the predictions is the model "
-           "(its constant-curvature segments, the linear rubber, the fibre balance of Eq. 16), not the knowledge of E, and a modulus "
-           "fitted to one kind of test mispredicts the other by more than its interval says." if inside < total / 2 else
+           "itself, not the knowledge of E, and a modulus fitted to one kind of test mispredicts the other by more than its interval "
+           "says." if inside < total / 2 else
            "The held-out errors are mostly within the propagated uncertainty: one modulus serves both kinds of test."),
         "",
     ]
