@@ -1,9 +1,10 @@
 """Designs evaluated in batches: the swarm's objective, IPOPT's starts and the figures.
 
 One design (r2, d) -> its 90 degree pressure in closed form (U is linear in P), its loaded state
-by Newton's method (``casadi.rootfinder("newton")`` on the generated gradient with the generated
-Hessian as Jacobian) along a ramp of the payload from 0 (the same load path as the physical
-test), and its secant stiffness; a CasADi Function mapped over the designs
+along a ramp of the payload from 0 (the same load path as the physical test: tangent predictor and
+Newton corrections solved in O(n) from the Hessian's structure, :mod:`esba.ramp`, accepted only when
+every Hessian met is positive definite and every step contracts, so that no snap-through is taken
+silently), and its secant stiffness; a CasADi Function mapped over the designs
 (``Function.map(N, "thread", 2)``) evaluates a whole swarm in one call (:func:`evaluate`). Free
 angles at a given pressure come from a bracketed bisection on the closed-form pressure of the
 uniform unloaded shape (:func:`free_angle`). :func:`term_curvatures` splits the stiffness of the
@@ -30,6 +31,7 @@ from derive.effects import EffectSet
 
 from .design_problem import DEFAULT_DESIGN_OPTIONS, DesignOptions, DesignProblem
 from .model import Model, load_model
+from .ramp import CONTRACTION, parts_function, ramp_expression
 
 __all__ = ["Evaluation", "evaluate", "free_angle", "term_curvatures"]
 
@@ -101,35 +103,39 @@ class _Evaluator:
     def __init__(self, problem: DesignProblem, options: DesignOptions):
         pc = _pieces(problem)
         self.pieces, self.problem, self.options = pc, problem, options
-        n, F = pc.n, problem.payload_n
+        n = pc.n
         th = ca.SX.sym("theta", n)
         z = ca.SX.sym("z", 4)  # r2, d, P, F
         G = ca.Function("G", [th, z], [pc.grad(th, z[0], z[1], z[2], z[3])], ["theta", "z"], ["g"])
-        J = ca.Function("J", [th, z], [pc.hess(th, z[0], z[1], z[2], z[3]), G(th, z)])
-        rf = ca.rootfinder(
-            "newton_equilibrium",
-            "newton",
-            G,
-            {"jacobian_function": J, "error_on_fail": False, "abstol": 1e-12, "max_iter": options.newton_max_iter, "show_eval_warnings": False},
-        )
+        H = ca.Function("H", [th, z], [pc.hess(th, z[0], z[1], z[2], z[3])], ["theta", "z"], ["h"])
+        self._parts = parts_function(G, H, "design_ramp_parts")
+        self.single = self._single(options.load_steps)
+        self._dense: ca.Function | None = None  # the retry's ramp, four times the steps, built when needed
+        self._maps: dict[int, ca.Function] = {}
+        self._dense_maps: dict[int, ca.Function] = {}
+        self._pmaps: dict[int, ca.Function] = {}
+
+    def _single(self, steps: int) -> ca.Function:
+        """One design -> P, loaded theta, K, residual, loaded Hessian, smallest pivot, worst contraction."""
+        pc, n, F = self.pieces, self.pieces.n, self.problem.payload_n
         x = ca.MX.sym("x", 2)
         r2, d = x[0], x[1]
-        start = math.radians(problem.start_angle_deg)
+        start = math.radians(self.problem.start_angle_deg)
         P = pc.pressure_closed(start, r2, d)
         theta_s = ca.DM.ones(n) * (start / n)
-        theta = ca.MX(theta_s)
-        worst = ca.MX(0)
-        for k in range(1, options.load_steps + 1):
-            Fk = F * k / options.load_steps
-            theta = rf(theta, ca.vertcat(r2, d, P, Fk))
-            worst = ca.fmax(worst, ca.norm_inf(pc.grad(theta, r2, d, P, Fk)))
+        # the payload ramp from the unloaded state: stable all the way, or reported failed (esba.ramp)
+        theta, g, low, contraction = ramp_expression(
+            self._parts, ca.MX(theta_s), ca.vertcat(r2, d, P, 0.0), ca.vertcat(0.0, 0.0, 0.0, F), 1.0, steps, self.options.newton_steps, 2
+        )
         K = pc.stiffness_expr(theta_s, theta)
         hess = pc.hess(theta, r2, d, P, F)
-        self.single = ca.Function(
-            "design_eval", [x], [P, theta, K, worst, ca.reshape(hess, n * n, 1)], ["x"], ["P", "theta_l", "K", "residual", "hess_l"]
+        return ca.Function(
+            "design_eval",
+            [x],
+            [P, theta, K, ca.norm_inf(g), ca.reshape(hess, n * n, 1), low, contraction],
+            ["x"],
+            ["P", "theta_l", "K", "residual", "hess_l", "min_pivot", "contraction"],
         )
-        self._maps: dict[int, ca.Function] = {}
-        self._pmaps: dict[int, ca.Function] = {}
 
     def _map(self, cache: dict, fun: ca.Function, size: int) -> ca.Function:
         f = cache.get(size)
@@ -143,28 +149,41 @@ class _Evaluator:
         f = self._map(self._pmaps, self.pieces.pressure_closed, Theta.size)
         return np.asarray(f(Theta.reshape(1, -1), r2.reshape(1, -1), d.reshape(1, -1)), dtype=float).ravel()
 
-    def __call__(self, r2: np.ndarray, d: np.ndarray) -> dict[str, np.ndarray]:
-        r2 = np.asarray(r2, dtype=float).ravel()
-        d = np.asarray(d, dtype=float).ravel()
+    def _run(self, fun: ca.Function, cache: dict, r2: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, ...]:
         N, n = r2.size, self.pieces.n
-        f = self._map(self._maps, self.single, N)
-        P, theta, K, res, hess = (np.asarray(v, dtype=float) for v in f(np.vstack([r2, d])))
+        f = self._map(cache, fun, N)
+        P, theta, K, res, hess, low, contraction = (np.asarray(v, dtype=float) for v in f(np.vstack([r2, d])))
         H = hess.T.reshape(N, n, n)
         ok = np.isfinite(res.ravel()) & (res.ravel() <= self.options.equilibrium_tol) & np.all(np.isfinite(H), axis=(1, 2))
+        # the ramp stayed on the stable branch it started on: no Hessian met was indefinite (no fold or
+        # branch point passed) and every step's Newton iteration contracted (esba.ramp)
+        ok &= (low.ravel() > self.options.critical_tol) & (contraction.ravel() <= CONTRACTION)
         min_eig = np.full(N, np.nan)
         if np.any(ok):
             ev = np.linalg.eigvalsh(0.5 * (H[ok] + np.transpose(H[ok], (0, 2, 1))))
             min_eig[ok] = ev[:, 0] / np.maximum(np.abs(ev[:, -1]), 1e-300)
         ok &= min_eig > self.options.critical_tol
-        K = np.where(ok, K.ravel(), np.nan)
-        return {"pressure": P.ravel(), "theta_l": theta.T, "stiffness": K, "ok": ok}
+        return P.ravel(), theta.T, K.ravel(), ok
+
+    def __call__(self, r2: np.ndarray, d: np.ndarray) -> dict[str, np.ndarray]:
+        r2 = np.asarray(r2, dtype=float).ravel()
+        d = np.asarray(d, dtype=float).ravel()
+        P, theta, K, ok = self._run(self.single, self._maps, r2, d)
+        redo = np.flatnonzero(~ok)
+        if len(redo):  # a denser ramp for the designs the first could not follow (huge bends, thin walls)
+            if self._dense is None:
+                self._dense = self._single(4 * self.options.load_steps)
+            P2, theta2, K2, ok2 = self._run(self._dense, self._dense_maps, r2[redo], d[redo])
+            P[redo], theta[redo], K[redo], ok[redo] = P2, theta2, K2, ok2
+        K = np.where(ok, K, np.nan)
+        return {"pressure": P, "theta_l": theta, "stiffness": K, "ok": ok}
 
 
 _EVALUATORS: dict[tuple, _Evaluator] = {}
 
 
 def _evaluator(problem: DesignProblem, options: DesignOptions) -> _Evaluator:
-    key = (_pieces_key(problem), problem.start_angle_deg, options.load_steps, options.newton_max_iter, options.equilibrium_tol,
+    key = (_pieces_key(problem), problem.start_angle_deg, options.load_steps, options.newton_steps, options.equilibrium_tol,
            options.critical_tol, options.threads)
     e = _EVALUATORS.get(key)
     if e is None:

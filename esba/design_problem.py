@@ -206,9 +206,10 @@ class DesignOptions:
     starts : int
         IPOPT starts spread over the triangle (1 to 8; the best converged result is kept).
     load_steps : int
-        Steps of the payload ramp in the batched evaluator (Newton per step), >= 1.
-    newton_max_iter : int
-        Newton iterations per ramp step, >= 1.
+        Steps of the payload ramp in the batched evaluator (a tangent predictor and ``newton_steps``
+        Newton corrections each, :mod:`esba.ramp`), >= 1.
+    newton_steps : int
+        Newton corrections per ramp step, >= 2 (the second measures the first's contraction).
     equilibrium_tol : float
         Largest |dU/dtheta| (N mm/rad) the evaluator accepts as an equilibrium.
     r2_min : float
@@ -238,8 +239,8 @@ class DesignOptions:
     max_iter: int = 200
     linear_solver: str = "mumps"
     starts: int = 4
-    load_steps: int = 16
-    newton_max_iter: int = 30
+    load_steps: int = 8
+    newton_steps: int = 3
     equilibrium_tol: float = 1e-8
     r2_min: float = 0.01
     max_free_angle_deg: float = 3600.0
@@ -258,7 +259,7 @@ class DesignOptions:
         if isinstance(self.starts, bool) or not isinstance(self.starts, int) or not 1 <= self.starts <= len(_START_FRACTIONS):
             raise DesignError(f"starts={self.starts!r}: expected a whole number from 1 to {len(_START_FRACTIONS)}")
         _whole("load_steps", self.load_steps, 1)
-        _whole("newton_max_iter", self.newton_max_iter, 1)
+        _whole("newton_steps", self.newton_steps, 2)
         _whole("threads", self.threads, 1)
         for name in ("equilibrium_tol", "r2_min", "max_free_angle_deg", "critical_tol", "load_path_tol", "active_tol"):
             _finite(name, getattr(self, name), 0.0, open_low=True)

@@ -40,7 +40,7 @@ from .model import Model
 from .stability import CRITICAL_TOL
 from .structured import pivots_sx, solve_sx
 
-__all__ = ["RampRun", "run_ramp", "ramp_function", "newton_parts", "STEPS", "NEWTON", "FINAL", "CONTRACTION"]
+__all__ = ["RampRun", "run_ramp", "ramp_function", "ramp_expression", "newton_parts", "parts_function", "STEPS", "NEWTON", "FINAL", "CONTRACTION"]
 
 #: Steps, Newton corrections per step and at the end (the fixed shape of the graph).
 STEPS, NEWTON, FINAL = 4, 3, 2
@@ -53,52 +53,51 @@ _PARTS: dict[str, ca.Function] = {}
 _RAMPS: dict[tuple, ca.Function] = {}
 
 
-def newton_parts(model: Model) -> ca.Function:
+def parts_function(gradient: ca.Function, hessian: ca.Function, name: str = "esba_ramp_parts") -> ca.Function:
     """(theta, p, dp) -> g, the Newton step H^-1 g, H^-1 dg/dlambda (dp the parameter direction) and the
-    smallest LDL^T pivot relative to the largest, in one Function: the solves in O(n) from the Hessian's
-    structure (:mod:`esba.structured`), so only row 0 and the diagonal of H are computed."""
+    smallest LDL^T pivot relative to the largest, in one Function, for any ``gradient(theta, p)`` and
+    ``hessian(theta, p)`` of a chain model: the solves in O(n) from the Hessian's structure
+    (:mod:`esba.structured`), so only row 0 and the diagonal of H are computed."""
+    n = gradient.size1_in(0)
+    npar = gradient.size1_in(1)
+    th = ca.SX.sym("theta", n)
+    p = ca.SX.sym("p", npar)
+    dp = ca.SX.sym("dp", npar)
+    g = gradient(th, p)
+    h = hessian(th, p)
+    piv = pivots_sx(h)
+    rel = ca.mmin(piv) / (ca.mmax(ca.fabs(piv)) + 1e-300)
+    hs = ca.SX.sym("hs", n, n)
+    bs = ca.SX.sym("b", n)
+    solve = ca.Function("esba_structured_solve", [hs, bs], [solve_sx(hs, bs)], {"cse": True})
+    return ca.Function(
+        name,
+        [th, p, dp],
+        [g, solve(h, g), solve(h, ca.jtimes(g, p, dp)), rel],
+        ["theta", "p", "dp"],
+        ["g", "newton", "dtheta", "min_pivot"],
+        {"cse": True},
+    )
+
+
+def newton_parts(model: Model) -> ca.Function:
+    """:func:`parts_function` of a generated model, its parameters as one vector in the model's order (cached)."""
     key = str(model.path)
     fun = _PARTS.get(key)
     if fun is None:
         n, npar = model.n, len(model.parameters)
         th = ca.SX.sym("theta", n)
         p = ca.SX.sym("p", npar)
-        dp = ca.SX.sym("dp", npar)
         args = ca.vertsplit(p) if npar else []
-        g = model["gradient"](th, *args)
-        h = model["hessian"](th, *args)
-        piv = pivots_sx(h)
-        rel = ca.mmin(piv) / (ca.mmax(ca.fabs(piv)) + 1e-300)
-        hs = ca.SX.sym("hs", n, n)
-        bs = ca.SX.sym("b", n)
-        solve = ca.Function("esba_structured_solve", [hs, bs], [solve_sx(hs, bs)], {"cse": True})
-        step = solve(h, g)
-        gl = ca.jtimes(g, p, dp)
-        tangent = solve(h, gl)
-        fun = ca.Function(
-            "esba_ramp_parts",
-            [th, p, dp],
-            [g, step, tangent, rel],
-            ["theta", "p", "dp"],
-            ["g", "newton", "dtheta", "min_pivot"],
-            {"cse": True},
-        )
-        _PARTS[key] = fun
+        gradient = ca.Function("g", [th, p], [model["gradient"](th, *args)])
+        hessian = ca.Function("h", [th, p], [model["hessian"](th, *args)])
+        fun = _PARTS[key] = parts_function(gradient, hessian)
     return fun
 
 
-def ramp_function(model: Model, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL) -> ca.Function:
-    """(theta0, p0, dp, lam1) -> theta, g, min_pivot, contraction: the ramp as one Function (cached)."""
-    key = (str(model.path), steps, newton, final)
-    fun = _RAMPS.get(key)
-    if fun is not None:
-        return fun
-    parts = newton_parts(model)
-    n, npar = model.n, len(model.parameters)
-    theta0 = ca.MX.sym("theta0", n)
-    p0 = ca.MX.sym("p0", npar)
-    dp = ca.MX.sym("dp", npar)
-    lam1 = ca.MX.sym("lam1")
+def ramp_expression(parts: ca.Function, theta0, p0, dp, lam1, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL):
+    """The ramp of lambda from 0 to ``lam1`` as CasADi expressions of its (MX) inputs:
+    (theta, g, min_pivot, contraction) at the end (see the module)."""
     theta = theta0
     low = ca.MX(1.0)
     worst = ca.MX(0.0)
@@ -122,14 +121,22 @@ def ramp_function(model: Model, steps: int = STEPS, newton: int = NEWTON, final:
         low = ca.fmin(low, piv)
         theta = theta - step
     g, _, _, piv = parts(theta, p0 + lam1 * dp, dp)
-    low = ca.fmin(low, piv)
-    fun = ca.Function(
-        "esba_ramp",
-        [theta0, p0, dp, lam1],
-        [theta, g, low, worst],
-        ["theta0", "p0", "dp", "lam1"],
-        ["theta", "g", "min_pivot", "contraction"],
-    )
+    return theta, g, ca.fmin(low, piv), worst
+
+
+def ramp_function(model: Model, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL) -> ca.Function:
+    """(theta0, p0, dp, lam1) -> theta, g, min_pivot, contraction: the ramp as one Function (cached)."""
+    key = (str(model.path), steps, newton, final)
+    fun = _RAMPS.get(key)
+    if fun is not None:
+        return fun
+    n, npar = model.n, len(model.parameters)
+    theta0 = ca.MX.sym("theta0", n)
+    p0 = ca.MX.sym("p0", npar)
+    dp = ca.MX.sym("dp", npar)
+    lam1 = ca.MX.sym("lam1")
+    outs = ramp_expression(newton_parts(model), theta0, p0, dp, lam1, steps, newton, final)
+    fun = ca.Function("esba_ramp", [theta0, p0, dp, lam1], list(outs), ["theta0", "p0", "dp", "lam1"], ["theta", "g", "min_pivot", "contraction"])
     _RAMPS[key] = fun
     return fun
 
