@@ -54,7 +54,7 @@ import numpy as np
 
 from . import checks
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve, stability_verdicts
-from .model import Model, cache_dir, domain_lower_bound
+from .model import Model, cache_dir, domain_lower_bound, near_domain_bound
 from .scene import Scene
 from .threads import single_threaded
 
@@ -617,7 +617,7 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
             eig[finite] = np.linalg.eigvalsh(sym)
         stability = stability_verdicts(eig, options.critical_tol)
         lb = _lower_bounds(model, pv)
-        near = np.any(theta - lb[:, None] <= 1e-7 * np.maximum(1.0, np.abs(lb))[:, None], axis=1)
+        near = near_domain_bound(theta, lb[:, None], axis=1)
         pressure_ok = np.isfinite(P) & (P >= 0)
         stationary = gnorm <= options.stationarity_tol
         left = ~(run["min_pivot"] >= -options.unstable_tol)

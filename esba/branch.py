@@ -208,7 +208,7 @@ class Branch:
             "points": len(self),
             "stopped": self.stopped,
             "stop_reason": self.stop_reason,
-            "lambda_range": [float(np.min(self.lam)), float(np.max(self.lam))],
+            "lambda_range": [float(np.min(self.lam)), float(np.max(self.lam))] if len(self) else None,
             "special_points": [s.to_dict() for s in self.special],
         }
         if points:
@@ -257,9 +257,12 @@ def branches_csv(branches: Sequence[Branch]) -> str:
     rows = [r for b in branches for r in b.csv_rows()]
     buf = io.StringIO()
     if rows:
-        writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
-        writer.writeheader()
-        writer.writerows(rows)
+        fields = list(rows[0])
+    else:  # no point at all: the header alone, so that the file still says what it would hold
+        fields = ["branch", "point", "kind", "arclength", "lambda", "total_angle_deg", "tip_x_mm", "tip_y_mm", "tip_angle_deg", "min_eigenvalue", "morse_index", "stable"]
+    writer = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
     return buf.getvalue()
 
 

@@ -1010,6 +1010,8 @@ def _path_table(d: dict) -> str:
             )
     for r in d["loading"]:
         what = f"quasi-static {d['parameter']} {r['from']:g} -> {r['to']:g}{unit}"
+        for lam in r["branch_points_crossed"]:
+            lines.append(f"{what}: passes the branch point {lam:.9g}{unit} and goes on along the stable branch crossing there")
         if not r["jumps"]:
             lines.append(f"{what}: no jump" + ("" if r["reached"] else f"; NOT reached: {r['message']}"))
         for j in r["jumps"]:
@@ -1083,8 +1085,9 @@ def _cmd_path(args: argparse.Namespace) -> int:
 
         data["figure"] = str(save_figure(study_figure(result, args.y), plot).resolve())
     _emit(args, data, _path_table)
-    if result.main.stopped not in ("bound", "loop"):
-        print(f"esba: the path stopped before {args.to:g}: {result.main.stop_reason}", file=sys.stderr)
+    reached = result.main.stopped == "loop" or (len(result.main) and result.main.lam[-1] == args.to)
+    if not reached:
+        print(f"esba: the branch did not reach --to {args.to:g}: {result.main.stop_reason}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
 

@@ -44,7 +44,7 @@ import numpy as np
 from . import checks
 from .loading import Jump, Ramp, follow
 from .minimise import LINEAR_SOLVERS, minimise
-from .model import Model
+from .model import Model, near_domain_bound
 from .path import PathOptions, PathProblem, SpecialPoint
 from .ramp import FINAL, NEWTON, STEPS, run_ramp
 from .scene import Scene
@@ -366,10 +366,6 @@ def pressure_for_angle(scene: Scene, angle_deg: float | None = None) -> float:
 # solving
 
 
-def _near_bound(theta: np.ndarray, lbx: np.ndarray) -> bool:
-    return bool(np.any(theta - lbx <= 1e-7 * np.maximum(1.0, np.abs(lbx))))
-
-
 def _resolve_pressure(scene: Scene, pressure: float | None) -> tuple[float, np.ndarray | None]:
     """The pressure to use and, when it comes from the target angle, the exact unloaded state."""
     if pressure is not None:
@@ -427,7 +423,7 @@ def evaluate(
     gnorm = float(np.max(np.abs(state["gradient"])))
     eig = np.sort(np.linalg.eigvalsh(state["hessian"]))
     verdict = stability_verdict(eig, options.critical_tol)
-    if success and _near_bound(theta, lbx):
+    if success and near_domain_bound(theta, lbx):
         success, status = False, "At_Bound"
         message = "the solve stopped on the model's domain boundary (Eq. 10: the chamber closes): not an equilibrium"
     elif success and gnorm > options.stationarity_tol:

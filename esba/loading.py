@@ -38,19 +38,11 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from . import checks
+from .corrector import Corrector
 from .minimise import minimise
-from .path import (
-    DEFAULT_PATH_OPTIONS,
-    Branch,
-    PathError,
-    PathOptions,
-    PathProblem,
-    SpecialPoint,
-    _Engine,
-    bifurcation_tangents,
-    step_off,
-    trace,
-)
+from .model import near_domain_bound
+from .path import DEFAULT_PATH_OPTIONS, Branch, PathError, PathOptions, PathProblem, SpecialPoint, crossing_start, trace
 from .stability import morse_index
 from .threads import single_threaded
 
@@ -180,31 +172,43 @@ def _minimum(problem: PathProblem, theta0: np.ndarray, lam: float, tol: float) -
     p = problem.params(lam)
     lbx = np.full(problem.n, problem.lower_bound(lam) * (1.0 - 1e-6))
     m = minimise(problem.model, theta0, p, lbx, tol=tol)
-    if not m.success or np.any(m.theta - lbx <= 1e-7 * np.maximum(1.0, np.abs(lbx))):
+    if not m.success or near_domain_bound(m.theta, lbx):
         return None, m.iterations
     g, h, _ = problem.ghl(m.theta, lam)
-    if float(np.max(np.abs(g))) > 1e-7 or morse_index(np.linalg.eigvalsh(h)) != 0 or np.linalg.eigvalsh(h)[0] <= 0:
+    eig = np.linalg.eigvalsh(h)
+    if float(np.max(np.abs(g))) > 1e-7 or morse_index(eig) != 0 or eig[0] <= 0:
         return None, m.iterations
     return m.theta, m.iterations
 
 
-def _snap(problem: PathProblem, piece: Branch, sp: SpecialPoint, direction: float, sigma: float, tol: float):
-    """Where the state lands after the stable branch ends at ``sp``: (lam_after, theta_after, iterations) or None."""
-    n = problem.n
-    w = float(n)
+#: How far past a fold (in typical sizes of the parameter) the landing state of a snap is sought.
+SNAP_PAST = 1e-7
+#: The first perturbation along the critical mode, radians of total bend (times 1/sqrt(n) per segment).
+SNAP_KICK = 0.05
+
+
+def _snap(problem: PathProblem, piece: Branch, sp: SpecialPoint, direction: float, tol: float):
+    """Where the state lands after the stable branch ends at ``sp``: (lam_after, theta_after, iterations) or None.
+
+    Just past the point (``SNAP_PAST`` typical sizes of lambda, in the ramp's direction) there is no
+    equilibrium near it: IPOPT from it, moved along the critical mode, finds where the state goes.
+    At a fold the mode is oriented towards the unstable side (the trace's next point: past a fold the
+    energy falls that way). At a branch point with no stable way on both orientations are tried and
+    the landing state nearer to the branch point is taken (the smaller snap).
+    """
     v = sp.eigenvector / np.linalg.norm(sp.eigenvector)
     signs = [1.0, -1.0]
     if piece.beyond is not None:  # towards the unstable side: where the trace went on
         toward = float(v @ (piece.beyond[1] - sp.theta))
         if toward != 0.0:
-            signs = [math.copysign(1.0, toward)] if sp.kind == "fold" else [math.copysign(1.0, toward), -math.copysign(1.0, toward)]
-    delta = max(1e-7 * sigma, 1e-12 * (1.0 + abs(sp.lam)))
-    lam_j = sp.lam + direction * delta
+            first = math.copysign(1.0, toward)
+            signs = [first] if sp.kind == "fold" else [first, -first]
+    lam_j = sp.lam + direction * max(SNAP_PAST * problem.scale, 1e-12 * (1.0 + abs(sp.lam)))
     iterations = 0
     candidates = []
     for sign in signs:
-        eps = 0.05 / math.sqrt(w)
-        for _ in range(4):
+        eps = SNAP_KICK / math.sqrt(problem.n)
+        for _ in range(3):  # the kick grows to 16 times the first: IPOPT must leave the fold's neighbourhood
             theta, it = _minimum(problem, sp.theta + sign * eps * v, lam_j, tol)
             iterations += it
             if theta is not None and float(np.linalg.norm(theta - sp.theta)) > eps:
@@ -213,33 +217,23 @@ def _snap(problem: PathProblem, piece: Branch, sp: SpecialPoint, direction: floa
             eps *= 4.0
     if not candidates:
         return None
-    # of several landing states, the lowest in energy
-    energies = [problem.model.energy(t, problem.params(lam_j)) for t in candidates]
-    return lam_j, candidates[int(np.argmin(energies))], iterations
+    nearest = min(candidates, key=lambda t: float(np.linalg.norm(t - sp.theta)))
+    return lam_j, nearest, iterations
 
 
-def _switch(problem: PathProblem, piece: Branch, sp: SpecialPoint, direction: float, options: PathOptions, sigma: float):
+def _switch(problem: PathProblem, piece: Branch, sp: SpecialPoint, direction: float, options: PathOptions, lo: float, hi: float):
     """At a branch point: the first stable point of a crossing branch that goes on in the ramp's direction, or None."""
-    n = problem.n
-    w = float(options.theta_weight if options.theta_weight is not None else n)
     i = sp.index
+    traced = None
     if 0 < i < len(piece):
-        a, b = piece.theta[i - 1], piece.theta[i]
-        t = np.concatenate([b - a, [piece.lam[i] - piece.lam[i - 1]]])
-    else:
-        t = None
-    try:
-        from .path import _branch_tangent
-
-        t_new = bifurcation_tangents(problem, sp, _branch_tangent(problem, sp, t), w, sigma)
-    except (PathError, np.linalg.LinAlgError):
-        return None
-    eng = _Engine(problem, options, sigma)
+        traced = np.concatenate([piece.theta[i] - piece.theta[i - 1], [piece.lam[i] - piece.lam[i - 1]]])
+    corr = Corrector.for_trace(problem, lo, hi, options)
     for sign in (1.0, -1.0):
-        start, _ = step_off(eng, sp, sign * t_new)
-        if start is None or start.morse != 0 or (start.lam - sp.lam) * direction <= 0:
-            continue
-        if np.linalg.eigvalsh(start.h)[0] <= 0:
+        try:
+            start = crossing_start(corr, sp, sign, traced)
+        except (PathError, np.linalg.LinAlgError):
+            return None
+        if start is None or start.morse != 0 or (start.lam - sp.lam) * direction <= 0 or start.eig[0] <= 0:
             continue
         return start
     return None
@@ -267,11 +261,13 @@ def follow(
         Check :attr:`Ramp.reached`.
     """
     opts = DEFAULT_PATH_OPTIONS if options is None else options
+    if not isinstance(opts, PathOptions):
+        raise PathError(f"options={options!r}: expected a PathOptions")
     theta = np.asarray(theta0, dtype=float).ravel()
-    lam = float(lam0)
-    to = float(to)
+    lam = checks.finite("lam0", lam0, PathError)
+    to = checks.finite("to", to, PathError)
     direction = 1.0 if to >= lam else -1.0
-    sigma = opts.scale if opts.scale is not None else (abs(to - lam) if to != lam else problem.scale)
+    lo, hi = min(lam, to), max(lam, to)
     jumps: list[Jump] = []
     switches: list[SpecialPoint] = []
     pieces: list[Branch] = []
@@ -307,12 +303,12 @@ def follow(
             break
         sp = piece.special[-1]
         if sp.kind == "branch point":
-            start = _switch(problem, piece, sp, direction, opts, sigma)
+            start = _switch(problem, piece, sp, direction, opts, lo, hi)
             if start is not None:
                 switches.append(sp)
                 theta, lam = start.theta, float(start.lam)
                 continue
-        landed = _snap(problem, piece, sp, direction, sigma, ipopt_tol)
+        landed = _snap(problem, piece, sp, direction, ipopt_tol)
         if landed is None:
             lam, theta = sp.lam, sp.theta
             message = f"the stable branch ends at a {sp.kind} at {problem.describe(sp.lam)} and no stable state was found after it"

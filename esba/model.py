@@ -45,7 +45,7 @@ from derive.effects import (
 )
 from derive.provenance import GENERATED_DIR, source_hash
 
-__all__ = ["Model", "load_model", "cache_dir", "EffectSet", "EffectError"]
+__all__ = ["Model", "load_model", "cache_dir", "domain_lower_bound", "near_domain_bound", "EffectSet", "EffectError"]
 
 _lock = threading.Lock()
 
@@ -226,6 +226,19 @@ def domain_lower_bound(n: int, L, r1, r2, d, margin: float = DOMAIN_MARGIN, maxi
     -0.791015
     """
     return maximum(-L * r2**2 / (n * r1**3), -L / (n * (r1 + d))) * (1.0 - margin)
+
+
+def near_domain_bound(theta, lbx, axis: int | None = None):
+    """True where theta lies on (within 1e-7 relative of) the model's lower bounds ``lbx``: a solve that
+    stops there has met the edge of Eq. 10's domain, not an equilibrium. ``axis`` reduces over it
+    (e.g. ``axis=1`` for a batch of rows); None reduces everything to one bool.
+
+    >>> bool(near_domain_bound(np.array([0.1, -0.5]), np.array([-0.5, -0.5])))
+    True
+    """
+    theta, lbx = np.asarray(theta, dtype=float), np.asarray(lbx, dtype=float)
+    close = theta - lbx <= 1e-7 * np.maximum(1.0, np.abs(lbx))
+    return bool(np.any(close)) if axis is None else np.any(close, axis=axis)
 
 
 def _locate_or_generate(n: int, effects: EffectSet, variant: str) -> Path:

@@ -335,8 +335,8 @@ class PathProblem:
         try:
             if base == "pressure":
                 return s.replace(pressure=float(lam))
-            if base == "load":
-                return s.replace(payloads=tuple(p.scaled(lam) for p in s.payloads), g=s.g * lam if lam > 0 else s.g, gravity=s.gravity)
+            if base == "load":  # no weight at all at a load factor of 0 (the scene's g must stay > 0)
+                return s.replace(payloads=tuple(p.scaled(lam) for p in s.payloads), g=s.g * lam if lam > 0 else s.g, gravity=s.gravity and lam > 0)
             if base in ("payload", "omega", "at"):
                 payloads = list(s.payloads)
                 p = payloads[k - 1]
@@ -348,6 +348,12 @@ class PathProblem:
             return s.replace(**{base: float(lam)})
         except SceneError as exc:
             raise PathError(f"{self.name}={lam:g} {self.unit}: {exc}") from None
+
+    @property
+    def unit_short(self) -> str:
+        """The unit without its explanation, " MPa" with a leading space, or "" for a plain number."""
+        unit = self.unit.split(" ")[0]
+        return "" if unit == "1" else f" {unit}"
 
     def describe(self, lam: float) -> str:
         """``payload1 = 2 N``."""

@@ -149,15 +149,16 @@ def study(
         when the scene has no stable equilibrium at the start value to begin from.
     """
     problem = PathProblem.from_scene(scene, parameter)
-    lam_from = problem.lam0 if start is None else float(start)
     lo, hi = problem.domain
-    for name, value in (("from", lam_from), ("to", to)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and lo <= value <= hi):
-            raise PathError(f"--{name}={value!r}: outside the range of {problem.name}, {lo:g} to {hi:g} {problem.unit}")
-    if lam_from != problem.lam0:
-        scene = problem.scene_at(lam_from)
-        problem = PathProblem.from_scene(scene, parameter)
-    first = solve(scene, pressure=problem.pressure)
+    values = {"from": problem.lam0 if start is None else start, "to": to}
+    for name, value in values.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or not lo <= value <= hi:
+            raise PathError(f"{name}={value!r}: outside the range of {problem.name}, {lo:g} to {hi:g}{problem.unit_short}")
+    lam_from, to = float(values["from"]), float(to)
+    # the start state solves the scene at the start value; the trace keeps lambda as the scene defines it
+    # (for the load factor: a fraction of the scene's own payloads and weight)
+    start_scene = problem.scene_at(lam_from) if lam_from != problem.lam0 else scene
+    first = solve(start_scene, pressure=None if problem.name == "pressure" else problem.pressure)
     if not first.ok:
         raise EquilibriumError(f"no stable equilibrium at the start ({problem.describe(lam_from)}) to trace from: {first.message}")
     main = trace(problem, first.theta, lam_from, to=to, options=options, label="main")
@@ -166,4 +167,4 @@ def study(
         for k, bp in enumerate(main.branch_points, start=1):
             crossing += bifurcating_branches(problem, bp, bounds=(min(lam_from, to), max(lam_from, to)), options=options, label=f"BP{k} ")
     ramps = tuple(history(problem, first.theta, lam_from, [to, lam_from], options)) if loading and to != lam_from else ()
-    return PathStudy(scene, problem, first, main, tuple(crossing), ramps, lam_from, float(to))
+    return PathStudy(scene, problem, first, main, tuple(crossing), ramps, lam_from, to)

@@ -124,7 +124,7 @@ def test_progress_bar_and_counts(capsys):
 def test_a_snap_through_is_never_taken_silently():
     """A straight actuator pushed along its axis (10 N at 180 deg, P = 1e-3 MPa) snaps sideways at ~3 N.
 
-    The Newton path sees an angle change larger than max_jump_deg in one load step and hands the
+    The Newton path meets a Hessian that is not positive definite on its load ramp and hands the
     element on; IPOPT's finer continuation follows the snap and notes it, as solve() does.
     """
     scenes = [Scene(pressure=1e-3, payloads=(Payload(f, 180.0),)) for f in (1.0, 10.0)]

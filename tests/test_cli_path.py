@@ -60,7 +60,7 @@ def test_json_and_csv(capsys, tmp_path, monkeypatch):
         (["--to", "0.3", "--out", "x.txt"], "--out 'x.txt': expected a file name ending in .csv, .json"),
         (["--to", "0.3", "--out", "missing/x.csv"], "the folder 'missing' does not exist"),
         (["--to", "0.3", "--plot", "x.xyz"], "--plot 'x.xyz': expected a file name ending in .png, .pdf, .svg"),
-        (["--to", "0.3", "--from", "-1"], "--from=-1.0: outside the range of pressure, 0 to inf MPa"),
+        (["--to", "0.3", "--from", "-1"], "from=-1.0: outside the range of pressure, 0 to inf MPa"),
         (["--param", "payload", "--no-payload", "--to", "1"], "the scene has 0 payloads"),
         (["--param", "omega", "--payload-index", "2", "--to", "100"], "the scene has 1 payload"),
         (["--param", "r2", "--payload-index", "2", "--to", "2"], "--payload-index 2: only means something with --param payload, omega or at"),
@@ -94,3 +94,21 @@ def test_write_doc_writes_the_page_and_its_figures(capsys, tmp_path):
 def test_write_doc_refuses_other_flags(capsys, tmp_path):
     code, out, err = run(capsys, "path", "--write-doc", str(tmp_path / "p.md"), "--to", "0.3")
     assert code == EXIT_USAGE and "give no --to with it" in err
+
+
+def test_load_factor_from_zero_ends_at_the_scenes_own_state(capsys, tmp_path):
+    from esba.equilibrium import solve
+    from esba.scene import MAIN_JOB
+
+    code, out, err = run(capsys, "path", "--param", "load", "--from", "0", "--to", "1", "--no-out", "--no-plot", "--json", "--points")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    assert d["start"]["total_angle_deg"] == pytest.approx(90.0, abs=1e-9)  # unloaded: the 90 degree state
+    assert d["branches"][0]["total_angle_deg"][-1] == pytest.approx(solve(MAIN_JOB).total_angle_deg, abs=1e-8)
+
+
+def test_a_branch_that_turns_back_before_to_says_so_and_exits_1(capsys):
+    code, out, err = run(capsys, "path", "--param", "pressure", "--from", "0.168", "--to", "0.3", "--payload", "2", "--no-out", "--no-plot")
+    assert code == 1
+    assert "turned back and returned to pressure = 0.168 MPa without reaching 0.3 MPa" in out
+    assert err.startswith("esba: the branch did not reach --to 0.3")

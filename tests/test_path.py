@@ -300,13 +300,18 @@ def test_bad_parameters_name_what_is_allowed(parameter, message):
 
 
 def test_design_parameter_path_stops_at_the_design_space_edge():
-    """r2 grows until the chamber wall vanishes (r2 + d = r1): the trace stops just inside."""
+    """r2 grows until the chamber wall vanishes (r2 + d = r1): a target beyond that edge is refused
+    with the range, and a trace to the edge stops just inside it."""
     scene = Scene(pressure=0.05)
     start = solve(scene)
     problem = PathProblem.from_scene(scene, "r2")
-    b = trace(problem, start.theta, 3.0, to=10.0)
-    assert b.stopped in ("bound", "domain"), b.stop_reason
-    assert b.lam[-1] <= 4.0 and np.all(np.diff(b.total_angle_deg) > 0)
+    with pytest.raises(PathError, match=r"to=10: outside the range of r2, 1e-06 to 4 mm"):
+        trace(problem, start.theta, 3.0, to=10.0)
+    edge = problem.domain[1]
+    assert 4.0 - 1e-5 < edge < 4.0
+    b = trace(problem, start.theta, 3.0, to=edge)
+    assert b.stopped == "bound" and b.lam[-1] == edge
+    assert np.all(np.diff(b.total_angle_deg) > 0)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -348,3 +353,70 @@ def test_every_kind_of_parameter_can_be_followed(direction_start, parameter, to)
     assert_equilibria(problem, b)
     end = solve(problem.scene_at(to), pressure=start.pressure, theta0=b.theta[-1])  # IPOPT agrees at the end
     np.testing.assert_allclose(end.theta, b.theta[-1], atol=1e-7)
+
+
+# ---------------------------------------------------------------------------------------------
+# found in review: near the cusp, empty branches, hostile input, the start on a range's end
+
+
+def test_two_folds_close_to_the_cusp_are_told_apart():
+    """At 1.65 N the bistable range is 17 Pa wide: the default step is far larger, yet both folds are
+    found once each, in order, and where a fine trace puts them."""
+    scene = Scene(pressure=0.0, payloads=(Payload(1.65, 90.0),))
+    start = solve(scene)
+    problem = PathProblem.from_scene(scene, "pressure")
+    coarse = trace(problem, start.theta, 0.0, to=0.4)
+    fine = trace(problem, start.theta, 0.0, to=0.4, options=PathOptions(ds_max=0.01))
+    assert len(coarse.folds) == 2 and len(fine.folds) == 2
+    for a, b in zip(coarse.folds, fine.folds):
+        assert a.lam == pytest.approx(b.lam, rel=LOCATE_RTOL) and a.status == "converged"
+    assert coarse.folds[0].lam > coarse.folds[1].lam and abs(coarse.folds[0].total_angle_deg - coarse.folds[1].total_angle_deg) > 5.0
+    assert np.all(np.diff(coarse.arclength) >= 0)
+
+
+def test_an_empty_branch_still_writes(tmp_path):
+    scene = Scene(pressure=0.1)
+    problem = PathProblem.from_scene(scene, "pressure")
+    b = trace(problem, [5.0, -5.0, 5.0], 0.1, to=0.2)  # far outside the domain: no equilibrium there
+    assert len(b) == 0 and b.stopped == "start"
+    assert json.loads(json.dumps(b.to_dict(), allow_nan=False))["lambda_range"] is None
+    assert branches_csv([b]).startswith("branch,point,kind")
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"to": 1e300}, "more than 10000"),
+        ({"to": -0.3}, "to=-0.3: outside the range of pressure, 0 to inf MPa"),
+        ({"bounds": (0.1,)}, r"bounds=\(0.1,\): expected \(low, high\)"),
+        ({"to": 0.3, "tangent": [1.0, 0.0]}, r"tangent has shape \(2,\): expected 4 finite numbers"),
+        ({"to": 0.3, "tangent": [0.0, 0.0, 0.0, 0.0]}, "tangent: expected a nonzero"),
+        ({"to": 0.3, "milestones": ["x"]}, "milestones='x': expected a finite number"),
+        ({"to": 0.3, "milestones": [float("nan")]}, "milestones=nan: expected a finite number"),
+        ({"to": 0.3, "direction": 0.0}, "direction=0: expected"),
+        ({"to": 0.3, "direction": float("nan")}, "direction=nan: expected a finite number"),
+        ({"to": 0.3, "event": "x"}, "event='x': expected a function"),
+    ],
+)
+def test_trace_refuses_bad_input(kwargs, message):
+    scene = Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),))
+    problem = PathProblem.from_scene(scene, "pressure")
+    with pytest.raises(PathError, match=message):
+        trace(problem, np.zeros(3), 0.0, **kwargs)
+    with pytest.raises(PathError, match="to='x': expected a finite number"):
+        follow(problem, np.zeros(3), 0.0, "x")
+
+
+def test_a_trace_from_an_end_of_its_interval_heading_out_stops_at_once():
+    scene = Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),))
+    problem = PathProblem.from_scene(scene, "pressure")
+    b = trace(problem, np.zeros(3), 0.0, bounds=(0.0, 0.3), direction=-1.0)
+    assert b.stopped == "bound" and len(b) == 1 and "leaves the interval" in b.stop_reason
+
+
+def test_where_a_snap_lands_does_not_depend_on_how_far_the_ramp_goes(pressure_path):
+    problem, start, _ = pressure_path
+    near = follow(problem, start.theta, 0.0, 0.3)
+    far = follow(problem, start.theta, 0.0, 100.0)
+    assert far.jumps[0].lam == pytest.approx(near.jumps[0].lam, rel=LOCATE_RTOL)
+    np.testing.assert_allclose(far.jumps[0].theta_after, near.jumps[0].theta_after, atol=1e-5)
