@@ -64,6 +64,8 @@ __all__ = [
     "solve_arrays",
     "solve_scenes",
     "compiler",
+    "batch_bytes",
+    "check_size",
     "METHODS",
 ]
 
@@ -84,12 +86,45 @@ TAIL_CHUNK = 64
 AUTO_COMPILE_MAX_N = 32
 
 
+#: The most memory a batch may take for its results (every element keeps its angles, gradient
+#: and Hessian until it is verified): beyond it a batch is refused, not left to exhaust the machine.
+MAX_BATCH_BYTES = 2 * 1024**3
+
+#: Upper bounds of BatchOptions counts (each multiplies the size of the mapped graph or its calls).
+MAX_CHUNK = 100_000
+MAX_STEPS = 1_000
+
+
 class BatchOptionsError(ValueError):
     """A batch option that is not allowed: the message names the option, the value and what is allowed."""
 
 
-def _whole(name: str, value, low: int) -> int:
-    return checks.whole(name, value, low, BatchOptionsError)
+def batch_bytes(size: int, n: int) -> int:
+    """Estimated memory (bytes) of a batch of ``size`` equilibria of an n-segment model.
+
+    Per element: the outputs of the mapped Function (angles, gradient, n x n Hessian, tip,
+    pressure), the parameters, eigenvalues and the verdict strings of the result.
+
+    >>> batch_bytes(10_000, 3)   # 680 bytes each
+    6800000
+    """
+    return int(size) * (8 * (n * n + 4 * n + 24) + 40 * 8)
+
+
+def check_size(size: int, n: int, what: str = "batch", error: type[Exception] = ValueError) -> int:
+    """``size`` when a batch that large fits in :data:`MAX_BATCH_BYTES`, else ``error`` naming both."""
+    need = batch_bytes(size, n)
+    if need > MAX_BATCH_BYTES:
+        most = MAX_BATCH_BYTES // batch_bytes(1, n)
+        raise error(
+            f"{what} of {size} equilibria at n = {n} would take about {need / 1024**3:.1f} GiB (limit "
+            f"{MAX_BATCH_BYTES / 1024**3:g} GiB): at most {most} at this n; split it into smaller runs"
+        )
+    return size
+
+
+def _whole(name: str, value, low: int, high: int | None = None, why: str = "") -> int:
+    return checks.whole(name, value, low, BatchOptionsError, high, why)
 
 
 @dataclass(frozen=True)
@@ -170,12 +205,11 @@ class BatchOptions:
     def __post_init__(self) -> None:
         if self.compile not in _COMPILE_MODES:
             raise BatchOptionsError(f"compile={self.compile!r}: allowed are {', '.join(_COMPILE_MODES)}")
-        _whole("chunk", self.chunk, 1)
+        _whole("chunk", self.chunk, 1, MAX_CHUNK)
         _whole("compile_min", self.compile_min, 1)
-        _whole("pressure_steps", self.pressure_steps, 1)
-        _whole("load_steps", self.load_steps, 1)
-        _whole("newton_steps", self.newton_steps, 1)
-        _whole("final_steps", self.final_steps, 0)
+        for name in ("pressure_steps", "load_steps", "newton_steps"):
+            _whole(name, getattr(self, name), 1, MAX_STEPS, "each step is unrolled into the mapped graph")
+        _whole("final_steps", self.final_steps, 0, MAX_STEPS, "each step is unrolled into the mapped graph")
         for name in ("max_step", "stationarity_tol", "critical_tol", "max_jump_deg"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
@@ -676,7 +710,7 @@ def solve_arrays(
         raise BatchOptionsError(f"parameter arrays of different lengths: {shapes}") from None
     if any(a.ndim != 1 for a in arrays):
         raise BatchOptionsError("every parameter must be a scalar or a 1-D array")
-    size = len(arrays[0])
+    size = check_size(len(arrays[0]), model.n, "a batch", BatchOptionsError)
     targets = arrays.pop() if angle_mode else np.zeros(size)
     pv = np.vstack(arrays) if arrays else np.zeros((0, size))
 

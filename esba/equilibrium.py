@@ -56,6 +56,13 @@ STABILITY = ("stable", "critical", "unstable")
 
 _LINEAR_SOLVERS = ("mumps", "spral")
 
+#: Upper bounds of the counts in SolverOptions (IPOPT keeps its iteration limit in a 32-bit int,
+#: and each count multiplies the work of one solve).
+MAX_ITER_LIMIT = 100_000
+MAX_STEPS_LIMIT = 10_000
+MAX_HALVINGS_LIMIT = 30
+MAX_SAMPLES_LIMIT = 1_000
+
 
 class SolverOptionsError(ValueError):
     """A solver option that is not allowed: the message names the option, the value and what is allowed."""
@@ -65,8 +72,8 @@ class EquilibriumError(RuntimeError):
     """A solve that failed or did not reach a stable equilibrium (or an unreachable target)."""
 
 
-def _check_int(name: str, value: Any, low: int) -> int:
-    return checks.whole(name, value, low, SolverOptionsError)
+def _check_int(name: str, value: Any, low: int, high: int | None = None, why: str = "") -> int:
+    return checks.whole(name, value, low, SolverOptionsError, high, why)
 
 
 def _check_pos(name: str, value: Any, high: float | None = None) -> float:
@@ -86,18 +93,19 @@ class SolverOptions:
     tol : float
         IPOPT's convergence tolerance (``ipopt.tol``), > 0.
     max_iter : int
-        IPOPT's iteration limit per solve, >= 1.
+        IPOPT's iteration limit per solve, 1 to 100000 (an equilibrium takes tens).
     linear_solver : str
         IPOPT's linear solver: ``"mumps"`` or ``"spral"`` (the HSL solvers are not in the wheel).
     continuation : bool
         Follow the load path (pressure, then payloads and weight) from a known state. When False,
         or when :func:`solve` is given ``theta0``, one solve at the full load.
     pressure_steps : int
-        Steps of the pressure ramp from theta = 0, used when the pressure is given (not a target angle).
+        Steps of the pressure ramp from theta = 0, used when the pressure is given (not a target
+        angle), 1 to 10000.
     load_steps : int
-        Steps of the payload and weight ramp from the unloaded state.
+        Steps of the payload and weight ramp from the unloaded state, 1 to 10000.
     max_halvings : int
-        How often a continuation step may be halved (after a failed solve, or a jump larger than
+        How often (0 to 30) a continuation step may be halved (after a failed solve, or a jump larger than
         ``max_jump_deg``) before the solve is reported failed (or the jump accepted and noted).
     max_jump_deg : float
         Largest change of any segment angle in one continuation step, degrees, before the step is
@@ -111,7 +119,7 @@ class SolverOptions:
         A Hessian whose smallest eigenvalue is within ``critical_tol`` times its largest (in
         absolute value) of zero is ``critical``; below that ``unstable``, above ``stable``.
     samples_per_segment : int
-        Centre-line samples per segment in the result (>= 1).
+        Centre-line samples per segment in the result (1 to 1000).
 
     Examples
     --------
@@ -120,7 +128,7 @@ class SolverOptions:
     >>> SolverOptions(load_steps=0)
     Traceback (most recent call last):
     ...
-    esba.equilibrium.SolverOptionsError: load_steps=0: expected a whole number >= 1
+    esba.equilibrium.SolverOptionsError: load_steps=0: expected a whole number from 1 to 10000
     """
 
     tol: float = 1e-10
@@ -138,19 +146,19 @@ class SolverOptions:
 
     def __post_init__(self) -> None:
         _check_pos("tol", self.tol, 1.0)
-        _check_int("max_iter", self.max_iter, 1)
+        _check_int("max_iter", self.max_iter, 1, MAX_ITER_LIMIT, "an equilibrium takes tens of iterations; IPOPT counts in a 32-bit int")
         if self.linear_solver not in _LINEAR_SOLVERS:
             raise SolverOptionsError(f"linear_solver={self.linear_solver!r}: allowed are {', '.join(_LINEAR_SOLVERS)}")
         for name in ("continuation", "polish"):
             if not isinstance(getattr(self, name), bool):
                 raise SolverOptionsError(f"{name}={getattr(self, name)!r}: expected True or False")
-        _check_int("pressure_steps", self.pressure_steps, 1)
-        _check_int("load_steps", self.load_steps, 1)
-        _check_int("max_halvings", self.max_halvings, 0)
+        _check_int("pressure_steps", self.pressure_steps, 1, MAX_STEPS_LIMIT)
+        _check_int("load_steps", self.load_steps, 1, MAX_STEPS_LIMIT)
+        _check_int("max_halvings", self.max_halvings, 0, MAX_HALVINGS_LIMIT, "a step halved 30 times is a billionth of the ramp")
         _check_pos("max_jump_deg", self.max_jump_deg)
         _check_pos("stationarity_tol", self.stationarity_tol)
         _check_pos("critical_tol", self.critical_tol, 1.0)
-        _check_int("samples_per_segment", self.samples_per_segment, 1)
+        _check_int("samples_per_segment", self.samples_per_segment, 1, MAX_SAMPLES_LIMIT)
 
 
 DEFAULT_OPTIONS = SolverOptions()

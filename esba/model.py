@@ -39,11 +39,12 @@ from derive.effects import (
     DEFAULT_VARIANT,
     EffectError,
     EffectSet,
-    check_segments,
     check_variant,
     model_filename,
 )
 from derive.provenance import GENERATED_DIR, source_hash
+
+from . import checks
 
 __all__ = ["Model", "load_model", "cache_dir", "EffectSet", "EffectError"]
 
@@ -210,9 +211,10 @@ def load_model(n: int = 3, effects: EffectSet | str = DEFAULT_EFFECTS, variant: 
     Raises
     ------
     EffectError
-        for n < 1 or not whole, an unknown effect or variant (the message names the value).
+        for n not a whole number from 1 to :data:`esba.checks.MAX_SEGMENTS`, an unknown effect or
+        variant (the message names the value).
     """
-    n = check_segments(n)
+    n = checks.segments(n, EffectError)
     check_variant(variant)
     eff = EffectSet.parse(effects) if isinstance(effects, (str, list, tuple)) else effects
     if not isinstance(eff, EffectSet):

@@ -37,7 +37,8 @@ from typing import Any
 
 import numpy as np
 
-from .batch import BatchOptions, BatchResult, solve_arrays
+from . import checks
+from .batch import BatchOptions, BatchResult, check_size, solve_arrays
 from .equilibrium import SolverOptions, solve
 from .scene import Payload, Scene, SceneError
 
@@ -45,6 +46,11 @@ __all__ = ["AXES", "SweepResult", "LoadPath", "sweep", "load_path", "fig12", "sw
 
 #: The axes of a sweep, in the order of the grid's dimensions, with their units.
 AXES: dict[str, str] = {"pressure": "MPa", "payload": "N", "payload_angle": "deg", "r2": "mm", "d": "mm"}
+
+
+#: The most points a sweep grid may have: its rows are kept and written whole (about 1 kB each in
+#: JSON); a larger study is a set of smaller sweeps.
+MAX_POINTS = 200_000
 
 
 class SweepError(ValueError):
@@ -63,23 +69,24 @@ def parse_values(text: str) -> list[float]:
     >>> parse_values("1:2")
     Traceback (most recent call last):
     ...
-    esba.sweep.SweepError: '1:2': expected start:stop:count (count >= 1) or a comma-separated list of numbers
+    esba.sweep.SweepError: '1:2': expected start:stop:count (count from 1 to 200000) or a comma-separated list of numbers
     """
-    msg = f"{text!r}: expected start:stop:count (count >= 1) or a comma-separated list of numbers"
+    msg = f"{text!r}: expected start:stop:count (count from 1 to {MAX_POINTS}) or a comma-separated list of numbers"
     try:
         if ":" in text:
             parts = text.split(":")
             if len(parts) != 3:
                 raise SweepError(msg)
-            a, b, k = float(parts[0]), float(parts[1]), int(parts[2])
-            if k < 1:
+            a, b = checks.number("start", parts[0]), checks.number("stop", parts[1])
+            k = checks.whole_text("count", parts[2])
+            if not 1 <= k <= MAX_POINTS:
                 raise SweepError(msg)
             values = [a] if k == 1 else [float(v) for v in np.linspace(a, b, k)]
         else:
-            values = [float(v) for v in text.split(",") if v.strip()]
+            values = [checks.number("value", v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise SweepError(msg) from None
-    if not values or not all(math.isfinite(v) for v in values):
+    if not values or not all(math.isfinite(v) for v in values) or len(values) > MAX_POINTS:
         raise SweepError(msg)
     return [round(v, 12) for v in values]
 
@@ -260,8 +267,12 @@ def sweep(
         "r2": base.actuator.r2,
         "d": base.actuator.d,
     }
-    grid = list(itertools.product(*axes.values())) if axes else [()]
-    size = len(grid)
+    size = math.prod(len(v) for v in axes.values())
+    if size > MAX_POINTS:
+        counts = " x ".join(f"{len(v)} {k}" for k, v in axes.items())
+        raise SweepError(f"the grid has {size} points ({counts}): at most {MAX_POINTS}; sweep fewer values, or split the grid")
+    check_size(size, base.segments, "the sweep", SweepError)
+    grid = list(itertools.product(*axes.values()))
     cols = {k: np.full(size, float(fixed[k])) for k in AXES}
     for j, name in enumerate(axes):
         cols[name] = np.array([pt[j] for pt in grid])
