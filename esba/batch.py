@@ -55,7 +55,7 @@ import numpy as np
 from . import checks
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve, stability_verdicts
 from .model import Model, cache_dir, domain_lower_bound
-from .scene import Scene
+from .scene import Scene, SceneError
 
 __all__ = [
     "BatchOptions",
@@ -761,7 +761,7 @@ def solve_arrays(
                     continue
                 try:
                     eq = solve(scene_of(int(i)))
-                except EquilibriumError as exc:
+                except (EquilibriumError, SceneError) as exc:  # SceneError: scales the solver cannot resolve
                     messages[i] = str(exc)
                     continue
                 ev = np.asarray(eq.eigenvalues, dtype=float)

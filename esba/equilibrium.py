@@ -35,9 +35,9 @@ from typing import Any, Sequence
 import casadi as ca
 import numpy as np
 
-from . import checks
+from . import checks, resolution
 from .model import Model
-from .scene import Scene
+from .scene import Scene, SceneError, check_pressure
 
 __all__ = [
     "SolverOptions",
@@ -366,10 +366,13 @@ def pressure_for_angle(scene: Scene, angle_deg: float | None = None) -> float:
     >>> round(pressure_for_angle(Scene(), 90.0), 7)
     0.1238739
     """
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene={scene!r}: expected an esba.scene.Scene")
     if angle_deg is None:
         angle_deg = scene.target_angle_deg
     if angle_deg is None:
         raise EquilibriumError("pressure_for_angle needs angle_deg (the scene gives a pressure, not a target angle)")
+    checks.finite("target_angle_deg", angle_deg, SceneError)
     angle = math.radians(float(angle_deg))
     model = scene.model()
     theta = np.full(scene.segments, angle / scene.segments)
@@ -415,6 +418,7 @@ def _nlp_solver(model: Model, options: SolverOptions) -> ca.Function:
         "calc_lam_p": False,  # no parametric sensitivities (the payload point s_k is not smooth there)
         "ipopt.print_level": 0,
         "ipopt.sb": "yes",
+        "show_eval_warnings": False,  # a NaN at a trial point is IPOPT's to handle, not a flood on stderr
         "ipopt.tol": options.tol,
         "ipopt.max_iter": options.max_iter,
         "ipopt.linear_solver": options.linear_solver,
@@ -476,6 +480,18 @@ def _near_bound(theta: np.ndarray, lbx: np.ndarray) -> bool:
     return bool(np.any(theta - lbx <= 1e-7 * np.maximum(1.0, np.abs(lbx))))
 
 
+def _check_inputs(scene: Any, pressure: Any, options: Any) -> SolverOptions:
+    """The checks the command line makes, for the Python API: the scene, a pressure, the options."""
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene={scene!r}: expected an esba.scene.Scene")
+    if pressure is not None:
+        check_pressure(pressure)
+    options = DEFAULT_OPTIONS if options is None else options
+    if not isinstance(options, SolverOptions):
+        raise SolverOptionsError(f"options={options!r}: expected a SolverOptions")
+    return options
+
+
 def _resolve_pressure(scene: Scene, pressure: float | None) -> tuple[float, np.ndarray | None]:
     """The pressure to use and, when it comes from the target angle, the exact unloaded state."""
     if pressure is not None:
@@ -514,12 +530,11 @@ def evaluate(
     >>> r.stability, r.ok
     ('unstable', False)
     """
-    options = DEFAULT_OPTIONS if options is None else options
+    options = _check_inputs(scene, pressure, options)
     model = scene.model()
     pressure, _ = _resolve_pressure(scene, pressure)
-    theta = np.asarray(theta, dtype=float).ravel()
-    if theta.shape != (scene.segments,) or not np.all(np.isfinite(theta)):
-        raise SolverOptionsError(f"theta has shape {theta.shape}: expected {scene.segments} finite angles (rad)")
+    resolution.check_resolvable(scene, pressure, options.stationarity_tol, DEFAULT_OPTIONS.stationarity_tol)
+    theta = _angles("theta", theta, scene.segments)
     full = scene.parameters(pressure)
     lbx = model.lower_bounds(full)
     pv = model.param_vector(full)
@@ -527,9 +542,15 @@ def evaluate(
         raise EquilibriumError(f"theta={np.degrees(theta).round(3).tolist()} deg lies outside the model's domain (Eq. 10)")
     grad = model.gradient(theta, pv)
     gnorm = float(np.max(np.abs(grad)))
-    eig = np.sort(np.linalg.eigvalsh(model.hessian(theta, pv)))
+    hess = model.hessian(theta, pv)
+    energy = model.energy(theta, pv)
+    finite = bool(np.all(np.isfinite(hess)) and np.isfinite(gnorm) and np.isfinite(energy))
+    eig = np.sort(np.linalg.eigvalsh(hess)) if finite else np.full(scene.segments, np.nan)
     verdict = stability_verdict(eig, options.critical_tol)
-    if success and _near_bound(theta, lbx):
+    if not finite:
+        success, status = False, "Not_Finite"
+        message = "the model's energy, gradient or Hessian is not finite at the result (overflow): not an equilibrium"
+    elif success and _near_bound(theta, lbx):
         success, status = False, "At_Bound"
         message = "the solve stopped on the model's domain boundary (Eq. 10: the chamber closes): not an equilibrium"
     elif success and gnorm > options.stationarity_tol:
@@ -538,14 +559,15 @@ def evaluate(
     if success and verdict != "stable":
         message = f"the equilibrium is {verdict}: smallest Hessian eigenvalue {eig[0]:.3g} N mm/rad^2 (largest {eig[-1]:.3g})"
     cl = model.centreline(theta, full["L"], samples=scene.segments * options.samples_per_segment + 1)
+    tip = model.tip(theta, full["L"])
     return Equilibrium(
         scene=scene,
         model=model,
         pressure=pressure,
         theta=theta,
-        tip=model.tip(theta, full["L"]),
+        tip=tip,
         centreline=cl,
-        energy=model.energy(theta, pv),
+        energy=energy,
         terms=model.energy_terms(theta, pv),
         gradient_norm=gnorm,
         eigenvalues=eig,
@@ -558,6 +580,17 @@ def evaluate(
         message=message,
         notes=tuple(notes),
     )
+
+
+def _angles(name: str, values: Any, n: int) -> np.ndarray:
+    """``values`` as n finite angles (rad), else :class:`SolverOptionsError` naming ``name``."""
+    try:
+        theta = np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise SolverOptionsError(f"{name}={values!r}: expected {n} finite angles (rad)") from None
+    if theta.shape != (n,) or not np.all(np.isfinite(theta)):
+        raise SolverOptionsError(f"{name} has shape {theta.shape}: expected {n} finite angles (rad)")
+    return theta
 
 
 def solve(
@@ -580,6 +613,16 @@ def solve(
     theta0 : sequence of float, optional
         Warm start (rad): one solve at the full load from here, no continuation.
 
+    Raises
+    ------
+    SceneError
+        for a scene that is not a :class:`~esba.scene.Scene`, a bad ``pressure`` (the same
+        messages as the scene's own field), or scales the solver cannot resolve to its
+        tolerances (a Young's modulus so small that every angle passes as an equilibrium, a
+        pressure or payload whose moments exceed double precision), all checked before solving.
+    SolverOptionsError
+        for ``options`` that are not a :class:`SolverOptions`, or a bad ``theta0``.
+
     Returns
     -------
     Equilibrium
@@ -589,13 +632,14 @@ def solve(
         snap-through, or a very steep path) is followed, as the actuator would, and recorded in
         ``notes``.
     """
-    options = DEFAULT_OPTIONS if options is None else options
-    if not isinstance(options, SolverOptions):
-        raise SolverOptionsError(f"options={options!r}: expected a SolverOptions")
+    options = _check_inputs(scene, pressure, options)
+    if theta0 is not None:
+        theta0 = _angles("theta0", theta0, scene.segments)
     model = scene.model()  # loaded (or generated) before the clock starts
     t_start = time.perf_counter()
     n = scene.segments
     pressure, known_unloaded = _resolve_pressure(scene, pressure)
+    resolution.check_resolvable(scene, pressure, options.stationarity_tol, DEFAULT_OPTIONS.stationarity_tol)
     full = scene.parameters(pressure)
     lbx = model.lower_bounds(full)
     pv_full = model.param_vector(full)
@@ -646,9 +690,7 @@ def solve(
         return theta, ""
 
     if theta0 is not None:
-        theta = np.asarray(theta0, dtype=float).ravel()
-        if theta.shape != (n,) or not np.all(np.isfinite(theta)):
-            raise SolverOptionsError(f"theta0 has shape {theta.shape}: expected {n} finite angles (rad)")
+        theta = theta0
     elif not options.continuation:
         theta = known_unloaded if known_unloaded is not None else np.zeros(n)
     else:

@@ -70,7 +70,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict"]
+__all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure"]
 
 #: Standard gravity, m/s^2.
 STANDARD_GRAVITY = 9.81
@@ -89,6 +89,20 @@ def _positive(where: str, value: Any) -> float:
     if value <= 0:
         raise SceneError(f"{where}={value:g}: expected a number > 0")
     return value
+
+
+def check_pressure(value: Any, where: str = "pressure") -> float:
+    """A pressure in MPa: a finite number >= 0 (the check of :attr:`Scene.pressure`, for every entry point).
+
+    >>> check_pressure(float("inf"))
+    Traceback (most recent call last):
+    ...
+    esba.scene.SceneError: pressure=inf: expected a finite number
+    """
+    p = _number(where, value)
+    if p < 0:
+        raise SceneError(f"{where}={p:g}: expected a pressure >= 0 MPa")
+    return p
 
 
 def _flag(where: str, value: Any) -> bool:
@@ -256,10 +270,7 @@ class Scene:
                 f"pressure={self.pressure!r} and target_angle_deg={self.target_angle_deg!r}: give one of the two, not both"
             )
         if self.pressure is not None:
-            p = _number("pressure", self.pressure)
-            if p < 0:
-                raise SceneError(f"pressure={p:g}: expected a pressure >= 0 MPa")
-            object.__setattr__(self, "pressure", p)
+            object.__setattr__(self, "pressure", check_pressure(self.pressure))
         else:
             target = 90.0 if self.target_angle_deg is None else self.target_angle_deg
             target = _number("target_angle_deg", target)

@@ -37,9 +37,9 @@ from typing import Any
 
 import numpy as np
 
-from . import checks
+from . import checks, resolution
 from .batch import BatchOptions, BatchResult, check_size, solve_arrays
-from .equilibrium import SolverOptions, solve
+from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, SolverOptions, pressure_for_angle, solve
 from .scene import Payload, Scene, SceneError
 
 __all__ = ["AXES", "SweepResult", "LoadPath", "sweep", "load_path", "fig12", "sweep_figure", "parse_values", "SweepError"]
@@ -299,6 +299,21 @@ def sweep(
         if key in bad:
             status[i], messages[i] = "infeasible", bad[key]
     feasible = np.where(status != "infeasible")[0]
+    if len(feasible):  # scales the solver cannot resolve are refused before the batch starts
+        strongest = float(np.max(cols["payload"][feasible])) if payload_swept else 0.0
+        for r2_, d_ in {(float(cols["r2"][i]), float(cols["d"][i])) for i in feasible}:
+            extreme = base.replace(r2=r2_, d=d_)
+            if payload_swept:
+                extreme = extreme.replace(payloads=(Payload(strongest, first.angle_deg, first.at),))
+            if not angle_mode:
+                extreme = extreme.replace(pressure=float(np.max(cols["pressure"][feasible])))
+                resolution.check_resolvable(extreme, extreme.pressure, DEFAULT_OPTIONS.stationarity_tol)
+                continue
+            try:
+                top = pressure_for_angle(extreme)
+            except EquilibriumError:  # that design's points are reported not ok by the batch
+                continue
+            resolution.check_resolvable(extreme, top, DEFAULT_OPTIONS.stationarity_tol)
 
     n = base.segments
     theta = np.full((size, n), np.nan)
