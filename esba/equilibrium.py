@@ -38,6 +38,7 @@ import numpy as np
 from . import checks, resolution
 from .model import Model
 from .scene import Scene, SceneError, check_pressure
+from .validity import Finding, assess
 
 __all__ = [
     "SolverOptions",
@@ -247,6 +248,10 @@ class Equilibrium:
         Why the result is not ok (empty when it is).
     notes : tuple of str
         What happened on the way that the result does not show (a jump on the load path).
+    validity : tuple of Finding
+        Where the result leaves the range the paper's model describes (strains past 1, a bend past
+        360 deg, the tip behind the base, loads far outside the paper's): see :mod:`esba.validity`.
+        Empty when it is inside; a result can be ``ok`` and still outside.
     """
 
     scene: Scene
@@ -267,6 +272,7 @@ class Equilibrium:
     solve_time_s: float
     message: str = ""
     notes: tuple[str, ...] = ()
+    validity: tuple[Finding, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -320,6 +326,7 @@ class Equilibrium:
             "status": self.status,
             "message": self.message,
             "notes": list(self.notes),
+            "validity": [f.to_dict() for f in self.validity],
             "iterations": self.iterations,
             "steps": self.steps,
             "gradient_norm": self.gradient_norm,
@@ -579,6 +586,7 @@ def evaluate(
         solve_time_s=solve_time_s,
         message=message,
         notes=tuple(notes),
+        validity=assess(scene, theta, pressure, tip),
     )
 
 

@@ -195,7 +195,16 @@ class SecantStiffness:
             "segments": self.initial.scene.segments,
             "variant": self.initial.scene.variant,
             "messages": [r.message for r in (self.initial, *self.loaded) if r.message],
+            "validity": self.validity(),
         }
+
+    def validity(self) -> list[dict]:
+        """The validity findings of every solve (:mod:`esba.validity`), each with its payload in N."""
+        out = []
+        for force, r in zip((0.0, *self.forces), (self.initial, *self.loaded)):
+            for f in r.validity:
+                out.append({**f.to_dict(), "payload_n": force, "message": f"at {force:g} N: {f.message}"})
+        return out
 
 
 def secant_stiffness(

@@ -41,6 +41,7 @@ from . import checks, resolution
 from .batch import BatchOptions, BatchResult, check_size, solve_arrays
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, SolverOptions, pressure_for_angle, solve
 from .scene import Payload, Scene, SceneError
+from .validity import Finding, assess_arrays
 
 __all__ = ["AXES", "SweepResult", "LoadPath", "sweep", "load_path", "fig12", "sweep_figure", "parse_values", "SweepError"]
 
@@ -110,6 +111,8 @@ class SweepResult:
         Why a point is not ok (empty when it is).
     notes : tuple of tuple of str
         What happened on a point's load path (a jump, noted by the IPOPT fallback).
+    validity : tuple of tuple of Finding
+        Where each point leaves the range the paper's model describes (:mod:`esba.validity`).
     batch : BatchResult or None
         The solves of the feasible points (None when there is none).
     """
@@ -126,6 +129,7 @@ class SweepResult:
     method: np.ndarray
     batch: BatchResult | None = field(repr=False)
     notes: tuple[tuple[str, ...], ...] = ()
+    validity: tuple[tuple[Finding, ...], ...] = ()
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -169,6 +173,7 @@ class SweepResult:
                 row[f"theta{k + 1}_deg"] = float(math.degrees(self.theta[i, k])) if feasible else None
             row["message"] = self.messages[i]
             row["notes"] = " | ".join(self.notes[i])
+            row["validity"] = " | ".join(f.message for f in self.validity[i]) if self.validity else ""
             out.append(row)
         return out
 
@@ -190,6 +195,7 @@ class SweepResult:
             "segments": self.base.segments,
             "axes": {k: {"values": v, "unit": AXES[k]} for k, v in self.axes.items()},
             "counts": counts,
+            "outside_model_range": sum(1 for v in self.validity if v),
             "backend": self.batch.backend if self.batch is not None else "",
             "timings_s": dict(self.batch.timings) if self.batch is not None else {},
             "rows": self.rows(),
@@ -345,6 +351,15 @@ def sweep(
             notes[i] = batch.notes[j]
             if not batch.ok[j]:
                 status[i], messages[i] = "not ok", batch.messages[j]
+    validity: list[tuple[Finding, ...]] = [()] * size
+    if len(feasible):
+        a = base.actuator
+        found = assess_arrays(
+            n, a.L, a.r1, cols["r2"][feasible], cols["d"][feasible], theta[feasible], tip[feasible, 0], pres[feasible],
+            cols["payload"][feasible] if payload_swept else max((p.force for p in base.payloads), default=0.0),
+        )
+        for j, i in enumerate(feasible):
+            validity[i] = found[j]
     return SweepResult(
         base=base,
         axes=axes,
@@ -358,6 +373,7 @@ def sweep(
         method=method.astype(str),
         batch=batch,
         notes=tuple(notes),
+        validity=tuple(validity),
     )
 
 

@@ -1,0 +1,72 @@
+"""Results outside the range the paper's model describes carry a validity list and print warnings."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from esba import validity
+from esba.equilibrium import solve
+from esba.scene import MAIN_JOB, Actuator, Payload, Scene
+from esba.sweep import sweep
+from esba.batch import BatchOptions
+
+#: One scene per check, each found by solving (n = 3); the set is every check the scene trips.
+CASES = {
+    "axial_strain": (Scene(actuator=Actuator(L=30.0), target_angle_deg=150.0), {"axial_strain"}),
+    "radial_strain": (
+        Scene(actuator=Actuator(r2=7.9, d=0.0), pressure=0.0, payloads=(Payload(20.0, 150.0),)),
+        {"axial_strain", "radial_strain", "tip_behind_base", "payload_range"},
+    ),
+    "total_bend": (Scene(actuator=Actuator(L=500.0), target_angle_deg=400.0), {"total_bend"}),
+    "tip_behind_base": (Scene(target_angle_deg=270.0), {"tip_behind_base"}),
+    "pressure_range": (Scene(actuator=Actuator(E=20.0), pressure=1.2), {"pressure_range"}),
+    "payload_range": (Scene(actuator=Actuator(E=50.0), pressure=0.1, payloads=(Payload(12.0),)), {"payload_range"}),
+}
+
+
+@pytest.mark.parametrize("check", list(CASES))
+def test_each_check_is_found_by_a_solve(check):
+    scene, expected = CASES[check]
+    r = solve(scene)
+    assert r.ok, r.message  # converged and stable: outside the model's range is not a failed solve
+    found = {f.check for f in r.validity}
+    assert found == expected
+    f = next(f for f in r.validity if f.check == check)
+    assert abs(f.value) > f.limit if check != "tip_behind_base" else f.value < f.limit
+    assert "\n" not in f.message
+    assert r.to_dict()["validity"] == [g.to_dict() for g in r.validity]
+
+
+def test_clean_table2_solve_has_none():
+    assert solve(MAIN_JOB).validity == ()
+    assert solve(MAIN_JOB).to_dict()["validity"] == []
+
+
+def test_radial_strain_on_a_squeezed_chamber():
+    """A chamber wider than half the actuator, squeezed: the radial strain passes -1 (assessed directly)."""
+    scene = Scene(actuator=Actuator(r2=7.99, d=0.0), pressure=0.0, segments=1)
+    theta = [-8.45]
+    assert validity.outer_fibre_strain(1, 135.0, 8.0, theta)[0] > -1.01
+    found = validity.assess(scene, theta, 0.0, [10.0, 0.0])
+    radial = next(f for f in found if f.check == "radial_strain")
+    assert radial.value < -1.0 and "chamber-wall radial strain" in radial.message
+
+
+def test_strains_match_the_paper():
+    # outer fibre 2 r1 from the layer: elongation 2 r1 theta_i (Eq. 6) over L / n
+    assert validity.outer_fibre_strain(3, 135.0, 8.0, [0.5])[0] == pytest.approx(2 * 8 * 0.5 / 45.0)
+    # Eq. (10): Delta r2 from volume conservation; strain Delta r2 / (r1 - r2)
+    t, n, L, r1, r2, d = 0.3, 3, 135.0, 8.0, 3.0, 4.0
+    dr = np.sqrt((L * r2**2 + n * r1**3 * t) / (L + n * d * t + n * r1 * t)) - r2
+    assert validity.chamber_wall_strain(n, L, r1, r2, d, [t])[0] == pytest.approx(dr / (r1 - r2))
+    # the widened chamber's strain stays below 1 however far it bends
+    assert validity.chamber_wall_strain(3, 135.0, 8.0, 0.5, 0.0, [1e6])[0] < 1.0
+
+
+def test_sweep_rows_carry_validity():
+    s = sweep(Scene(), pressure=[0.1, 5.0], options=BatchOptions(compile="never"))
+    assert s.validity[0] == () and {f.check for f in s.validity[1]} >= {"axial_strain", "total_bend"}
+    rows = s.rows()
+    assert rows[0]["validity"] == "" and "total bend" in rows[1]["validity"]
+    assert s.to_dict()["outside_model_range"] == 1
