@@ -37,7 +37,8 @@ import numpy as np
 
 from .bench import median_time
 from .equilibrium import SolverOptions, solve
-from .model import _exec_model, cache_dir
+from . import cache
+from .model import _exec_model, _usable_cached, cache_dir
 from .scene import Payload, Scene
 
 __all__ = [
@@ -115,7 +116,7 @@ def model_cost(n: int, effects: str, variant: str = "paper", repeat: int = 3) ->
     follow do not generate it a second time (the emission is deterministic: same bytes).
     """
     from derive.effects import EffectSet
-    from derive.emit import atomic_write, write_model
+    from derive.emit import write_model
 
     eff = EffectSet.parse(effects)
     with tempfile.TemporaryDirectory(prefix="esba-bench-") as tmp:
@@ -124,8 +125,8 @@ def model_cost(n: int, effects: str, variant: str = "paper", repeat: int = 3) ->
         generate_s = time.perf_counter() - t0
         load_s = median_time(lambda: _exec_model(path), repeat)
         cached = cache_dir() / path.name
-        if not cached.exists():
-            atomic_write(cached, path.read_text(encoding="utf-8"))
+        if not _usable_cached(cached, n, eff, variant):
+            cache.install(cache.usable_root(cached.parent) / path.name, path)
     instr = {k: int(v) for k, v in entry["instructions"].items() if k in ("energy", "gradient", "hessian")}
     return ModelCost(n, eff.spec(), generate_s, load_s, instr)
 

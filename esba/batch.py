@@ -13,7 +13,8 @@ one model is instead solved here as one CasADi ``Function`` mapped over the batc
    domain (the bounds of :meth:`esba.model.Model.lower_bounds`). The whole path is one graph of
    fixed size, mapped over a chunk of the batch and, when a C compiler is found, generated to C
    by CasADi and compiled once (the shared library is cached, keyed by the hash of the model file,
-   the options and this module).
+   the options and this module, with a checksum that is verified before the library is loaded:
+   a damaged one is reported and rebuilt, see :mod:`esba.cache`).
 2. **Verification.** Every element is checked the way :func:`solve` checks its answers, from the
    gradient and Hessian evaluated at the final angles: finite, ``max |dU/dtheta| <=
    stationarity_tol``, not on the domain boundary, and a stability verdict from the Hessian's
@@ -39,6 +40,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import logging
 import math
 import os
 import shutil
@@ -52,9 +54,9 @@ from typing import Callable, Mapping, Sequence
 import casadi as ca
 import numpy as np
 
-from . import checks
+from . import cache, checks
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve, stability_verdicts
-from .model import Model, cache_dir, domain_lower_bound
+from .model import Model, domain_lower_bound
 from .scene import Scene, SceneError
 
 __all__ = [
@@ -173,7 +175,7 @@ class BatchOptions:
         Show a tqdm progress bar on stderr.
     cache : str or None
         Folder of the compiled libraries (default: ``compiled/`` in esba's cache, beside
-        :func:`esba.model.cache_dir`).
+        :func:`esba.model.cache_dir`, i.e. under :func:`esba.cache.root`).
 
     Examples
     --------
@@ -481,7 +483,26 @@ def compiler() -> str | None:
 def _compiled_dir(options: BatchOptions) -> Path:
     if options.cache is not None:
         return Path(options.cache)
-    return cache_dir().parent.parent / "compiled"
+    return cache.root() / "compiled"
+
+
+_log = logging.getLogger("esba.batch")
+
+
+def _usable_library(lib: Path) -> bool:
+    """True when the compiled library is there and intact; a damaged one is reported and removed.
+
+    Loading a truncated shared library can kill the process (a bus error), so it is checked
+    against the checksum recorded when it was built, before ``casadi.external`` loads it.
+    """
+    if not lib.exists():
+        return False
+    why = cache.damage(lib)
+    if why is None:
+        return True
+    _log.warning("compiled batch solver %s is damaged (%s): building it again", lib, why)
+    cache.discard(lib)
+    return False
 
 
 def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
@@ -505,6 +526,7 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
     key = _key(model, options, angle_mode)
     lib = _compiled_dir(options) / f"esba_batch_{key}.so"
     cc = compiler() if options.compile != "never" else None
+    have_lib = cc is not None and _usable_library(lib)
     if options.compile == "always" and cc is None:
         raise BatchOptionsError("compile='always' but no C compiler was found ($CC, gcc, cc): install gcc or use compile='auto'")
     why = ""
@@ -512,7 +534,7 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
         why = "compile='never'"
     elif cc is None:
         why = "no C compiler found ($CC, gcc, cc)"
-    elif options.compile == "auto" and not lib.exists():
+    elif options.compile == "auto" and not have_lib:
         if model.n > AUTO_COMPILE_MAX_N:
             why = f"compile='auto' and n = {model.n} > {AUTO_COMPILE_MAX_N} (compiling would take longer than it saves)"
         elif size < options.compile_min:
@@ -537,7 +559,8 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
             element.map(f"esba_batch_{key}", "serial", options.chunk, [], []),
             element.map(f"esba_batch_{key}_tail", "serial", small, [], []),
         )
-        if not lib.exists():
+        if not have_lib:
+            cache.usable_root(lib.parent)
             t1 = time.perf_counter()
             _compile(mapped, lib, cc)
             compile_s = time.perf_counter() - t1
@@ -560,10 +583,7 @@ def _compile(funs: Sequence[ca.Function], lib: Path, cc: str) -> None:
         proc = subprocess.run([cc, "-O2", "-shared", "-fPIC", str(src), "-o", str(out), "-lm"], capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"compiling the batch solver failed ({cc}): {proc.stderr.strip()[:2000]}")
-        fd, part = tempfile.mkstemp(prefix=f".{lib.name}.", dir=lib.parent)
-        os.close(fd)
-        shutil.copyfile(out, part)
-        os.replace(part, lib)
+        cache.install(lib, out)
 
 
 # ---------------------------------------------------------------------------------------------
