@@ -46,6 +46,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .equilibrium import Equilibrium, EquilibriumError, pressure_for_angle, solve
+from .outputs import check_folder, figures_dir
 from .plots import draw_payloads, draw_shape, new_figure, save_figure, setup_frame_axes
 from .scene import MAIN_JOB, Payload, Scene
 from .stiffness import PAPER_FORCES, SecantStiffness, secant_stiffness
@@ -64,10 +65,12 @@ __all__ = [
     "figure_10",
     "figure_11",
     "registry",
+    "check_names",
     "write_all",
 ]
 
-#: Where ``esba figures`` writes by default.
+#: The repository's figures folder (``esba figures`` writes there when run inside a checkout; see
+#: :mod:`esba.outputs` for the default elsewhere).
 DEFAULT_OUT = Path(__file__).resolve().parent.parent / "docs" / "figures"
 
 #: Fibre winding angles of Fig. 7b, degrees (10 is Table 1's).
@@ -435,13 +438,25 @@ def registry() -> dict[str, Callable[[str | Path], Path]]:
     return out
 
 
-def write_all(out_dir: str | Path = DEFAULT_OUT, names: Sequence[str] | None = None) -> dict[str, Path]:
-    """Write figures into ``out_dir`` (created if missing).
+def check_names(names: Sequence[str] | None) -> list[str] | None:
+    """``names`` without repeats when every one is registered (None: all), else :class:`FigureError`."""
+    if names is None:
+        return None
+    figures = registry()
+    for name in names:
+        if name not in figures:
+            raise FigureError(f"unknown figure {name!r}: allowed are {', '.join(figures)}")
+    return list(dict.fromkeys(names))
+
+
+def write_all(out_dir: str | Path | None = None, names: Sequence[str] | None = None) -> dict[str, Path]:
+    """Write figures into ``out_dir`` (created if its parent exists).
 
     Parameters
     ----------
-    out_dir : str or Path
-        Folder for the PNG files.
+    out_dir : str or Path, optional
+        Folder for the PNG files (default :func:`esba.outputs.figures_dir`: ``docs/figures/`` in a
+        checkout, else ``./figures/``).
     names : sequence of str, optional
         Which figures (default: all of :func:`registry`), written in the order given.
 
@@ -458,10 +473,6 @@ def write_all(out_dir: str | Path = DEFAULT_OUT, names: Sequence[str] | None = N
         when a solve behind a figure fails or is not stable.
     """
     figures = registry()
-    chosen = list(figures) if names is None else list(dict.fromkeys(names))
-    for name in chosen:
-        if name not in figures:
-            raise FigureError(f"unknown figure {name!r}: allowed are {', '.join(figures)}")
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    chosen = check_names(names) or list(figures)
+    out = check_folder(figures_dir() if out_dir is None else out_dir, "out_dir")
     return {name: figures[name](out) for name in chosen}

@@ -29,7 +29,6 @@ import csv
 import dataclasses
 import io
 import itertools
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from . import checks, resolution
+from . import checks, jsonsafe, resolution
 from .batch import BatchOptions, BatchResult, check_size, solve_arrays
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, SolverOptions, pressure_for_angle, solve
 from .scene import Payload, Scene, SceneError
@@ -151,13 +150,18 @@ class SweepResult:
         return np.asarray(values).reshape(self.shape)
 
     def rows(self) -> list[dict[str, Any]]:
-        """One dict per point: the axes, status, angles (degrees), tip (mm), solver facts."""
+        """One dict per point: the axes, status, angles (degrees), tip (mm), solver facts, validity.
+
+        Values that do not exist (an infeasible point's angles, the pressure of an infeasible
+        point swept by target angle) are None, never NaN.
+        """
         out = []
         n = self.theta.shape[1]
         for i in range(len(self.status)):
             feasible = self.status[i] != "infeasible"
+            pressure = float(self.pressure[i]) if feasible else float(self.points["pressure"][i])
             row: dict[str, Any] = {
-                "pressure_mpa": float(self.pressure[i]) if feasible else float(self.points["pressure"][i]),
+                "pressure_mpa": pressure if math.isfinite(pressure) else None,
                 "payload_n": float(self.points["payload"][i]),
                 "payload_angle_deg": float(self.points["payload_angle"][i]),
                 "r2_mm": float(self.points["r2"][i]),
@@ -202,15 +206,14 @@ class SweepResult:
         }
 
     def write(self, path: str | Path) -> Path:
-        """Write CSV (``.csv``) or JSON (``.json``) by the file's suffix."""
+        """Write CSV (``.csv``) or JSON (``.json``, no NaN) by the file's suffix; the folder must exist."""
         path = Path(path)
         if path.suffix.lower() == ".csv":
             text = self.to_csv()
         elif path.suffix.lower() == ".json":
-            text = json.dumps(self.to_dict(), indent=1)
+            text = jsonsafe.dumps(self.to_dict(), indent=1)
         else:
             raise SweepError(f"output {str(path)!r}: expected a .csv or .json file")
-        path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(text, encoding="utf-8")
         return path
 

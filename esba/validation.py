@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Sequence
 
 from .equilibrium import Equilibrium, SolverOptions, solve
+from .outputs import default_page
 from .scene import MAIN_JOB
 
 __all__ = ["TABLE2", "TOLERANCE_DEG", "TOLERANCE_MM", "Comparison", "Table2Case", "table2", "render_page", "write_page", "check_page", "summary", "DOC_PATH"]
@@ -39,7 +40,8 @@ TOLERANCE_DEG = 0.15
 #: Tolerance on the tip coordinates, mm.
 TOLERANCE_MM = 0.2
 
-#: The page ``esba validate`` writes.
+#: The repository's page (``esba validate`` writes it when run inside a checkout; elsewhere the
+#: default is ``./validation.md``, see :mod:`esba.outputs`).
 DOC_PATH = Path(__file__).resolve().parent.parent / "docs" / "validation.md"
 
 
@@ -214,16 +216,15 @@ def _page(cases: Sequence[Table2Case] | None) -> str:
 
 
 def write_page(path: str | Path | None = None, cases: Sequence[Table2Case] | None = None) -> Path:
-    """Write the validation page (default ``docs/validation.md``); return its path."""
-    path = Path(path) if path else DOC_PATH
-    path.parent.mkdir(parents=True, exist_ok=True)
+    """Write the validation page (default :func:`esba.outputs.default_page`); return its path."""
+    path = Path(path) if path else default_page("validation.md")
     path.write_text(_page(cases), encoding="utf-8")
     return path
 
 
 def check_page(path: str | Path | None = None, cases: Sequence[Table2Case] | None = None) -> bool:
     """True when the page at ``path`` is missing or differs from what :func:`write_page` would write."""
-    path = Path(path) if path else DOC_PATH
+    path = Path(path) if path else default_page("validation.md")
     if not path.exists():
         return True
     return path.read_text(encoding="utf-8") != _page(cases)

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
 from esba import validity
+from esba.cli import EXIT_OK, main
 from esba.equilibrium import solve
 from esba.scene import MAIN_JOB, Actuator, Payload, Scene
 from esba.sweep import sweep
@@ -38,9 +41,34 @@ def test_each_check_is_found_by_a_solve(check):
     assert r.to_dict()["validity"] == [g.to_dict() for g in r.validity]
 
 
-def test_clean_table2_solve_has_none():
+def test_clean_table2_solve_has_none(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     assert solve(MAIN_JOB).validity == ()
-    assert solve(MAIN_JOB).to_dict()["validity"] == []
+    assert main(["solve", "--json", "--no-plot"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    assert json.loads(out)["validity"] == [] and err == ""
+
+
+def test_pressure_5_solves_and_warns(capsys, tmp_path, monkeypatch):
+    """The issue's case: 8968 degrees of bend, exit 0, a warning line per finding and the list in JSON."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["solve", "--pressure", "5", "--no-plot", "--json"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    data = json.loads(out)
+    checks = [f["check"] for f in data["validity"]]
+    assert checks == ["axial_strain", "total_bend", "tip_behind_base", "pressure_range"]
+    assert round(data["total_angle_deg"]) == 8968
+    lines = err.strip().splitlines()
+    assert len(lines) == 4 and all(line.startswith("esba: warning: ") for line in lines)
+    assert "total bend 8968 deg is more than a full turn" in err
+
+
+def test_target_angle_1e6_solves_and_warns(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["solve", "--target-angle", "1e6", "--no-plot", "--json"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    assert {"axial_strain", "total_bend"} <= {f["check"] for f in json.loads(out)["validity"]}
+    assert "esba: warning: total bend 1e+06 deg" in err
 
 
 def test_radial_strain_on_a_squeezed_chamber():
@@ -64,9 +92,22 @@ def test_strains_match_the_paper():
     assert validity.chamber_wall_strain(3, 135.0, 8.0, 0.5, 0.0, [1e6])[0] < 1.0
 
 
-def test_sweep_rows_carry_validity():
+def test_sweep_rows_carry_validity(capsys, tmp_path, monkeypatch):
     s = sweep(Scene(), pressure=[0.1, 5.0], options=BatchOptions(compile="never"))
     assert s.validity[0] == () and {f.check for f in s.validity[1]} >= {"axial_strain", "total_bend"}
     rows = s.rows()
     assert rows[0]["validity"] == "" and "total bend" in rows[1]["validity"]
     assert s.to_dict()["outside_model_range"] == 1
+    monkeypatch.chdir(tmp_path)
+    assert main(["sweep", "--pressure", "0.1,5", "--no-progress", "--no-compile"]) == EXIT_OK
+    err = capsys.readouterr().err
+    assert "esba: warning: 1 point(s) outside the model's range, e.g. outer-fibre axial strain" in err
+
+
+def test_stiffness_reports_the_findings_of_its_solves(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["stiffness", "--payload", "12", "--json"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    found = json.loads(out)["validity"]
+    assert [f["check"] for f in found] == ["payload_range"] and found[0]["payload_n"] == 12.0
+    assert err.strip() == f"esba: warning: {found[0]['message']}"
