@@ -387,9 +387,10 @@ def figure_11(out_dir: str | Path) -> Path:
         f_min, s_min = fine.forces[k_min], fine.stiffness_n_per_m[k_min]
         ax.plot([f_min], [s_min], "v", color="C2", ms=6, label=f"smallest: {s_min:.2f} N/m at {f_min:.3g} N")
     k0 = fine.tangent.along(90.0)
-    ax.plot([0.0], [k0], "o", mfc="white", mec="C3", ms=6, label=f"tangent stiffness at 0 N: {k0:.1f} N/m")
-    ax.set_xlim(0.0, 2.2)
-    ax.set_ylim(0.0, None)
+    ax.plot([0.0], [k0], "o", mfc="white", mec="C3", ms=6, clip_on=False, zorder=5, label=f"tangent stiffness at 0 N: {k0:.1f} N/m")
+    # room around the marker at F = 0 and above the largest value, so that nothing is cut off
+    ax.set_xlim(-0.05, 2.2)
+    ax.set_ylim(0.0, 1.1 * max(k0, float(np.max(fine.stiffness_n_per_m))))
     ax.set_xlabel("horizontal tip payload F (N)")
     ax.set_ylabel("stiffness K (N/m)")
     ax.set_title(

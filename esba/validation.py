@@ -205,8 +205,32 @@ def render_page(cases: Sequence[Table2Case], printed: Sequence[Table2Case] = ())
             "",
             *_table(printed),
         ]
+    lines += ["", *_figures_section()]
     lines.append("")
     return "\n".join(lines)
+
+
+#: The paper-style figures of the experiments of Section 4, shown on this page (``esba figures``).
+PAGE_FIGURES = (
+    ("fig7b", "Fig. 7b: the unloaded bending angle against pressure, 0 to 0.2 MPa, for fibre angles 5, 10, 15 and 20°."),
+    ("fig8c", "Fig. 8c: the shapes for n = 1 to 4 under the 2 N horizontal tip payload of Table 2 (the red arrow), with the unloaded 90° shape and the measured and FEM tips."),
+    ("fig10", "Fig. 10: the horizontal tip payload, 0 to 2 N, against the tip position, n = 3, with the paper's secants."),
+    ("fig11", "Fig. 11: the secant stiffness against the payload (the paper's 0.5, 1 and 2 N and a fine curve), and the tangent stiffness at 0 N."),
+)
+
+
+def _figures_section() -> list[str]:
+    out = [
+        "## Figures",
+        "",
+        "The paper's figures of these experiments, drawn from the same model (Table 1 actuator, `paper` variant). "
+        "Each is written into `docs/figures/` by the command beside it (`esba figures` writes them all; see "
+        "`esba/figures.py` for the data behind each).",
+        "",
+    ]
+    for name, caption in PAGE_FIGURES:
+        out += [f"- `esba figures --only {name}`: {caption}", "", f"  ![{name}](figures/{name}.png)", ""]
+    return out[:-1]
 
 
 def _page(cases: Sequence[Table2Case] | None) -> str:
