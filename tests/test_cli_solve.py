@@ -194,3 +194,12 @@ def test_validate_writes_and_checks(capsys, tmp_path):
 def test_committed_validation_page_is_fresh(capsys):
     code, _, err = run(capsys, "validate", "--check")
     assert code == EXIT_OK, f"{DOC_PATH} is stale: run `esba validate` and commit it ({err.strip()})"
+
+
+def test_pressure_table_says_what_the_pressure_is_for(capsys):
+    code, out, _ = run(capsys, "pressure", "--target-angle", "90")
+    assert code == EXIT_OK
+    assert "target: the pressure that bends the unloaded actuator to 90 deg in total (n = 3, paper)" in out
+    assert "{" not in out  # no raw dict
+    code, out, _ = run(capsys, "pressure", "--tip-y", "50")
+    assert code == EXIT_OK and "target: the pressure that puts the loaded actuator's tip at y = 50 mm" in out

@@ -568,3 +568,21 @@ def test_non_finite_model_values_are_never_stable():
     r = evaluate(MAIN_JOB.replace(pressure=0.1), [1e300, 0.0, 0.0])
     assert not r.ok and r.stability != "stable" and r.status == "Not_Finite"
     assert math.isnan(r.eigenvalues[0])
+
+
+def test_refresh_of_one_segment_count_writes_only_those(capsys, places):
+    out = Path(places["tmp"]) / "gen"
+    out.mkdir()
+    assert main(["generate", "--refresh", "--segments", "1", "--out", str(out), "--json"]) == EXIT_OK
+    data = strict_json(capsys.readouterr().out)
+    assert data["refreshed"] == ["m_n001__air_axial_radial_fibres_payload1__paper.py", "m_n001__air_axial_radial_fibres_payload1__printed.py"]
+    assert sorted(p.name for p in out.iterdir()) == sorted(data["refreshed"] + ["manifest.json"])
+    committed = ROOT / "generated" / data["refreshed"][0]
+    assert (out / data["refreshed"][0]).read_bytes() == committed.read_bytes()
+
+
+def test_small_benchmark_batches_run(capsys, places):
+    """Batch sizes below the 50 IPOPT samples crashed with a traceback."""
+    assert main(["bench", "batch", "--size", "10", "--json"]) == EXIT_OK
+    data = strict_json(capsys.readouterr().out)
+    assert data["size"] == 9 and data["ipopt_samples"] == 9  # a 3 x 3 grid of pressures and payloads
