@@ -810,16 +810,43 @@ def _cmd_design(args: argparse.Namespace) -> int:
     else:
         run = compare(problem, options, pso_options)
     data = run.to_dict()
+    results = [run] if method != "both" else [run.ipopt, run.pso]
+    for r, d in zip(results, [data] if method != "both" else [data["ipopt"], data["pso"]]):
+        d["validity"] = _design_validity(r, d)
     if figure is not None:
         from esba.design_figures import design_figure
 
         data["figure"] = str(design_figure(run, figure).resolve())
     _emit(args, data, _design_table)
-    results = [run] if method != "both" else [run.ipopt, run.pso]
+    for r, d in zip(results, [data] if method != "both" else [data["ipopt"], data["pso"]]):
+        _warn(d["validity"])
     bad = [r for r in results if r.status != "optimal"]
     for r in bad:
         print(f"esba: design {r.status} ({r.method}): {r.message}", file=sys.stderr)
     return EXIT_FAILED if bad else EXIT_OK
+
+
+def _design_validity(result, d: dict) -> list[dict]:
+    """The validity findings (:mod:`esba.validity`) of each state of a design (its start and loaded states)."""
+    import math
+
+    from esba.validity import assess_angles
+
+    values = (d.get("r2_mm"), d.get("d_mm"), d.get("pressure_mpa"))
+    if any(v is None or not math.isfinite(v) for v in values) or not isinstance(d.get("theta_deg"), dict):
+        return []
+    r2, dd, start_pressure = values
+    # the start and loaded states are at the 90 degree pressure; free at max_pressure; target at its own
+    pressures = {"free": d.get("max_pressure"), "target": d.get("target_pressure_mpa")}
+    out = []
+    for state, degrees in d["theta_deg"].items():
+        pressure = pressures.get(state) or start_pressure
+        if degrees is None or not all(math.isfinite(v) for v in degrees) or not math.isfinite(pressure):
+            continue
+        scene = result.problem.scene(r2, dd, pressure, loaded=(state == "loaded"))
+        for f in assess_angles(scene, [math.radians(v) for v in degrees], pressure):
+            out.append({**f.to_dict(), "state": state, "message": f"{result.method} design, {state} state: {f.message}"})
+    return out
 
 
 #: ``esba.design.METHODS`` and ``esba.design.OBJECTIVES`` (written out so that building the parser

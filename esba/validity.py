@@ -49,6 +49,7 @@ from .scene import Scene
 __all__ = [
     "Finding",
     "assess",
+    "assess_angles",
     "assess_arrays",
     "outer_fibre_strain",
     "chamber_wall_strain",
@@ -218,3 +219,10 @@ def assess(scene: Scene, theta: Sequence[float], pressure: float, tip: Sequence[
     payload = max((p.force for p in scene.payloads), default=0.0)
     theta = np.asarray(theta, dtype=float).reshape(1, -1)
     return assess_arrays(theta.shape[1], a.L, a.r1, a.r2, a.d, theta, float(tip[0]), float(pressure), payload)[0]
+
+
+def assess_angles(scene: Scene, theta: Sequence[float], pressure: float) -> tuple[Finding, ...]:
+    """:func:`assess` for angles found some other way (e.g. a design's states): the tip comes from
+    the scene's model (its kinematics)."""
+    theta = np.asarray(theta, dtype=float)
+    return assess(scene, theta, pressure, scene.model().tip(theta, scene.actuator.L))

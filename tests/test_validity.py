@@ -111,3 +111,16 @@ def test_stiffness_reports_the_findings_of_its_solves(capsys, tmp_path, monkeypa
     found = json.loads(out)["validity"]
     assert [f["check"] for f in found] == ["payload_range"] and found[0]["payload_n"] == 12.0
     assert err.strip() == f"esba: warning: {found[0]['message']}"
+
+
+def test_design_states_carry_validity(capsys, tmp_path, monkeypatch):
+    """A design whose target state bends past a full turn says so (each state of each method)."""
+    monkeypatch.chdir(tmp_path)
+    code = main(["design", "--objective", "pressure", "--min-stiffness", "10", "--target-angle", "400", "--json"])
+    out, err = capsys.readouterr()
+    assert code == EXIT_OK, err
+    found = json.loads(out)["validity"]
+    assert [(f["state"], f["check"]) for f in found] == [("target", "total_bend")]
+    assert err.strip() == f"esba: warning: {found[0]['message']}"
+    assert main(["design", "--json"]) == EXIT_OK
+    assert json.loads(capsys.readouterr().out)["validity"] == []
