@@ -912,13 +912,25 @@ def render() -> str:
     return "\n".join(parts).rstrip("\n") + "\n"
 
 
+def default_page() -> Path:
+    """:data:`DOC_PATH` when run inside the checkout that holds this package, else ./derivations.md.
+
+    An installed package never writes into its own folder (``esba.outputs`` applies the same rule
+    to the runtime's pages).
+    """
+    root = DOC_PATH.parent.parent
+    here = Path.cwd().resolve()
+    inside = here == root or root in here.parents
+    return DOC_PATH if (root / "pyproject.toml").is_file() and inside else Path.cwd() / DOC_PATH.name
+
+
 def write_page(out: str | Path | None = None) -> tuple[Path, dict[str, AuditEntry]]:
     """Write the derivations page.
 
     Parameters
     ----------
     out : path, optional
-        where to write it (default :data:`DOC_PATH`).
+        where to write it (default :func:`default_page`; its folder must exist).
 
     Returns
     -------
@@ -927,15 +939,14 @@ def write_page(out: str | Path | None = None) -> tuple[Path, dict[str, AuditEntr
     verdicts : dict
         the audit entries by key; each has a ``verdict``.
     """
-    path = Path(out) if out is not None else DOC_PATH
-    path.parent.mkdir(parents=True, exist_ok=True)
+    path = Path(out) if out is not None else default_page()
     path.write_text(render(), encoding="utf-8")
     return path, verdicts()
 
 
 def check_page(out: str | Path | None = None) -> bool:
-    """True when the page on disk (default :data:`DOC_PATH`) is missing or differs from :func:`render`."""
-    path = Path(out) if out is not None else DOC_PATH
+    """True when the page on disk (default :func:`default_page`) is missing or differs from :func:`render`."""
+    path = Path(out) if out is not None else default_page()
     if not path.is_file():
         return True
     return path.read_text(encoding="utf-8") != render()

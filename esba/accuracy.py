@@ -37,7 +37,9 @@ import numpy as np
 
 from .bench import median_time
 from .equilibrium import SolverOptions, solve
-from .model import _exec_model, cache_dir
+from . import cache
+from .model import _exec_model, _usable_cached, cache_dir
+from .outputs import default_page, figures_dir
 from .scene import Payload, Scene
 
 __all__ = [
@@ -115,7 +117,7 @@ def model_cost(n: int, effects: str, variant: str = "paper", repeat: int = 3) ->
     follow do not generate it a second time (the emission is deterministic: same bytes).
     """
     from derive.effects import EffectSet
-    from derive.emit import atomic_write, write_model
+    from derive.emit import write_model
 
     eff = EffectSet.parse(effects)
     with tempfile.TemporaryDirectory(prefix="esba-bench-") as tmp:
@@ -124,8 +126,8 @@ def model_cost(n: int, effects: str, variant: str = "paper", repeat: int = 3) ->
         generate_s = time.perf_counter() - t0
         load_s = median_time(lambda: _exec_model(path), repeat)
         cached = cache_dir() / path.name
-        if not cached.exists():
-            atomic_write(cached, path.read_text(encoding="utf-8"))
+        if not _usable_cached(cached, n, eff, variant):
+            cache.install(cache.usable_root(cached.parent) / path.name, path)
     instr = {k: int(v) for k, v in entry["instructions"].items() if k in ("energy", "gradient", "hessian")}
     return ModelCost(n, eff.spec(), generate_s, load_s, instr)
 
@@ -417,6 +419,8 @@ def batch_study(size: int = 10_000, segments: int = 3, naive_repeat: int = 5, ip
         result = interp
     # IPOPT (esba.equilibrium.solve) and naive BFGS on a sample of the same batch
     rng = np.random.default_rng(0)
+    ipopt_samples = min(ipopt_samples, size)
+    out["ipopt_samples"] = ipopt_samples
     sample = rng.choice(size, ipopt_samples, replace=False)
     scenes = [Scene(pressure=float(vals["P"][i]), payloads=(Payload(float(vals["F1"][i]), 90.0),), segments=segments) for i in sample]
     solve(scenes[0])
@@ -424,7 +428,9 @@ def batch_study(size: int = 10_000, segments: int = 3, naive_repeat: int = 5, ip
     refs = [solve(s) for s in scenes]
     out["ipopt_us"] = 1e6 * (time.perf_counter() - t0) / len(scenes)
     agree = [float(np.max(np.abs(r.theta - result.theta[i]))) for r, i in zip(refs, sample) if r.ok and result.ok[i]]
-    out["max_theta_difference_vs_ipopt"] = max(agree) if agree else float("nan")
+    out["max_theta_difference_vs_ipopt"] = max(agree) if agree else None
+    if not agree:
+        out["max_theta_difference_vs_ipopt_reason"] = "no sampled element was solved ok by both"
     pv = [model.param_vector({**{k: (v if np.ndim(v) == 0 else v[i]) for k, v in vals.items()}}) for i in sample[:naive_repeat]]
     naive_solve(model, pv[0], segments)  # warm-up (SciPy's first call imports and sets up)
     t0 = time.perf_counter()
@@ -698,13 +704,12 @@ def write_page(study, tolerance, effects, naive, batch, command: str = "esba ben
     """Write the page and the figure; return their paths."""
     from .plots import save_figure
 
-    doc = DOC_PATH if doc is None else Path(doc)
-    fig_path = FIGURE_PATH if fig_path is None else Path(fig_path)
+    doc = default_page("accuracy-vs-time.md") if doc is None else Path(doc)
+    fig_path = figures_dir() / "accuracy-vs-time.png" if fig_path is None else Path(fig_path)
     save_figure(figure(study), fig_path)
     try:
         rel = fig_path.resolve().relative_to(doc.resolve().parent).as_posix()
     except ValueError:
         rel = fig_path.resolve().as_posix()
-    doc.parent.mkdir(parents=True, exist_ok=True)
     doc.write_text(render_page(study, tolerance, effects, naive, batch, command, rel), encoding="utf-8")
     return doc, fig_path

@@ -13,7 +13,8 @@ one model is instead solved here as one CasADi ``Function`` mapped over the batc
    domain (the bounds of :meth:`esba.model.Model.lower_bounds`). The whole path is one graph of
    fixed size, mapped over a chunk of the batch and, when a C compiler is found, generated to C
    by CasADi and compiled once (the shared library is cached, keyed by the hash of the model file,
-   the options and this module).
+   the options and this module, with a checksum that is verified before the library is loaded:
+   a damaged one is reported and rebuilt, see :mod:`esba.cache`).
 2. **Verification.** Every element is checked the way :func:`solve` checks its answers, from the
    gradient and Hessian evaluated at the final angles: finite, ``max |dU/dtheta| <=
    stationarity_tol``, not on the domain boundary, and a stability verdict from the Hessian's
@@ -39,6 +40,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import logging
 import math
 import os
 import shutil
@@ -52,10 +54,10 @@ from typing import Callable, Mapping, Sequence
 import casadi as ca
 import numpy as np
 
-from . import checks
+from . import cache, checks
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve, stability_verdicts
-from .model import Model, cache_dir, domain_lower_bound, near_domain_bound
-from .scene import Scene
+from .model import Model, domain_lower_bound, near_domain_bound
+from .scene import Scene, SceneError
 from .threads import single_threaded
 
 __all__ = [
@@ -66,6 +68,8 @@ __all__ = [
     "solve_scenes",
     "compiler",
     "compile_library",
+    "batch_bytes",
+    "check_size",
     "METHODS",
 ]
 
@@ -86,12 +90,45 @@ TAIL_CHUNK = 64
 AUTO_COMPILE_MAX_N = 32
 
 
+#: The most memory a batch may take for its results (every element keeps its angles, gradient
+#: and Hessian until it is verified): beyond it a batch is refused, not left to exhaust the machine.
+MAX_BATCH_BYTES = 2 * 1024**3
+
+#: Upper bounds of BatchOptions counts (each multiplies the size of the mapped graph or its calls).
+MAX_CHUNK = 100_000
+MAX_STEPS = 1_000
+
+
 class BatchOptionsError(ValueError):
     """A batch option that is not allowed: the message names the option, the value and what is allowed."""
 
 
-def _whole(name: str, value, low: int) -> int:
-    return checks.whole(name, value, low, BatchOptionsError)
+def batch_bytes(size: int, n: int) -> int:
+    """Estimated memory (bytes) of a batch of ``size`` equilibria of an n-segment model.
+
+    Per element: the outputs of the mapped Function (angles, gradient, n x n Hessian, tip,
+    pressure), the parameters, eigenvalues and the verdict strings of the result.
+
+    >>> batch_bytes(10_000, 3)   # 680 bytes each
+    6800000
+    """
+    return int(size) * (8 * (n * n + 4 * n + 24) + 40 * 8)
+
+
+def check_size(size: int, n: int, what: str = "batch", error: type[Exception] = ValueError) -> int:
+    """``size`` when a batch that large fits in :data:`MAX_BATCH_BYTES`, else ``error`` naming both."""
+    need = batch_bytes(size, n)
+    if need > MAX_BATCH_BYTES:
+        most = MAX_BATCH_BYTES // batch_bytes(1, n)
+        raise error(
+            f"{what} of {size} equilibria at n = {n} would take about {need / 1024**3:.1f} GiB (limit "
+            f"{MAX_BATCH_BYTES / 1024**3:g} GiB): at most {most} at this n; split it into smaller runs"
+        )
+    return size
+
+
+def _whole(name: str, value, low: int, high: int | None = None, why: str = "") -> int:
+    return checks.whole(name, value, low, BatchOptionsError, high, why)
 
 
 @dataclass(frozen=True)
@@ -142,7 +179,7 @@ class BatchOptions:
         Show a tqdm progress bar on stderr.
     cache : str or None
         Folder of the compiled libraries (default: ``compiled/`` in esba's cache, beside
-        :func:`esba.model.cache_dir`).
+        :func:`esba.model.cache_dir`, i.e. under :func:`esba.cache.root`).
 
     Examples
     --------
@@ -174,12 +211,11 @@ class BatchOptions:
     def __post_init__(self) -> None:
         if self.compile not in _COMPILE_MODES:
             raise BatchOptionsError(f"compile={self.compile!r}: allowed are {', '.join(_COMPILE_MODES)}")
-        _whole("chunk", self.chunk, 1)
+        _whole("chunk", self.chunk, 1, MAX_CHUNK)
         _whole("compile_min", self.compile_min, 1)
-        _whole("pressure_steps", self.pressure_steps, 1)
-        _whole("load_steps", self.load_steps, 1)
-        _whole("newton_steps", self.newton_steps, 1)
-        _whole("final_steps", self.final_steps, 0)
+        for name in ("pressure_steps", "load_steps", "newton_steps"):
+            _whole(name, getattr(self, name), 1, MAX_STEPS, "each step is unrolled into the mapped graph")
+        _whole("final_steps", self.final_steps, 0, MAX_STEPS, "each step is unrolled into the mapped graph")
         for name in ("max_step", "stationarity_tol", "critical_tol", "unstable_tol"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
@@ -473,7 +509,26 @@ def compiler() -> str | None:
 def _compiled_dir(options: BatchOptions) -> Path:
     if options.cache is not None:
         return Path(options.cache)
-    return cache_dir().parent.parent / "compiled"
+    return cache.root() / "compiled"
+
+
+_log = logging.getLogger("esba.batch")
+
+
+def _usable_library(lib: Path) -> bool:
+    """True when the compiled library is there and intact; a damaged one is reported and removed.
+
+    Loading a truncated shared library can kill the process (a bus error), so it is checked
+    against the checksum recorded when it was built, before ``casadi.external`` loads it.
+    """
+    if not lib.exists():
+        return False
+    why = cache.damage(lib)
+    if why is None:
+        return True
+    _log.warning("compiled batch solver %s is damaged (%s): building it again", lib, why)
+    cache.discard(lib)
+    return False
 
 
 def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
@@ -497,6 +552,7 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
     key = _key(model, options, angle_mode)
     lib = _compiled_dir(options) / f"esba_batch_{key}.so"
     cc = compiler() if options.compile != "never" else None
+    have_lib = cc is not None and _usable_library(lib)
     if options.compile == "always" and cc is None:
         raise BatchOptionsError("compile='always' but no C compiler was found ($CC, gcc, cc): install gcc or use compile='auto'")
     why = ""
@@ -504,7 +560,7 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
         why = "compile='never'"
     elif cc is None:
         why = "no C compiler found ($CC, gcc, cc)"
-    elif options.compile == "auto" and not lib.exists():
+    elif options.compile == "auto" and not have_lib:
         if model.n > AUTO_COMPILE_MAX_N:
             why = f"compile='auto' and n = {model.n} > {AUTO_COMPILE_MAX_N} (compiling would take longer than it saves)"
         elif size < options.compile_min:
@@ -529,7 +585,8 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
             element.map(f"esba_batch_{key}", "serial", options.chunk, [], []),
             element.map(f"esba_batch_{key}_tail", "serial", small, [], []),
         )
-        if not lib.exists():
+        if not have_lib:
+            cache.usable_root(lib.parent)
             t1 = time.perf_counter()
             compile_library(mapped, lib, cc)
             compile_s = time.perf_counter() - t1
@@ -552,10 +609,7 @@ def compile_library(funs: Sequence[ca.Function], lib: Path, cc: str) -> None:
         proc = subprocess.run([cc, "-O2", "-shared", "-fPIC", str(src), "-o", str(out), "-lm"], capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"compiling the batch solver failed ({cc}): {proc.stderr.strip()[:2000]}")
-        fd, part = tempfile.mkstemp(prefix=f".{lib.name}.", dir=lib.parent)
-        os.close(fd)
-        shutil.copyfile(out, part)
-        os.replace(part, lib)
+        cache.install(lib, out)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -703,7 +757,7 @@ def solve_arrays(
         raise BatchOptionsError(f"parameter arrays of different lengths: {shapes}") from None
     if any(a.ndim != 1 for a in arrays):
         raise BatchOptionsError("every parameter must be a scalar or a 1-D array")
-    size = len(arrays[0])
+    size = check_size(len(arrays[0]), model.n, "a batch", BatchOptionsError)
     targets = arrays.pop() if angle_mode else np.zeros(size)
     pv = np.vstack(arrays) if arrays else np.zeros((0, size))
 
@@ -754,7 +808,7 @@ def solve_arrays(
                     continue
                 try:
                     eq = solve(scene_of(int(i)))
-                except EquilibriumError as exc:
+                except (EquilibriumError, SceneError) as exc:  # SceneError: scales the solver cannot resolve
                     messages[i] = str(exc)
                     continue
                 ev = np.asarray(eq.eigenvalues, dtype=float)

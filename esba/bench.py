@@ -119,13 +119,22 @@ def generation(ns: Sequence[int] = GENERATION_NS, repeat: int = 3, naive: bool =
     return rows
 
 
-def growth_exponent(ns: Sequence[int], times: Sequence[float], n_min: int = 16) -> float:
-    """Least-squares slope of log(time) against log(n) for n >= n_min."""
+def growth(ns: Sequence[int], times: Sequence[float], n_min: int = 16) -> tuple[float | None, str]:
+    """Least-squares slope of log(time) against log(n) for n >= n_min, or None and why not.
+
+    >>> growth([1, 2, 4], [0.1, 0.2, 0.4])
+    (None, 'needs at least two n >= 16 (got 0): run with --max-n 32 or more')
+    """
     pts = [(np.log(n), np.log(t)) for n, t in zip(ns, times) if n >= n_min and t > 0]
     if len(pts) < 2:
-        return float("nan")
+        return None, f"needs at least two n >= {n_min} (got {len(pts)}): run with --max-n {2 * n_min} or more"
     x, y = np.array(pts).T
-    return float(np.polyfit(x, y, 1)[0])
+    return float(np.polyfit(x, y, 1)[0]), ""
+
+
+def growth_exponent(ns: Sequence[int], times: Sequence[float], n_min: int = 16) -> float | None:
+    """The exponent of :func:`growth` (None when there are too few points)."""
+    return growth(ns, times, n_min)[0]
 
 
 def generation_table(rows: list[GenerationRow]) -> str:
@@ -143,10 +152,11 @@ def generation_table(rows: list[GenerationRow]) -> str:
             f"{r.instructions['energy']:>8} {r.instructions['gradient']:>10} {r.instructions['hessian']:>10} "
             f"{r.ad_hessian_instructions:>8} {r.call_us['energy']:7.1f} {r.call_us['gradient']:8.1f} {r.call_us['hessian']:8.1f}"
         )
-    k = growth_exponent([r.n for r in rows], [r.total_s for r in rows])
+    k, why = growth([r.n for r in rows], [r.total_s for r in rows])
+    rate = f"generation time grows as n^{k:.2f} for n >= 16" if k is not None else f"growth exponent not computed: {why}"
     lines += [
         "",
-        f"generation time grows as n^{k:.2f} for n >= 16 (target: at most n^2, and n = 100 within 30 s)",
+        f"{rate} (target: at most n^2, and n = 100 within 30 s)",
         "naive: expanded POE tip + sympy.diff + cse, the same effects (ratio = naive / esba, same run)",
         "AD hess: instructions of CasADi's own AD Hessian of the generated energy (the yardstick)",
         "us: median per-call time of the generated Functions from Python (interpreted SX)",

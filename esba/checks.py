@@ -1,8 +1,9 @@
-"""Value checks shared by esba: inputs of every validated dataclass, and JSON-ready outputs.
+"""Value checks shared by esba: inputs of every validated dataclass and entry point, and JSON-ready outputs.
 
 Each check names the field, the value and what is allowed, and raises the caller's own error
 class (``SceneError``, ``SolverOptionsError``, ...), so a message reads the same everywhere.
-:func:`json_ready` turns results into what JSON can hold: no NaN or infinity (None instead).
+Counts that decide how much time or memory a run takes have an upper bound, and the message
+says why.
 
 Examples
 --------
@@ -12,27 +13,45 @@ Examples
 Traceback (most recent call last):
 ...
 ValueError: segments=0: expected a whole number >= 1
+>>> whole("max_iter", 2**31, 1, high=100_000, why="an equilibrium takes tens")
+Traceback (most recent call last):
+...
+ValueError: max_iter=2147483648: expected a whole number from 1 to 100000 (an equilibrium takes tens)
 >>> finite("pressure", float("nan"))
 Traceback (most recent call last):
 ...
 ValueError: pressure=nan: expected a finite number
->>> json_ready({"a": [1.0, float("nan")], "b": np.float64(2.0)})
-{'a': [1.0, None], 'b': 2.0}
+>>> number("--pressure", "0_1")
+Traceback (most recent call last):
+...
+ValueError: --pressure '0_1': not a number (expected decimal digits such as 0.1 or 2e-3)
 """
 
 from __future__ import annotations
 
 import math
+import re
 from numbers import Integral
 from typing import Any
 
-import numpy as np
+#: The largest segment count esba builds a model for. The model's Hessian has n^2 entries and its
+#: generation takes minutes beyond this; the accuracy study's finest reference is n = 256, and the
+#: tip is within 0.1 mm of it from n = 16 (docs/accuracy-vs-time.md).
+MAX_SEGMENTS = 256
+MAX_SEGMENTS_WHY = "the finest model of the accuracy study; larger n costs n^2 memory and minutes to generate for no accuracy"
+
+#: A decimal number as people write it (no digit-group underscores, no hex), or nan/inf, which
+#: the field checks then refuse with their own message.
+_NUMBER = re.compile(r"\s*[+-]?((\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|nan|inf|infinity)\s*", re.IGNORECASE)
+_WHOLE = re.compile(r"\s*[+-]?\d+\s*")
 
 
-def whole(name: str, value: Any, low: int, error: type[Exception] = ValueError) -> int:
-    """``value`` as an int if it is a whole number (not a bool) >= ``low``."""
-    if isinstance(value, bool) or not isinstance(value, Integral) or value < low:
-        raise error(f"{name}={value!r}: expected a whole number >= {low}")
+def whole(name: str, value: Any, low: int, error: type[Exception] = ValueError, high: int | None = None, why: str = "") -> int:
+    """``value`` as an int if it is a whole number (not a bool) from ``low`` to ``high``."""
+    bad = isinstance(value, bool) or not isinstance(value, Integral) or value < low or (high is not None and value > high)
+    if bad:
+        allowed = f">= {low}" if high is None else f"from {low} to {high}"
+        raise error(f"{name}={value!r}: expected a whole number {allowed}" + (f" ({why})" if why else ""))
     return int(value)
 
 
@@ -43,18 +62,22 @@ def finite(name: str, value: Any, error: type[Exception] = ValueError) -> float:
     return float(value)
 
 
-def json_ready(value: Any) -> Any:
-    """``value`` with non-finite floats as None and NumPy scalars and arrays as Python ones, recursively."""
-    if isinstance(value, dict):
-        return {k: json_ready(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_ready(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return json_ready(value.tolist())
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
+def segments(value: Any, error: type[Exception] = ValueError, name: str = "segments") -> int:
+    """A segment count: a whole number from 1 to :data:`MAX_SEGMENTS` (whole floats such as 3.0 pass)."""
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    return whole(name, value, 1, error, high=MAX_SEGMENTS, why=MAX_SEGMENTS_WHY)
+
+
+def number(name: str, text: str, error: type[Exception] = ValueError) -> float:
+    """The number a command-line word spells; Python's own ``float()`` also takes ``0_1`` (= 1)."""
+    if not isinstance(text, str) or not _NUMBER.fullmatch(text):
+        raise error(f"{name} {text!r}: not a number (expected decimal digits such as 0.1 or 2e-3)")
+    return float(text)
+
+
+def whole_text(name: str, text: str, error: type[Exception] = ValueError) -> int:
+    """The whole number a command-line word spells (no underscores, no signs other than -)."""
+    if not isinstance(text, str) or not _WHOLE.fullmatch(text):
+        raise error(f"{name} {text!r}: not a whole number (expected digits such as 3)")
+    return int(text)

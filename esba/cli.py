@@ -1,22 +1,30 @@
 """The ``esba`` command line.
 
-Every command prints a readable table, or JSON with ``--json``. Bad input (a flag, a scene file)
-ends with one line ``esba: error: ...`` naming the value and what is allowed, and exit code 2;
-a solve that fails or lands on an unstable equilibrium says so and exits 1.
+Every command prints a readable table, or JSON with ``--json`` (valid JSON: no NaN or Infinity,
+see :mod:`esba.jsonsafe`). Bad input (a flag, a scene file, an output path that cannot be
+written, an unusable model cache) ends with one line ``esba: error: ...`` naming the value and
+what is allowed, and exit code 2, before any long computation; a solve that fails or lands on an
+unstable equilibrium says so and exits 1; a result outside the range the paper's model describes
+is printed with ``esba: warning: ...`` lines (and a ``validity`` list in JSON). Where each
+command writes is decided by :mod:`esba.outputs`.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
+import os
+import re
 import sys
 import time
 from typing import Callable, Sequence
 
-from derive.effects import DEFAULT_EFFECTS, DEFAULT_VARIANT, VARIANTS, EffectError, EffectSet, check_segments
+from derive.effects import DEFAULT_EFFECTS, DEFAULT_VARIANT, VARIANTS, EffectError, EffectSet
+
+from esba import __version__, checks, console, jsonsafe, outputs
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+EXIT_INTERRUPTED = 130
 
 
 class UsageError(ValueError):
@@ -28,18 +36,53 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
+_WHOLE = re.compile(r"\s*\d+\s*")
+
+
 def _segments(text: str) -> int:
+    if not _WHOLE.fullmatch(text):
+        raise argparse.ArgumentTypeError(f"segments={text!r}: expected a whole number from 1 to {checks.MAX_SEGMENTS}")
     try:
-        return check_segments(text)
-    except EffectError as exc:
+        return checks.segments(int(text))
+    except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _count(name: str, low: int, high: int, why: str = "") -> Callable[[str], int]:
+    """An argparse type: a whole number from ``low`` to ``high`` (``why`` explains the bound)."""
+
+    def parse(text: str) -> int:
+        value = int(text) if _WHOLE.fullmatch(text) else None
+        if value is None or not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{name}={text}: expected a whole number from {low} to {high}" + (f" ({why})" if why else ""))
+        return value
+
+    return parse
+
+
+def _given(args: argparse.Namespace, *dests: str) -> list[str]:
+    """The flags among ``dests`` that were given (not None, not False), as the user spells them."""
+    return ["--" + d.replace("_", "-") for d in dests if getattr(args, d, None) not in (None, False)]
+
+
+def _refuse(args: argparse.Namespace, dests: Sequence[str], why: str) -> None:
+    """A usage error when any of ``dests`` was given: they would be silently ignored."""
+    given = _given(args, *dests)
+    if given:
+        raise UsageError(f"{', '.join(given)} {'is' if len(given) == 1 else 'are'} not used {why}")
 
 
 def _emit(args: argparse.Namespace, data: dict, table: Callable[[dict], str]) -> None:
     if getattr(args, "json", False):
-        print(json.dumps(data, indent=2, sort_keys=True))
+        print(jsonsafe.dumps(data, indent=2, sort_keys=True))
     else:
         print(table(data))
+
+
+def _warn(findings) -> None:
+    """The validity findings of a result, one ``esba: warning:`` line each on stderr."""
+    for f in findings:
+        print(f"esba: warning: {f.message if hasattr(f, 'message') else f['message']}", file=sys.stderr)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -47,30 +90,57 @@ def _emit(args: argparse.Namespace, data: dict, table: Callable[[dict], str]) ->
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
-    from derive import emit  # SymPy: only for this command
-
+    if args.effects is not None:
+        try:
+            effects = EffectSet.parse(args.effects)
+        except EffectError as exc:
+            raise UsageError(f"--effects: {exc}") from None
+    else:
+        effects = EffectSet.parse(DEFAULT_EFFECTS)
+    checkout = outputs.checkout_root()
+    out = None
+    if args.out is not None:
+        out = outputs.check_folder(args.out, "--out")
+    elif checkout is not None:
+        out = checkout / "generated"
     if args.refresh:
+        from derive import emit  # SymPy: only for this command
+
+        _refuse(args, ["effects"], "with --refresh: the committed models have the default effects (drop --refresh to generate others)")
+        if out is None:
+            raise UsageError("--refresh rewrites the repository's generated/: run it inside a checkout, or give --out DIR")
+        chosen = [(n, e, v) for n, e, v in emit.COMMITTED if args.segments in (None, n) and args.variant in (None, v)]
+        if not chosen:
+            have = sorted({n for n, _, _ in emit.COMMITTED})
+            raise UsageError(f"--refresh --segments {args.segments}: the committed models are n = {have[0]}..{have[-1]}; drop --refresh to generate n = {args.segments}")
         rows = []
-
-        def progress(path):
+        for n, eff, var in chosen:
+            print(f"esba: generating n = {n} ({var}) into {out}", file=sys.stderr)
+            path, _ = emit.write_model(n, eff, var, out)
             rows.append(path.name)
-
-        emit.refresh(args.out, progress=progress)
-        _emit(args, {"refreshed": rows}, lambda d: "\n".join(f"wrote {r}" for r in d["refreshed"]))
+        _emit(args, {"refreshed": rows, "folder": str(out)}, lambda d: "\n".join(f"wrote {d['folder']}/{r}" for r in d["refreshed"]))
         return EXIT_OK
     if args.segments is None:
-        raise UsageError("generate needs --segments N (a whole number >= 1) or --refresh")
-    try:
-        effects = EffectSet.parse(args.effects)
-    except EffectError as exc:
-        raise UsageError(f"--effects: {exc}") from None
+        raise UsageError("generate needs --segments N (a whole number from 1 to 256) or --refresh")
+    variant = args.variant or DEFAULT_VARIANT
     t0 = time.perf_counter()
-    path, entry = emit.write_model(args.segments, effects, args.variant, args.out)
+    if out is None:  # installed esba: the model cache, where esba finds models it was not shipped with
+        from esba.model import generate_into_cache
+
+        path, entry = generate_into_cache(args.segments, effects, variant)
+        where = "the model cache"
+    else:
+        from derive import emit  # SymPy: only for this command
+
+        print(f"esba: generating n = {args.segments} ({effects.spec()}, {variant}) into {out}", file=sys.stderr)
+        path, entry = emit.write_model(args.segments, effects, variant, out)
+        where = "the checkout's generated/" if args.out is None else "--out"
     data = {
         "file": str(path),
+        "written_to": where,
         "segments": args.segments,
         "effects": effects.spec(),
-        "variant": args.variant,
+        "variant": variant,
         "instructions": entry["instructions"],
         "generate_time_s": time.perf_counter() - t0,
     }
@@ -79,12 +149,12 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
 
 def _add_generate(sub) -> None:
-    p = sub.add_parser("generate", help="derive and emit a CasADi model into generated/")
-    p.add_argument("--segments", "-n", type=_segments, help="segment count n >= 1")
-    p.add_argument("--effects", default=DEFAULT_EFFECTS, help=f"comma-separated effects (default {DEFAULT_EFFECTS}); payload:K for K payloads")
-    p.add_argument("--variant", choices=VARIANTS, default=DEFAULT_VARIANT)
-    p.add_argument("--out", default=None, help="folder (default: the generated/ package)")
-    p.add_argument("--refresh", action="store_true", help="regenerate every committed model")
+    p = sub.add_parser("generate", help="derive and emit a CasADi model (in a checkout: into generated/; else into the model cache)")
+    p.add_argument("--segments", "-n", type=_segments, help="segment count n, 1 to 256 (with --refresh: refresh that n only)")
+    p.add_argument("--effects", default=None, help=f"comma-separated effects (default {DEFAULT_EFFECTS}); payload:K for K payloads")
+    p.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default {DEFAULT_VARIANT}; with --refresh: that variant only)")
+    p.add_argument("--out", default=None, metavar="DIR", help="folder to write (default: generated/ in a checkout, else the model cache)")
+    p.add_argument("--refresh", action="store_true", help="regenerate the committed models (n = 1..8, both variants) and the manifest")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_generate)
 
@@ -94,25 +164,29 @@ def _add_generate(sub) -> None:
 
 
 def _cmd_audit(args: argparse.Namespace) -> int:
+    page = outputs.default_page("derivations.md") if args.out is None else args.out
+    if args.check:
+        from derive import audit  # SymPy: only for this command
+
+        stale = audit.check_page(page)
+        _emit(args, {"page": str(page), "stale": stale}, lambda d: f"{d['page']} is {'STALE' if d['stale'] else 'up to date'}")
+        if stale:
+            print(f"esba: {page} is stale: run `esba audit` and commit it", file=sys.stderr)
+            return EXIT_FAILED
+        return EXIT_OK
+    page = outputs.check_file(page, "--out")
     from derive import audit  # SymPy: only for this command
 
-    if args.check:
-        stale = audit.check_page(args.out)
-        if stale:
-            print(f"esba: {args.out or audit.DOC_PATH} is stale: run `esba audit` and commit it", file=sys.stderr)
-            return EXIT_FAILED
-        print("derivations page is up to date")
-        return EXIT_OK
-    path, verdicts = audit.write_page(args.out)
+    path, verdicts = audit.write_page(page)
     data = {"page": str(path), "verdicts": {k: v.verdict for k, v in verdicts.items()}}
     _emit(args, data, lambda d: "\n".join([f"wrote {d['page']}"] + [f"  {k:<26} {v}" for k, v in d["verdicts"].items()]))
     return EXIT_OK
 
 
 def _add_audit(sub) -> None:
-    p = sub.add_parser("audit", help="check the paper's printed equations against the derivation; write docs/derivations.md")
-    p.add_argument("--check", action="store_true", help="exit 1 when the committed page is stale")
-    p.add_argument("--out", default=None, help="page to write (default docs/derivations.md)")
+    p = sub.add_parser("audit", help="check the paper's printed equations against the derivation; write the derivations page")
+    p.add_argument("--check", action="store_true", help="write nothing; exit 1 when the page is stale")
+    p.add_argument("--out", default=None, metavar="FILE.md", help="page to write (default docs/derivations.md in a checkout, else ./derivations.md)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_audit)
 
@@ -125,26 +199,21 @@ DEFAULT_SOLVE_FIGURE = "esba-solve.png"
 
 
 def _float_arg(text: str) -> float:
+    """A number as people write it; Python's ``float()`` would also read ``0_1`` as 1."""
     try:
-        value = float(text)
+        return checks.number("value", text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    return value
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number (expected decimal digits such as 0.1 or 2e-3)") from None
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number >= 1")
-    return value
+#: ``--max-iter``'s bound (``esba.equilibrium.MAX_ITER_LIMIT``, written out so that building the
+#: parser does not import CasADi; a test checks they agree).
+_MAX_ITER = 100_000
 
 
 def _add_scene_flags(p: argparse.ArgumentParser, payloads: bool = True) -> None:
     p.add_argument("scene", nargs="?", default=None, metavar="SCENE.toml", help="scene file (default: the main job, Table 1 with a 2 N horizontal tip payload, n = 3)")
-    p.add_argument("--segments", "-n", type=_segments, help="segment count n >= 1")
+    p.add_argument("--segments", "-n", type=_segments, help="segment count n, 1 to 256")
     drive = p.add_mutually_exclusive_group()
     drive.add_argument("--pressure", type=_float_arg, help="pressure, MPa")
     drive.add_argument("--target-angle", type=_float_arg, metavar="DEG", help="use the pressure that bends the unloaded actuator to DEG")
@@ -187,12 +256,23 @@ def _scene_changes(args: argparse.Namespace, skip: tuple[str, ...] = ()) -> dict
     return changes
 
 
+def _load_scene(path: str | None, default):
+    """The scene file ``path`` (an empty name is an error, not the default), else ``default``."""
+    from esba.scene import SceneError, load_scene
+
+    if path is None:
+        return default
+    if not path.strip():
+        raise SceneError(f"scene file {path!r}: expected the path of a TOML scene file (or no argument for the default scene)")
+    return load_scene(path)
+
+
 def _scene_from_args(args: argparse.Namespace, payloads: bool = True):
     """The scene file (or the main job) with the flags applied; bad values are usage errors."""
-    from esba.scene import MAIN_JOB, Payload, SceneError, load_scene
+    from esba.scene import MAIN_JOB, Payload, SceneError
 
     try:
-        scene = load_scene(args.scene) if args.scene else MAIN_JOB
+        scene = _load_scene(args.scene, MAIN_JOB)
         changes = _scene_changes(args)
         if payloads:
             if args.no_payload and (args.payload or args.payload_angle or args.payload_at):
@@ -287,10 +367,14 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    from esba.equilibrium import EquilibriumError, solve
+    from esba.equilibrium import EquilibriumError, SolverOptions, solve
 
-    from esba.equilibrium import SolverOptions
-
+    if args.no_plot and args.plot is not None:
+        raise UsageError("--plot and --no-plot: give one of the two")
+    plot = args.plot
+    if plot is None and args.scene is None and not args.no_plot:
+        plot = DEFAULT_SOLVE_FIGURE
+    figure = outputs.figure_file(plot, "--plot", DEFAULT_SOLVE_FIGURE) if plot and not args.no_plot else None
     scene = _scene_from_args(args)
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
@@ -325,17 +409,15 @@ def _cmd_solve(args: argparse.Namespace) -> int:
             mc = monte_carlo(scene, sigmas, mc_options)
             data["monte_carlo"] = mc.to_dict()
             data["agreement"] = compare(propagation, mc).to_dict()
-    plot = args.plot
-    if plot is None and args.scene is None and not args.no_plot:
-        plot = DEFAULT_SOLVE_FIGURE
-    if plot and not args.no_plot:
+    if figure is not None:
         from esba.plots import save_figure, solve_figure
 
         unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False), pressure=result.pressure)
         cov = propagation.cov_tip if propagation is not None and propagation.has_numbers else None
         tips = mc.tip[mc.ok] if mc is not None else None
-        data["figure"] = str(save_figure(solve_figure(result, unloaded, tip_cov=cov, samples=tips), plot).resolve())
+        data["figure"] = str(save_figure(solve_figure(result, unloaded, tip_cov=cov, samples=tips), figure).resolve())
     _emit(args, data, _solve_table)
+    _warn(result.validity)
     if not result.ok:
         print(f"esba: solve not ok: {result.message or result.status}", file=sys.stderr)
         return EXIT_FAILED
@@ -377,9 +459,9 @@ def _seed(text: str) -> int:
 def _add_solve(sub) -> None:
     p = sub.add_parser("solve", help="solve a scene's equilibrium (no arguments: the paper's Table 2 case, n = 3)")
     _add_scene_flags(p)
-    p.add_argument("--plot", metavar="FILE", help=f"write the deformed and unloaded shapes (default {DEFAULT_SOLVE_FIGURE} when no scene file is given)")
+    p.add_argument("--plot", metavar="FILE|DIR", help=f"write the deformed and unloaded shapes (default ./{DEFAULT_SOLVE_FIGURE} when no scene file is given; a folder gets {DEFAULT_SOLVE_FIGURE} inside it; no suffix: .png)")
     p.add_argument("--no-plot", action="store_true", help="write no figure")
-    p.add_argument("--max-iter", type=_positive_int, default=200, metavar="N", help="IPOPT iterations per solve (default 200)")
+    p.add_argument("--max-iter", type=_count("max_iter", 1, _MAX_ITER, "an equilibrium takes tens of iterations"), default=200, metavar="N", help="IPOPT iterations per solve (default 200, at most 100000)")
     p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
     p.add_argument("--sensitivities", action="store_true", help="d(angles, tip)/d(parameter) for every scene parameter (exact, implicit function theorem)")
     p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="uncertain parameter: E=0.05 (in its unit), E=10%%, r2=±0.1 (a tolerance); repeatable; propagated to first order")
@@ -422,7 +504,9 @@ def _cmd_stiffness(args: argparse.Namespace) -> int:
     except EquilibriumError as exc:
         print(f"esba: failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
-    _emit(args, result.to_dict(), _stiffness_table)
+    data = result.to_dict()
+    _emit(args, data, _stiffness_table)
+    _warn(data.get("validity", []))
     if not result.ok:
         print("esba: stiffness not ok: a solve failed or was not stable", file=sys.stderr)
         return EXIT_FAILED
@@ -437,8 +521,19 @@ def _add_stiffness(sub) -> None:
     p.set_defaults(func=_cmd_stiffness)
 
 
+def _target_sentence(d: dict) -> str:
+    """What the pressure was found for, as a sentence."""
+    t = d["target"]
+    if "target_angle_deg" in t:
+        return f"bends the unloaded actuator to {t['target_angle_deg']:g} deg in total (n = {d['segments']}, {d['variant']})"
+    if "total_angle_deg" in t:
+        return f"bends the loaded actuator to {t['total_angle_deg']:g} deg in total (n = {d['segments']}, {d['variant']})"
+    parts = [f"{axis} = {v:g} mm" for axis, v in zip(("x", "y"), t["tip_mm"]) if v is not None]
+    return f"puts the loaded actuator's tip at {' and '.join(parts)} (n = {d['segments']}, {d['variant']})"
+
+
 def _pressure_table(d: dict) -> str:
-    rows = [("pressure", f"{d['pressure_mpa']:.7f} MPa"), ("method", d["method"]), ("target", json.dumps(d["target"]))]
+    rows = [("pressure", f"{d['pressure_mpa']:.7f} MPa"), ("target", f"the pressure that {_target_sentence(d)}"), ("method", d["method"])]
     if "residual" in d:
         rows.append(("residual", f"{d['residual']:.3g}"))
         rows.append(("theta", f"({_fmt(d['equilibrium']['theta_deg'], 2)}) deg"))
@@ -460,6 +555,8 @@ def _cmd_pressure(args: argparse.Namespace) -> int:
         raise UsageError("pressure needs a target: --target-angle DEG (unloaded), --total-angle DEG or --tip-x/--tip-y MM (under the payloads)")
     if args.pressure is not None:
         raise UsageError("--pressure is what this command finds: give a target instead")
+    if args.target_angle is not None:
+        _refuse(args, ["payload", "payload_angle", "payload_at", "no_payload", "gravity"], "with --target-angle (the closed form is for the unloaded actuator; use --total-angle for a target under payloads)")
     keep_target, args.target_angle = args.target_angle, None
     scene = _scene_from_args(args)
     try:
@@ -491,6 +588,7 @@ def _cmd_pressure(args: argparse.Namespace) -> int:
         print(f"esba: failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
     _emit(args, data, _pressure_table)
+    _warn(data.get("equilibrium", {}).get("validity", []))
     if not data["ok"]:
         print(f"esba: pressure not found: {data.get('message', '')}", file=sys.stderr)
         return EXIT_FAILED
@@ -509,25 +607,28 @@ def _add_pressure(sub) -> None:
 def _cmd_validate(args: argparse.Namespace) -> int:
     from esba import validation
 
+    page = outputs.default_page("validation.md") if args.out is None else args.out
+    if not args.check:
+        page = outputs.check_file(page, "--out")
     rows = validation.table2()
     if args.check:
-        stale = validation.check_page(args.out, rows)
+        stale = validation.check_page(page, rows)
         if stale:
-            print(f"esba: {args.out or validation.DOC_PATH} is stale: run `esba validate` and commit it", file=sys.stderr)
+            print(f"esba: {page} is stale: run `esba validate` and commit it", file=sys.stderr)
             return EXIT_FAILED
     else:
-        path = validation.write_page(args.out, rows)
+        page = validation.write_page(page, rows)
     data = {"passed": all(r.passed for r in rows), "rows": [r.to_dict() for r in rows]}
     if not args.check:
-        data["page"] = str(path)
-    _emit(args, data, lambda d: validation.summary(rows) + (f"\nwrote {d['page']}" if "page" in d else "\npage is up to date"))
+        data["page"] = str(page)
+    _emit(args, data, lambda d: validation.summary(rows) + (f"\nwrote {d['page']}" if "page" in d else f"\n{page} is up to date"))
     return EXIT_OK if data["passed"] else EXIT_FAILED
 
 
 def _add_validate(sub) -> None:
-    p = sub.add_parser("validate", help="compare with the paper's Table 2 (n = 1..4); write docs/validation.md")
-    p.add_argument("--check", action="store_true", help="write nothing; exit 1 when the committed page is stale")
-    p.add_argument("--out", default=None, help="page to write (default docs/validation.md)")
+    p = sub.add_parser("validate", help="compare with the paper's Table 2 (n = 1..4); write the validation page")
+    p.add_argument("--check", action="store_true", help="write nothing; exit 1 when the page is stale")
+    p.add_argument("--out", default=None, metavar="FILE.md", help="page to write (default docs/validation.md in a checkout, else ./validation.md)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_validate)
 
@@ -539,34 +640,53 @@ def _add_validate(sub) -> None:
 def _cmd_bench_generation(args: argparse.Namespace) -> int:
     from esba import bench
 
+    page = outputs.check_file(args.markdown, "--markdown") if args.markdown else None
     ns = [n for n in bench.GENERATION_NS if n <= args.max_n]
 
     def progress(n):
         print(f"  n = {n} done", file=sys.stderr)
 
     rows = bench.generation(ns, repeat=args.repeat, naive=not args.no_naive, progress=None if args.json else progress)
-    data = {"rows": [r.__dict__ for r in rows], "growth_exponent": bench.growth_exponent([r.n for r in rows], [r.total_s for r in rows])}
+    exponent, why = bench.growth([r.n for r in rows], [r.total_s for r in rows])
+    data = {"rows": [r.__dict__ for r in rows], "growth_exponent": exponent}
+    if exponent is None:
+        data["growth_exponent_reason"] = why
     _emit(args, data, lambda d: bench.generation_table(rows))
-    if args.markdown:
+    if page is not None:
         command = f"esba bench generation --max-n {args.max_n} --repeat {args.repeat}{' --no-naive' if args.no_naive else ''} --markdown {args.markdown}"
-        path = bench.write_generation_page(args.markdown, rows, command)
-        print(f"wrote {path}", file=sys.stderr)
+        path = bench.write_generation_page(page, rows, command)
+        print(f"esba: wrote {path}", file=sys.stderr)
     return EXIT_OK
 
 
 def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
     from esba import accuracy as acc
 
+    if args.quick:
+        _refuse(args, ["max_n", "reference_n", "fixed_n"], "with --quick (it fixes n <= 4, reference n = 16)")
+    if args.no_write:
+        _refuse(args, ["out", "figure"], "with --no-write")
+    max_n = 128 if args.max_n is None else args.max_n
+    reference_n = acc.REFERENCE_N if args.reference_n is None else args.reference_n
+    fixed_n = 16 if args.fixed_n is None else args.fixed_n
+    if args.quick:
+        ns, ref_n, fixed_n, naive_ns, size = (1, 2, 3, 4), 16, 4, (3,), 1000
+    else:
+        ns, ref_n, naive_ns, size = tuple(n for n in acc.ACCURACY_NS if n <= max_n), reference_n, (3, 8, 16), 10_000
+    if ref_n < 4 or ref_n % 4:
+        raise UsageError(f"--reference-n {ref_n}: expected a multiple of 4 (the reference extrapolates from n/4, n/2, n)")
+    doc = fig = None
+    if not args.no_write:
+        doc = outputs.check_file(outputs.default_page("accuracy-vs-time.md") if args.out is None else args.out, "--out")
+        fig = outputs.figures_dir() / "accuracy-vs-time.png" if args.figure is None else args.figure
+        if args.figure is None and outputs.checkout_root() is None:
+            outputs.check_folder(fig.parent, "--figure")
+        fig = outputs.figure_file(fig, "--figure", "accuracy-vs-time.png")
+
     def say(msg):
         if not args.json:
             print(f"  {msg}", file=sys.stderr)
 
-    if args.quick:
-        ns, ref_n, fixed_n, naive_ns, size = (1, 2, 3, 4), 16, 4, (3,), 1000
-    else:
-        ns, ref_n, fixed_n, naive_ns, size = tuple(n for n in acc.ACCURACY_NS if n <= args.max_n), args.reference_n, args.fixed_n, (3, 8, 16), 10_000
-    if ref_n < 4 or ref_n % 4:
-        raise UsageError(f"--reference-n {ref_n}: expected a multiple of 4 (the reference extrapolates from n/4, n/2, n)")
     study = acc.accuracy_study(ns, ref_n, repeat=args.repeat, progress=say)
     say(f"tolerance study (n = {fixed_n})")
     tol = acc.tolerance_study(fixed_n, repeat=args.repeat)
@@ -591,11 +711,11 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
         "naive": naive,
         "batch": batch,
     }
-    if not args.no_write:
+    if doc is not None:
         command = "esba bench accuracy" + (" --quick" if args.quick else "")
-        if not args.quick and (args.max_n, args.reference_n, args.fixed_n, args.repeat) != (128, 256, 16, 5):
-            command += f" --max-n {args.max_n} --reference-n {args.reference_n} --fixed-n {args.fixed_n} --repeat {args.repeat}"
-        doc, fig = acc.write_page(study, tol, eff, naive, batch, command, doc=args.out, fig_path=args.figure)
+        if not args.quick and (max_n, reference_n, fixed_n, args.repeat) != (128, 256, 16, 5):
+            command += f" --max-n {max_n} --reference-n {reference_n} --fixed-n {fixed_n} --repeat {args.repeat}"
+        doc, fig = acc.write_page(study, tol, eff, naive, batch, command, doc=doc, fig_path=fig)
         data["page"], data["figure"] = str(doc), str(fig)
 
     def table(d: dict) -> str:
@@ -617,7 +737,7 @@ def _cmd_bench_solve(args: argparse.Namespace) -> int:
     from esba.pages import write_section
 
     if args.markdown:
-        _writable("--markdown", args.markdown, (".md",))
+        outputs.check_file(args.markdown, "--markdown", (".md",))
 
     def progress(msg):
         if not args.json:
@@ -637,7 +757,7 @@ def _cmd_bench_path(args: argparse.Namespace) -> int:
     from esba.pages import write_section
 
     if args.markdown:
-        _writable("--markdown", args.markdown, (".md",))
+        outputs.check_file(args.markdown, "--markdown", (".md",))
 
     def progress(n):
         if not args.json:
@@ -655,7 +775,9 @@ def _cmd_bench_path(args: argparse.Namespace) -> int:
 
 def _cmd_bench_batch(args: argparse.Namespace) -> int:
     from esba import accuracy as acc
+    from esba.batch import check_size
 
+    check_size(args.size, args.segments, "--size", UsageError)
     data = acc.batch_study(args.size, args.segments)
 
     def table(d: dict) -> str:
@@ -665,13 +787,14 @@ def _cmd_bench_batch(args: argparse.Namespace) -> int:
                 ("compiled, warm", f"{d['compiled_us']:.1f} us per equilibrium (fast path alone {d['compiled_fast_path_us']:.1f} us)"),
                 ("compiled, first", f"{d['compiled_first_us']:.1f} us per equilibrium (compiling took {d['compiled_first_compile_s']:.1f} s)"),
             ]
+        diff = d["max_theta_difference_vs_ipopt"]
         rows += [
             ("interpreted", f"{d['interpreted_us']:.1f} us per equilibrium"),
-            ("IPOPT solve", f"{d['ipopt_us']:.0f} us per equilibrium (esba.equilibrium.solve, one by one)"),
+            ("IPOPT solve", f"{d['ipopt_us']:.0f} us per equilibrium (esba.equilibrium.solve, one by one, on {d['ipopt_samples']} of them)"),
             ("naive BFGS", f"{d['naive_us']:.0f} us per equilibrium (SciPy, numeric gradients)"),
             ("speed-up", f"{d['speedup_vs_naive']:.0f}x naive, {d['speedup_vs_ipopt']:.0f}x IPOPT"),
             ("answered by", str(d["counts"])),
-            ("vs IPOPT", f"largest angle difference {d['max_theta_difference_vs_ipopt']:.2g} rad on a sample"),
+            ("vs IPOPT", "no sample solved ok by both" if diff is None else f"largest angle difference {diff:.2g} rad on a sample"),
             ("backend", d["backend"]),
         ]
         return "\n".join(f"{k:>16}: {v}" for k, v in rows)
@@ -680,25 +803,31 @@ def _cmd_bench_batch(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+#: ``--repeat``'s bound: medians of more runs change nothing but the wait.
+_MAX_REPEAT = 100
+#: ``--size``'s bound before the memory check (esba.batch.check_size) refines it per n.
+_MAX_SIZE = 10_000_000
+
+
 def _add_bench(sub) -> None:
     p = sub.add_parser("bench", help="benchmarks: tables of medians over repeated runs")
     bsub = p.add_subparsers(dest="bench", parser_class=_Parser, required=True)
-    g = bsub.add_parser("generation", help="generation time and size against n; per-call time of U, gradient, Hessian")
+    g = bsub.add_parser("generation", help="generation time and size against n; per-call time of U, gradient, Hessian (minutes)")
     g.add_argument("--max-n", type=_segments, default=100, help="largest n (default 100)")
-    g.add_argument("--repeat", type=_segments, default=3, help="runs per n, median reported (default 3)")
+    g.add_argument("--repeat", type=_count("repeat", 1, _MAX_REPEAT), default=3, help="runs per n, median reported (default 3, at most 100)")
     g.add_argument("--no-naive", action="store_true", help="skip the naive SymPy route")
     g.add_argument("--markdown", metavar="FILE", help="also write the table as a docs page (docs/performance.md)")
     g.add_argument("--json", action="store_true")
     g.set_defaults(func=_cmd_bench_generation)
 
-    a = bsub.add_parser("accuracy", help="tip error against n, tolerance, effects, naive vs esba, batch; writes docs/accuracy-vs-time.md")
-    a.add_argument("--max-n", type=_segments, default=128, help="largest n of the study (default 128)")
-    a.add_argument("--reference-n", type=_segments, default=256, help="finest n; the reference extrapolates from n/4, n/2, n (default 256)")
-    a.add_argument("--fixed-n", type=_segments, default=16, help="n of the tolerance and effect studies (default 16)")
-    a.add_argument("--repeat", type=_segments, default=5, help="solves per timing, median reported (default 5)")
+    a = bsub.add_parser("accuracy", help="tip error against n, tolerance, effects, naive vs esba, batch (about 4 minutes); writes the accuracy page")
+    a.add_argument("--max-n", type=_segments, default=None, help="largest n of the study (default 128)")
+    a.add_argument("--reference-n", type=_segments, default=None, help="finest n; the reference extrapolates from n/4, n/2, n (default 256)")
+    a.add_argument("--fixed-n", type=_segments, default=None, help="n of the tolerance and effect studies (default 16)")
+    a.add_argument("--repeat", type=_count("repeat", 1, _MAX_REPEAT), default=5, help="solves per timing, median reported (default 5, at most 100)")
     a.add_argument("--quick", action="store_true", help="a small smoke run (n <= 4, reference n = 16, batch of 1000)")
-    a.add_argument("--out", default=None, metavar="FILE", help="page to write (default docs/accuracy-vs-time.md)")
-    a.add_argument("--figure", default=None, metavar="FILE", help="figure to write (default docs/figures/accuracy-vs-time.png)")
+    a.add_argument("--out", default=None, metavar="FILE", help="page to write (default docs/accuracy-vs-time.md in a checkout, else ./accuracy-vs-time.md)")
+    a.add_argument("--figure", default=None, metavar="FILE", help="figure to write (default figures/accuracy-vs-time.png beside the page)")
     a.add_argument("--no-write", action="store_true", help="print only; write no page or figure")
     a.add_argument("--json", action="store_true")
     a.set_defaults(func=_cmd_bench_accuracy)
@@ -713,7 +842,7 @@ def _add_bench(sub) -> None:
     pa.add_argument("--json", action="store_true")
     pa.set_defaults(func=_cmd_bench_path)
     b = bsub.add_parser("batch", help="us per equilibrium of the batch path against IPOPT and naive BFGS")
-    b.add_argument("--size", type=_segments, default=10_000, help="batch size (default 10000)")
+    b.add_argument("--size", type=_count("size", 1, _MAX_SIZE), default=10_000, help="batch size (default 10000; bounded by the memory it takes)")
     b.add_argument("--segments", "-n", type=_segments, default=3, help="segment count (default 3)")
     b.add_argument("--json", action="store_true")
     b.set_defaults(func=_cmd_bench_batch)
@@ -727,24 +856,21 @@ def _cmd_figures(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from esba import figures
-    from esba.equilibrium import EquilibriumError
 
-    out = figures.DEFAULT_OUT if args.out is None else args.out
     try:
-        written = figures.write_all(out, args.only)
+        names = figures.check_names(args.only)
     except figures.FigureError as exc:
         raise UsageError(f"--only: {exc}") from None
-    except EquilibriumError as exc:
-        print(f"esba: failed: {exc}", file=sys.stderr)
-        return EXIT_FAILED
+    out = outputs.check_folder(outputs.figures_dir() if args.out is None else args.out, "--out")
+    written = figures.write_all(out, names)
     data = {"out": str(Path(out).resolve()), "figures": {name: str(path.resolve()) for name, path in written.items()}}
     _emit(args, data, lambda d: "\n".join(f"wrote {path}" for path in d["figures"].values()))
     return EXIT_OK
 
 
 def _add_figures(sub) -> None:
-    p = sub.add_parser("figures", help="regenerate the paper-style figures (Figs. 7b, 8c, 10, 11, ...) as PNG files")
-    p.add_argument("--out", metavar="DIR", default=None, help="folder to write (default docs/figures/)")
+    p = sub.add_parser("figures", help="regenerate the paper-style figures (Figs. 7b, 8c, 10, 11, 13a, 13b, 14) as PNG files (a few minutes)")
+    p.add_argument("--out", metavar="DIR", default=None, help="folder to write (default docs/figures/ in a checkout, else ./figures/)")
     p.add_argument("--only", metavar="NAME", nargs="+", action="extend", default=None, help="write only these figures (e.g. fig7b fig11)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_figures)
@@ -806,41 +932,81 @@ def _cmd_design(args: argparse.Namespace) -> int:
     from esba.design_report import write_doc
     from esba.pso import PSOOptions, PSOOptionsError
 
+    if args.write_doc:
+        _refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot"], "with --write-doc (the study runs its own problems)")
+        page = outputs.check_file(args.write_doc, "--write-doc")
+    method = args.method or "ipopt"
+    if method == "ipopt":
+        _refuse(args, ["particles", "iterations", "seed"], "with --method ipopt (they set the swarm: use --method pso or both)")
+    if method == "pso":
+        _refuse(args, ["starts"], "with --method pso (it sets IPOPT's starts: use --method ipopt or both)")
+    figure = outputs.figure_file(args.plot, "--plot", "esba-design.png") if args.plot else None
     try:
-        pso_options = PSOOptions(particles=args.particles, iterations=args.iterations, seed=args.seed)
-        options = DesignOptions(starts=args.starts)
+        pso_options = PSOOptions(
+            particles=30 if args.particles is None else args.particles,
+            iterations=50 if args.iterations is None else args.iterations,
+            seed=0 if args.seed is None else args.seed,
+        )
+        options = DesignOptions(starts=4 if args.starts is None else args.starts)
         if args.write_doc:
-            path, _ = write_doc(args.write_doc, segments=args.segments, options=options, pso_options=pso_options)
+            path, _ = write_doc(page, segments=args.segments, options=options, pso_options=pso_options)
             _emit(args, {"page": str(path)}, lambda d: f"wrote {d['page']}")
             return EXIT_OK
         problem = DesignProblem(
-            objective=args.objective,
+            objective=args.objective or "stiffness",
             segments=args.segments,
-            variant=args.variant,
+            variant=args.variant or DEFAULT_VARIANT,
             min_stiffness=args.min_stiffness,
             max_pressure=args.max_pressure,
             target_angle_deg=args.target_angle,
-            min_wall=args.min_wall,
+            min_wall=0.0 if args.min_wall is None else args.min_wall,
         )
     except (DesignError, PSOOptionsError) as exc:
         raise UsageError(str(exc)) from None
-    if args.method == "ipopt":
+    if method == "ipopt":
         run = optimise_ipopt(problem, options)
-    elif args.method == "pso":
+    elif method == "pso":
         run = optimise_pso(problem, options, pso_options)
     else:
         run = compare(problem, options, pso_options)
     data = run.to_dict()
-    if args.plot:
+    results = [run] if method != "both" else [run.ipopt, run.pso]
+    for r, d in zip(results, [data] if method != "both" else [data["ipopt"], data["pso"]]):
+        d["validity"] = _design_validity(r, d)
+    if figure is not None:
         from esba.design_figures import design_figure
 
-        data["figure"] = str(design_figure(run, args.plot).resolve())
+        data["figure"] = str(design_figure(run, figure).resolve())
     _emit(args, data, _design_table)
-    results = [run] if args.method != "both" else [run.ipopt, run.pso]
+    for r, d in zip(results, [data] if method != "both" else [data["ipopt"], data["pso"]]):
+        _warn(d["validity"])
     bad = [r for r in results if r.status != "optimal"]
     for r in bad:
         print(f"esba: design {r.status} ({r.method}): {r.message}", file=sys.stderr)
     return EXIT_FAILED if bad else EXIT_OK
+
+
+def _design_validity(result, d: dict) -> list[dict]:
+    """The validity findings (:mod:`esba.validity`) of each state of a design (its start and loaded states)."""
+    import math
+
+    from esba.validity import assess_angles
+
+    values = (d.get("r2_mm"), d.get("d_mm"), d.get("pressure_mpa"))
+    if any(v is None or not math.isfinite(v) for v in values) or not isinstance(d.get("theta_deg"), dict):
+        return []
+    r2, dd, start_pressure = values
+    # the start and loaded states are at the 90 degree pressure; free at max_pressure; target at its own
+    pressures = {"free": d.get("max_pressure"), "target": d.get("target_pressure_mpa")}
+    out = []
+    for state, degrees in d["theta_deg"].items():
+        pressure = pressures.get(state) or start_pressure
+        if degrees is None or not all(math.isfinite(v) for v in degrees) or not math.isfinite(pressure):
+            continue
+        scene = result.problem.scene(r2, dd, pressure, loaded=(state == "loaded"))
+        for f in assess_angles(scene, [math.radians(v) for v in degrees], pressure):
+            out.append({**f.to_dict(), "state": state, "message": f"{result.method} design, {state} state: {f.message}"})
+    return out
 
 
 #: ``esba.design.METHODS`` and ``esba.design.OBJECTIVES`` (written out so that building the parser
@@ -851,20 +1017,20 @@ _DESIGN_OBJECTIVES = ("stiffness", "angle", "pressure")
 
 def _add_design(sub) -> None:
     p = sub.add_parser("design", help="optimise the chamber (r2, d): IPOPT on the full-space NLP, PSO as in the paper")
-    p.add_argument("--segments", "-n", type=_segments, default=3, help="segment count n >= 1 (default 3)")
-    p.add_argument("--method", choices=_DESIGN_METHODS, default="ipopt", help="ipopt (default), pso, or both side by side")
-    p.add_argument("--objective", choices=_DESIGN_OBJECTIVES, default="stiffness", help="maximise the stiffness (default), the free angle at --max-pressure, or minimise the pressure for --target-angle")
+    p.add_argument("--segments", "-n", type=_segments, default=3, help="segment count n, 1 to 256 (default 3)")
+    p.add_argument("--method", choices=_DESIGN_METHODS, default=None, help="ipopt (default), pso, or both side by side")
+    p.add_argument("--objective", choices=_DESIGN_OBJECTIVES, default=None, help="maximise the stiffness (default), the free angle at --max-pressure, or minimise the pressure for --target-angle")
     p.add_argument("--min-stiffness", type=_float_arg, metavar="K", help="K >= K N/m (required by angle and pressure)")
     p.add_argument("--max-pressure", type=_float_arg, metavar="P", help="pressure budget, MPa (the pressure of the free angle for --objective angle)")
     p.add_argument("--target-angle", type=_float_arg, metavar="DEG", help="target unloaded angle of --objective pressure (default 90)")
-    p.add_argument("--min-wall", type=_float_arg, default=0.0, metavar="T", help="thinnest wall r1 - r2 - d, mm (default 0: r2 + d < r1)")
-    p.add_argument("--variant", choices=VARIANTS, default=DEFAULT_VARIANT)
-    p.add_argument("--seed", type=int, default=0, help="PSO seed (default 0)")
-    p.add_argument("--particles", type=int, default=30, help="PSO swarm size (default 30, the paper's)")
-    p.add_argument("--iterations", type=int, default=50, help="PSO iterations (default 50, the paper's)")
-    p.add_argument("--starts", type=int, default=4, help="IPOPT starts (1 to 8, default 4)")
-    p.add_argument("--plot", metavar="FILE", help="write the stiffness map with the design(s) (and the swarm)")
-    p.add_argument("--write-doc", metavar="FILE", help="run the whole study (both methods, every problem) and write it, e.g. docs/design.md")
+    p.add_argument("--min-wall", type=_float_arg, default=None, metavar="T", help="thinnest wall r1 - r2 - d, mm (default 0: r2 + d < r1)")
+    p.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default {DEFAULT_VARIANT})")
+    p.add_argument("--seed", type=_count("seed", 0, 2**32 - 1), default=None, help="PSO seed (default 0)")
+    p.add_argument("--particles", type=_count("particles", 2, 500_000, "particles x (iterations + 1) is at most 1000000"), default=None, help="PSO swarm size (default 30, the paper's)")
+    p.add_argument("--iterations", type=_count("iterations", 1, 500_000, "particles x (iterations + 1) is at most 1000000"), default=None, help="PSO iterations (default 50, the paper's)")
+    p.add_argument("--starts", type=_count("starts", 1, 8), default=None, help="IPOPT starts (1 to 8, default 4)")
+    p.add_argument("--plot", metavar="FILE|DIR", help="write the stiffness map with the design(s) (and the swarm); a folder gets esba-design.png")
+    p.add_argument("--write-doc", metavar="FILE", help="run the whole study (both methods, every problem; minutes) and write it, e.g. docs/design.md")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_design)
 
@@ -892,7 +1058,8 @@ def _sweep_table(d: dict) -> str:
         for r in rows:
             ang = "" if r["total_angle_deg"] is None else f"{r['total_angle_deg']:10.3f}"
             tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
-            lines.append(f"{r['pressure_mpa']:9.5f} {r['payload_n']:6.3g} {r['payload_angle_deg']:7.3g} {r['r2_mm']:6.3g} {r['d_mm']:6.3g} {ang:>10} {tip:>18}  {r['status']}")
+            pres = f"{'-':>9}" if r["pressure_mpa"] is None else f"{r['pressure_mpa']:9.5f}"
+            lines.append(f"{pres} {r['payload_n']:6.3g} {r['payload_angle_deg']:7.3g} {r['r2_mm']:6.3g} {r['d_mm']:6.3g} {ang:>10} {tip:>18}  {r['status']}")
     else:
         lines.append(f"{len(rows)} rows: write them with --out FILE.csv or FILE.json")
     for k in ("out", "figure"):
@@ -904,36 +1071,43 @@ def _sweep_table(d: dict) -> str:
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from esba.batch import BatchOptions
     from esba.plots import save_figure
-    from esba.scene import Scene, SceneError, load_scene
-    from esba.sweep import SweepError, fig12, sweep, sweep_figure
+    from esba.scene import Scene
+    from esba.sweep import fig12, sweep, sweep_figure
 
-    try:
-        base = load_scene(args.scene) if args.scene else Scene()
-        changes = _scene_changes(args, skip=("pressure",))
-        base = base.replace(**changes) if changes else base
-    except SceneError as exc:
-        raise UsageError(str(exc)) from None
+    if args.fig12:
+        _refuse(args, ["pressure", "payload", "payload_angle", "r2", "d", "target_angle", "out", "plot"], "with --fig12 (it draws its own grid: r2 and d at P = 0.2 MPa, no payload)")
+        figure = outputs.figure_file(args.fig12, "--fig12", "sweep-fig12.png")
+    else:
+        if args.pressure is not None:
+            _refuse(args, ["target_angle"], "with --pressure (it sets the pressure of designs swept without --pressure)")
+        out = outputs.check_file(args.out, "--out", (".csv", ".json")) if args.out else None
+        figure = outputs.figure_file(args.plot, "--plot", "esba-sweep.png") if args.plot else None
+    base = _load_scene(args.scene, None) or Scene()
+    changes = _scene_changes(args, skip=("pressure",))
+    base = base.replace(**changes) if changes else base
     options = BatchOptions(compile="never" if args.no_compile else "auto", progress=not (args.json or args.no_progress))
     if args.fig12:
-        if any(v is not None for v in (args.pressure, args.payload, args.payload_angle, args.r2, args.d)):
-            raise UsageError("--fig12 draws its own grid (r2 and d at P = 0.2 MPa, no payload): give no axes with it")
         fig, sweeps = fig12(base.replace(pressure=0.2, payloads=()), options=options)
-        path = save_figure(fig, args.fig12)
+        path = save_figure(fig, figure)
         curves = [s for group in sweeps.values() for s in group]
         bad = sum(int((s.status == "not ok").sum()) for s in curves)
         data = {"figure": str(path), "curves": len(curves), "points": sum(len(s.status) for s in curves), "not_ok": bad}
         _emit(args, data, lambda d: f"wrote {d['figure']}: {d['curves']} curves, {d['points']} points, {d['not_ok']} not ok")
         return EXIT_OK if bad == 0 else EXIT_FAILED
-    try:
-        result = sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d, options=options)
-        data = result.to_dict()
-        if args.out:
-            data["out"] = str(result.write(args.out))
-        if args.plot:
-            data["figure"] = str(save_figure(sweep_figure(result), args.plot))
-    except (SweepError, SceneError) as exc:
-        raise UsageError(str(exc)) from None
+    result = sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d, options=options)
+    if figure is not None:
+        drawn = sweep_figure(result)  # refuses a figure with too many curves before anything is written
+    data = result.to_dict()
+    if out is not None:
+        data["out"] = str(result.write(out))
+    if figure is not None:
+        data["figure"] = str(save_figure(drawn, figure))
     _emit(args, data, _sweep_table)
+    outside = [f for found in result.validity for f in found]
+    for check in dict.fromkeys(f.check for f in outside):
+        first = next(f for f in outside if f.check == check)
+        count = sum(1 for found in result.validity if any(f.check == check for f in found))
+        print(f"esba: warning: {count} point(s) outside the model's range, e.g. {first.message}", file=sys.stderr)
     if data["counts"]["not ok"]:
         print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
         return EXIT_FAILED
@@ -949,14 +1123,14 @@ def _add_sweep(sub) -> None:
     p.add_argument("--payload-angle", type=_values_arg, metavar="VALUES", help="payload directions Omega from the vertical, degrees")
     p.add_argument("--r2", type=_values_arg, metavar="VALUES", help="chamber radii, mm")
     p.add_argument("--d", type=_values_arg, metavar="VALUES", help="eccentric distances, mm")
-    p.add_argument("--segments", "-n", type=_segments, help="segment count n >= 1")
+    p.add_argument("--segments", "-n", type=_segments, help="segment count n, 1 to 256")
     p.add_argument("--target-angle", type=_float_arg, metavar="DEG", help="without --pressure: each design at the pressure that bends it unloaded to DEG")
     p.add_argument("--gravity", action="store_true", help="include the actuator's weight (Eq. 15)")
     p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant")
-    p.add_argument("--out", metavar="FILE", help="write every point to FILE.csv or FILE.json")
-    p.add_argument("--plot", metavar="FILE", help="total angle against the first swept axis, one curve per other value")
-    p.add_argument("--fig12", metavar="FILE", help="write the paper's Fig. 12 (angle vs r2 for d = 0, 2, 4, 6; vs d for r2 = 2, 4, 6; P = 0.2 MPa)")
+    p.add_argument("--out", metavar="FILE", help="write every point to FILE.csv or FILE.json (no file is written by default)")
+    p.add_argument("--plot", metavar="FILE|DIR", help="total angle against the first swept axis, one curve per other value (a folder gets esba-sweep.png)")
+    p.add_argument("--fig12", metavar="FILE|DIR", help="write the paper's Fig. 12 (angle vs r2 for d = 0, 2, 4, 6; vs d for r2 = 2, 4, 6; P = 0.2 MPa)")
     p.add_argument("--no-compile", action="store_true", help="use CasADi's interpreter, not compiled C")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print JSON (every row)")
@@ -973,24 +1147,6 @@ DEFAULT_PATH_FIGURE = "esba-path.png"
 #: The parameters of ``esba path --param`` (``esba.path_problem.PARAMETERS``, written out so that
 #: building the parser does not import CasADi; a test checks they agree).
 _PATH_PARAMETERS = ("pressure", "payload", "omega", "at", "load", "r2", "d", "rho", "E", "L", "r1", "M")
-
-
-def _writable(flag: str, path: str, suffixes: tuple[str, ...]) -> str:
-    """``path`` if its folder exists and is writable and its suffix is one of ``suffixes``, else a usage error."""
-    import os
-    from pathlib import Path
-
-    p = Path(path)
-    if p.suffix.lower() not in suffixes:
-        raise UsageError(f"{flag} {path!r}: expected a file name ending in {', '.join(suffixes)}")
-    folder = p.parent if str(p.parent) else Path(".")
-    if not folder.is_dir():
-        raise UsageError(f"{flag} {path!r}: the folder {str(folder)!r} does not exist")
-    if p.is_dir():
-        raise UsageError(f"{flag} {path!r}: is a folder, expected a file name")
-    if not os.access(folder, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
-        raise UsageError(f"{flag} {path!r}: cannot write there (no permission)")
-    return path
 
 
 def _path_table(d: dict) -> str:
@@ -1033,7 +1189,7 @@ def _path_write_doc(args: argparse.Namespace) -> int:
     given = [flag for flag, v in (("--to", args.to), ("--from", args.start), ("--out", args.out), ("--plot", args.plot), ("SCENE.toml", args.scene)) if v is not None]
     if given:
         raise UsageError(f"--write-doc runs its own studies of the Table 1 actuator: give no {', '.join(given)} with it")
-    _writable("--write-doc", args.write_doc, (".md",))
+    outputs.check_file(args.write_doc, "--write-doc", (".md",))
     from esba.paths_report import paths_data, write_page
 
     def say(msg):
@@ -1055,8 +1211,8 @@ def _cmd_path(args: argparse.Namespace) -> int:
         raise UsageError("the following arguments are required: --to")
     if not math.isfinite(args.to):
         raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
-    out = None if args.no_out else _writable("--out", args.out or DEFAULT_PATH_OUT, (".csv", ".json"))
-    plot = None if args.no_plot else _writable("--plot", args.plot or DEFAULT_PATH_FIGURE, (".png", ".pdf", ".svg"))
+    out = None if args.no_out else outputs.check_file(args.out or DEFAULT_PATH_OUT, "--out", (".csv", ".json"))
+    plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_PATH_FIGURE, "--plot", DEFAULT_PATH_FIGURE)
     from esba.equilibrium import EquilibriumError
     from esba.path import PathOptions, write_branches
     from esba.path_problem import PathError
@@ -1099,11 +1255,11 @@ def _add_path(sub) -> None:
     )
     _add_scene_flags(p)
     p.add_argument("--param", choices=_PATH_PARAMETERS, default="pressure", help="the parameter to follow (default pressure; payload, omega and at are payload 1's: use --payload-index for another)")
-    p.add_argument("--payload-index", type=_positive_int, default=1, metavar="K", help="which payload --param payload/omega/at means (default 1)")
+    p.add_argument("--payload-index", type=_count("--payload-index", 1, 16, "a model carries at most 16 payloads"), default=1, metavar="K", help="which payload --param payload/omega/at means (default 1)")
     p.add_argument("--to", type=_float_arg, metavar="VALUE", help="trace to this value (MPa, N, deg, mm, ... as the parameter; required)")
     p.add_argument("--from", dest="start", type=_float_arg, metavar="VALUE", help="start here (default: the scene's own value)")
     p.add_argument("--locate", choices=("extended", "bisection"), default="extended", help="how folds are located (default: the extended system)")
-    p.add_argument("--max-steps", type=_positive_int, default=2000, metavar="N", help="steps per branch (default 2000)")
+    p.add_argument("--max-steps", type=_count("--max-steps", 1, 1_000_000, "each step stores a point"), default=2000, metavar="N", help="steps per branch (default 2000, at most 1000000)")
     p.add_argument("--ds-max", type=_float_arg, default=0.1, metavar="DS", help="largest step in the scaled arclength (default 0.1)")
     p.add_argument("--no-switch", action="store_true", help="do not trace the branches crossing at branch points")
     p.add_argument("--no-loading", action="store_true", help="do not follow quasi-static loading up and down (the hysteresis)")
@@ -1122,24 +1278,14 @@ def _add_path(sub) -> None:
 
 
 def _output_file(*suffixes: str) -> Callable[[str], str]:
-    """An argparse type for a file to write: the suffix allowed, not a folder, its folder creatable.
-
-    Checked when the flags are parsed, before any computation.
-    """
-    import os
-    from pathlib import Path
+    """An argparse type for a file to write (:func:`esba.outputs.check_file`), checked when the flags are
+    parsed, before any computation."""
 
     def check(text: str) -> str:
-        path = Path(text)
-        if path.suffix.lower() not in suffixes:
-            raise argparse.ArgumentTypeError(f"{text!r}: expected a file ending in {', '.join(suffixes)}")
-        if path.is_dir():
-            raise argparse.ArgumentTypeError(f"{text!r} is a folder: expected a file")
-        ancestor = path.resolve().parent
-        while not ancestor.exists():
-            ancestor = ancestor.parent
-        if not ancestor.is_dir() or not os.access(ancestor, os.W_OK):
-            raise argparse.ArgumentTypeError(f"{text!r}: cannot write there ({ancestor} is not a writable folder)")
+        try:
+            outputs.check_file(text, "file", suffixes)
+        except outputs.OutputError as exc:
+            raise argparse.ArgumentTypeError(str(exc).removeprefix("file ")) from None
         return text
 
     return check
@@ -1320,23 +1466,61 @@ COMMANDS: list[Callable] = [_add_generate, _add_audit, _add_solve, _add_path, _a
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="esba", description="Models of eccentric soft bending actuators (Yang et al.).")
+    parser.add_argument("--version", action="version", version=f"esba {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
     for add in COMMANDS:
         add(sub)
     return parser
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit code."""
+def _input_error(exc: BaseException) -> bool:
+    """An error class of esba's own that reports bad input (SceneError, OutputError, CacheError, ...)."""
+    module = type(exc).__module__
+    return isinstance(exc, ValueError) and (module.startswith("esba.") or module.startswith("derive."))
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    from esba.equilibrium import EquilibriumError
+
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
         if not getattr(args, "func", None):
             raise UsageError("name a command: " + ", ".join(sorted(parser._subparsers._group_actions[0].choices)))  # type: ignore[union-attr]
         return int(args.func(args))
-    except (UsageError, EffectError) as exc:
-        print(f"esba: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+    except EquilibriumError as exc:
+        print(f"esba: failed: {_first_line(exc)}", file=sys.stderr)
+        return EXIT_FAILED
+    except Exception as exc:
+        if _input_error(exc):
+            print(f"esba: error: {_first_line(exc)}", file=sys.stderr)
+            return EXIT_USAGE
+        if isinstance(exc, (BrokenPipeError, MemoryError)) or os.environ.get("ESBA_DEBUG"):
+            raise
+        print(
+            f"esba: internal error: {type(exc).__name__}: {_first_line(exc)} (a bug: please report the command; "
+            "ESBA_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return EXIT_FAILED
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit code."""
+    console.show_library_messages()
+    try:
+        return console.run(lambda: _run(argv))
+    except KeyboardInterrupt:
+        print("esba: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except MemoryError:
+        print("esba: out of memory: ask for a smaller run", file=sys.stderr)
+        return EXIT_FAILED
 
 
 if __name__ == "__main__":  # pragma: no cover

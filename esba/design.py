@@ -34,10 +34,10 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
+from . import jsonsafe
 from .design_batch import Evaluation, _evaluator, _objective_of, _pieces, _uniform_state, _violation_of, evaluate, free_angle, term_curvatures
 from .design_nlp import ActiveConstraint, _extra_start, _extra_states, _nlp, _start_designs
 from .design_problem import (
@@ -209,22 +209,11 @@ class DesignResult:
                 "seed": self.pso.options.seed,
                 "best_value_per_iteration": [float(v) for v in self.pso.history.best_value],
             }
-        return _json_ready(out)
+        return jsonsafe.clean(out)
 
 
 # ---------------------------------------------------------------------------------------------
 # the checks every result gets
-
-
-def _json_ready(value: Any) -> Any:
-    """Non-finite floats become None (JSON has no NaN), recursively."""
-    if isinstance(value, dict):
-        return {k: _json_ready(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_ready(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    return value
 
 
 def _checked(
@@ -610,7 +599,7 @@ class Comparison:
                 "agree": self.agree,
             },
         }
-        return _json_ready(out)
+        return jsonsafe.clean(out)
 
 
 def compare(

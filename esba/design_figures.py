@@ -216,6 +216,8 @@ def figure_14(out_dir: str | Path, problem: DesignProblem | None = None, pso_opt
     zoom.set_xlim(result.r2_mm - 0.5, result.r2_mm + 0.5)
     zoom.set_ylim(-0.02, 0.3)
     zoom.tick_params(labelsize=6)
+    zoom.set_xlabel("r2 (mm)", fontsize=6, labelpad=1)
+    zoom.set_ylabel("d (mm)", fontsize=6, labelpad=1)
     zoom.set_title("near the optimum", fontsize=7)
     o = result.pso.options
     ax.set_title(f"Fig. 14: {o.particles} particles, {o.iterations} iterations (seed {o.seed}), n = {problem.segments}", fontsize=9)
@@ -227,7 +229,8 @@ def figure_14(out_dir: str | Path, problem: DesignProblem | None = None, pso_opt
     inset = ax2.inset_axes([0.35, 0.12, 0.6, 0.5])
     err = np.abs(best - best[-1])
     inset.semilogy(np.arange(best.size)[err > 0], err[err > 0], ".-", ms=2, lw=0.8)
-    inset.set_title("|best - final|", fontsize=7)
+    inset.set_title(f"|best - final| ({problem.unit})", fontsize=7)
+    inset.set_xlabel("iteration", fontsize=6, labelpad=1)
     inset.tick_params(labelsize=6)
     return save_figure(fig, Path(out_dir) / "fig14.png")
 

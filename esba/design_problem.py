@@ -46,8 +46,8 @@ def _finite(name: str, value: Any, low: float | None = None, *, open_low: bool =
     return value
 
 
-def _whole(name: str, value: Any, low: int) -> int:
-    return checks.whole(name, value, low, DesignError)
+def _whole(name: str, value: Any, low: int, high: int | None = None, why: str = "") -> int:
+    return checks.whole(name, value, low, DesignError, high, why)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -113,7 +113,7 @@ class DesignProblem:
     def __post_init__(self) -> None:
         if self.objective not in OBJECTIVES:
             raise DesignError(f"objective={self.objective!r}: allowed are {', '.join(OBJECTIVES)}")
-        _whole("segments", self.segments, 1)
+        checks.segments(self.segments, DesignError)
         if self.variant not in VARIANTS:
             raise DesignError(f"variant={self.variant!r}: allowed are {', '.join(VARIANTS)}")
         if not isinstance(self.actuator, Actuator):
@@ -253,14 +253,14 @@ class DesignOptions:
         tol = _finite("tol", self.tol, 0.0, open_low=True)
         if tol >= 1.0:
             raise DesignError(f"tol={tol:g}: expected 0 < tol < 1")
-        _whole("max_iter", self.max_iter, 1)
+        _whole("max_iter", self.max_iter, 1, 100_000, "an optimum takes tens of iterations; IPOPT counts in a 32-bit int")
         if self.linear_solver not in ("mumps", "spral"):
             raise DesignError(f"linear_solver={self.linear_solver!r}: allowed are mumps, spral")
         if isinstance(self.starts, bool) or not isinstance(self.starts, int) or not 1 <= self.starts <= len(_START_FRACTIONS):
             raise DesignError(f"starts={self.starts!r}: expected a whole number from 1 to {len(_START_FRACTIONS)}")
-        _whole("load_steps", self.load_steps, 1)
-        _whole("newton_steps", self.newton_steps, 2)
-        _whole("threads", self.threads, 1)
+        _whole("load_steps", self.load_steps, 1, 1_000, "each step is unrolled into the mapped evaluator")
+        _whole("newton_steps", self.newton_steps, 2, 1_000, "each step is unrolled into the mapped evaluator")
+        _whole("threads", self.threads, 1, 256)
         for name in ("equilibrium_tol", "r2_min", "max_free_angle_deg", "critical_tol", "load_path_tol", "active_tol"):
             _finite(name, getattr(self, name), 0.0, open_low=True)
 

@@ -41,15 +41,16 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from . import checks
+from . import checks, resolution
 from .loading import Jump, Ramp, follow
 from .minimise import LINEAR_SOLVERS, minimise
 from .model import Model, near_domain_bound
 from .path import PathOptions, PathProblem, SpecialPoint
 from .ramp import FINAL, NEWTON, STEPS, run_ramp
-from .scene import Scene
+from .scene import Scene, SceneError, check_pressure
 from .stability import STABILITY, stability_verdict, stability_verdicts
 from .threads import single_threaded
+from .validity import Finding, assess
 
 __all__ = [
     "SolverOptions",
@@ -65,6 +66,12 @@ __all__ = [
 ]
 
 
+#: Upper bounds of the counts in SolverOptions (IPOPT keeps its iteration limit in a 32-bit int,
+#: and each count multiplies the work of one solve).
+MAX_ITER_LIMIT = 100_000
+MAX_SAMPLES_LIMIT = 1_000
+
+
 class SolverOptionsError(ValueError):
     """A solver option that is not allowed: the message names the option, the value and what is allowed."""
 
@@ -73,8 +80,8 @@ class EquilibriumError(RuntimeError):
     """A solve that failed or did not reach a stable equilibrium (or an unreachable target)."""
 
 
-def _check_int(name: str, value: Any, low: int) -> int:
-    return checks.whole(name, value, low, SolverOptionsError)
+def _check_int(name: str, value: Any, low: int, high: int | None = None, why: str = "") -> int:
+    return checks.whole(name, value, low, SolverOptionsError, high, why)
 
 
 def _check_pos(name: str, value: Any, high: float | None = None) -> float:
@@ -124,7 +131,7 @@ class SolverOptions:
     >>> SolverOptions(max_iter=0)
     Traceback (most recent call last):
     ...
-    esba.equilibrium.SolverOptionsError: max_iter=0: expected a whole number >= 1
+    esba.equilibrium.SolverOptionsError: max_iter=0: expected a whole number from 1 to 100000 (an equilibrium takes tens of iterations; IPOPT counts in a 32-bit int)
     """
 
     tol: float = 1e-10
@@ -140,7 +147,7 @@ class SolverOptions:
 
     def __post_init__(self) -> None:
         _check_pos("tol", self.tol, 1.0)
-        _check_int("max_iter", self.max_iter, 1)
+        _check_int("max_iter", self.max_iter, 1, MAX_ITER_LIMIT, "an equilibrium takes tens of iterations; IPOPT counts in a 32-bit int")
         if self.linear_solver not in LINEAR_SOLVERS:
             raise SolverOptionsError(f"linear_solver={self.linear_solver!r}: allowed are {', '.join(LINEAR_SOLVERS)}")
         for name in ("continuation", "polish", "fast"):
@@ -150,7 +157,7 @@ class SolverOptions:
             raise SolverOptionsError(f"path={self.path!r}: expected a PathOptions")
         _check_pos("stationarity_tol", self.stationarity_tol)
         _check_pos("critical_tol", self.critical_tol, 1.0)
-        _check_int("samples_per_segment", self.samples_per_segment, 1)
+        _check_int("samples_per_segment", self.samples_per_segment, 1, MAX_SAMPLES_LIMIT)
 
 
 DEFAULT_OPTIONS = SolverOptions()
@@ -217,6 +224,10 @@ class Equilibrium:
         Branch points the load history went through along a stable crossing branch (buckling).
     certificate : str
         What certified the returned state: IPOPT's status from the path's end, and how far it moved.
+    validity : tuple of Finding
+        Where the result leaves the range the paper's model describes (strains past 1, a bend past
+        360 deg, the tip behind the base, loads far outside the paper's): see :mod:`esba.validity`.
+        Empty when it is inside; a result can be ``ok`` and still outside.
     """
 
     scene: Scene
@@ -240,6 +251,7 @@ class Equilibrium:
     jumps: tuple[Jump, ...] = ()
     switches: tuple[SpecialPoint, ...] = ()
     certificate: str = ""
+    validity: tuple[Finding, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -299,6 +311,7 @@ class Equilibrium:
                 for b in self.switches
             ],
             "certificate": self.certificate,
+            "validity": [f.to_dict() for f in self.validity],
             "iterations": self.iterations,
             "steps": self.steps,
             "gradient_norm": self.gradient_norm,
@@ -345,10 +358,13 @@ def pressure_for_angle(scene: Scene, angle_deg: float | None = None) -> float:
     >>> round(pressure_for_angle(Scene(), 90.0), 7)
     0.1238739
     """
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene={scene!r}: expected an esba.scene.Scene")
     if angle_deg is None:
         angle_deg = scene.target_angle_deg
     if angle_deg is None:
         raise EquilibriumError("pressure_for_angle needs angle_deg (the scene gives a pressure, not a target angle)")
+    checks.finite("target_angle_deg", angle_deg, SceneError)
     angle = math.radians(float(angle_deg))
     model = scene.model()
     theta = np.full(scene.segments, angle / scene.segments)
@@ -364,6 +380,29 @@ def pressure_for_angle(scene: Scene, angle_deg: float | None = None) -> float:
 
 # ---------------------------------------------------------------------------------------------
 # solving
+
+
+def _check_inputs(scene: Any, pressure: Any, options: Any) -> SolverOptions:
+    """The checks the command line makes, for the Python API: the scene, a pressure, the options."""
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene={scene!r}: expected an esba.scene.Scene")
+    if pressure is not None:
+        check_pressure(pressure)
+    options = DEFAULT_OPTIONS if options is None else options
+    if not isinstance(options, SolverOptions):
+        raise SolverOptionsError(f"options={options!r}: expected a SolverOptions")
+    return options
+
+
+def _angles(name: str, values: Any, n: int) -> np.ndarray:
+    """``values`` as n finite angles (rad), else :class:`SolverOptionsError` naming ``name``."""
+    try:
+        theta = np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise SolverOptionsError(f"{name}={values!r}: expected {n} finite angles (rad)") from None
+    if theta.shape != (n,) or not np.all(np.isfinite(theta)):
+        raise SolverOptionsError(f"{name} has shape {theta.shape}: expected {n} finite angles (rad)")
+    return theta
 
 
 def _resolve_pressure(scene: Scene, pressure: float | None) -> tuple[float, np.ndarray | None]:
@@ -408,12 +447,11 @@ def evaluate(
     >>> r.stability, r.ok
     ('unstable', False)
     """
-    options = DEFAULT_OPTIONS if options is None else options
+    options = _check_inputs(scene, pressure, options)
     model = scene.model()
     pressure, _ = _resolve_pressure(scene, pressure)
-    theta = np.asarray(theta, dtype=float).ravel()
-    if theta.shape != (scene.segments,) or not np.all(np.isfinite(theta)):
-        raise SolverOptionsError(f"theta has shape {theta.shape}: expected {scene.segments} finite angles (rad)")
+    resolution.check_resolvable(scene, pressure, options.stationarity_tol, DEFAULT_OPTIONS.stationarity_tol)
+    theta = _angles("theta", theta, scene.segments)
     full = scene.parameters(pressure)
     lbx = model.lower_bounds(full)
     pv = model.param_vector(full)
@@ -421,9 +459,13 @@ def evaluate(
         raise EquilibriumError(f"theta={np.degrees(theta).round(3).tolist()} deg lies outside the model's domain (Eq. 10)")
     state = model.state(theta, pv)
     gnorm = float(np.max(np.abs(state["gradient"])))
-    eig = np.sort(np.linalg.eigvalsh(state["hessian"]))
+    finite = bool(np.all(np.isfinite(state["hessian"])) and np.isfinite(gnorm) and np.isfinite(state["energy"]))
+    eig = np.sort(np.linalg.eigvalsh(state["hessian"])) if finite else np.full(scene.segments, np.nan)
     verdict = stability_verdict(eig, options.critical_tol)
-    if success and near_domain_bound(theta, lbx):
+    if not finite:
+        success, status = False, "Not_Finite"
+        message = "the model's energy, gradient or Hessian is not finite at the result (overflow): not an equilibrium"
+    elif success and near_domain_bound(theta, lbx):
         success, status = False, "At_Bound"
         message = "the solve stopped on the model's domain boundary (Eq. 10: the chamber closes): not an equilibrium"
     elif success and gnorm > options.stationarity_tol:
@@ -454,6 +496,7 @@ def evaluate(
         jumps=tuple(jumps),
         switches=tuple(switches),
         certificate=certificate,
+        validity=assess(scene, theta, pressure, state["tip"]),
     )
 
 
@@ -492,6 +535,16 @@ def solve(
         The unloaded equilibrium at this pressure (rad), when it is already known (a stiffness
         study solves several payloads at one pressure): the load ramp starts there.
 
+    Raises
+    ------
+    SceneError
+        for a scene that is not a :class:`~esba.scene.Scene`, a bad ``pressure`` (the same
+        messages as the scene's own field), or scales the solver cannot resolve to its
+        tolerances (a Young's modulus so small that every angle passes as an equilibrium, a
+        pressure or payload whose moments exceed double precision), all checked before solving.
+    SolverOptionsError
+        for ``options`` that are not a :class:`SolverOptions`, or a bad ``theta0`` or ``unloaded``.
+
     Returns
     -------
     Equilibrium
@@ -502,17 +555,18 @@ def solve(
         branch ends at a fold) is followed as the actuator would, and recorded in ``jumps`` and
         ``notes``; so is buckling at a branch point (``switches``).
     """
-    options = DEFAULT_OPTIONS if options is None else options
-    if not isinstance(options, SolverOptions):
-        raise SolverOptionsError(f"options={options!r}: expected a SolverOptions")
+    options = _check_inputs(scene, pressure, options)
+    if theta0 is not None:
+        theta0 = _angles("theta0", theta0, scene.segments)
+    if unloaded is not None:
+        unloaded = _angles("unloaded", unloaded, scene.segments)
     model = scene.model()  # loaded (or generated) before the clock starts
     t_start = time.perf_counter()
     n = scene.segments
     pressure, known_unloaded = _resolve_pressure(scene, pressure)
+    resolution.check_resolvable(scene, pressure, options.stationarity_tol, DEFAULT_OPTIONS.stationarity_tol)
     if unloaded is not None:
-        known_unloaded = np.asarray(unloaded, dtype=float).ravel()
-        if known_unloaded.shape != (n,) or not np.all(np.isfinite(known_unloaded)):
-            raise SolverOptionsError(f"unloaded has shape {known_unloaded.shape}: expected {n} finite angles (rad)")
+        known_unloaded = unloaded
     full = scene.parameters(pressure)
     lbx = model.lower_bounds(full)
     pv_full = model.param_vector(full)
@@ -522,9 +576,7 @@ def solve(
     ramps: list[tuple[str, Ramp]] = []
     fast_ramps = 0
     if theta0 is not None:
-        theta = np.asarray(theta0, dtype=float).ravel()
-        if theta.shape != (n,) or not np.all(np.isfinite(theta)):
-            raise SolverOptionsError(f"theta0 has shape {theta.shape}: expected {n} finite angles (rad)")
+        theta = theta0
     elif not options.continuation:
         theta = known_unloaded if known_unloaded is not None else np.zeros(n)
     else:

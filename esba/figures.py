@@ -46,6 +46,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .equilibrium import Equilibrium, EquilibriumError, pressure_for_angle, solve
+from .outputs import check_folder, figures_dir
 from .plots import draw_payloads, draw_shape, new_figure, save_figure, setup_frame_axes
 from .scene import MAIN_JOB, Payload, Scene
 from .stiffness import PAPER_FORCES, SecantStiffness, secant_stiffness
@@ -65,10 +66,12 @@ __all__ = [
     "figure_10",
     "figure_11",
     "registry",
+    "check_names",
     "write_all",
 ]
 
-#: Where ``esba figures`` writes by default.
+#: The repository's figures folder (``esba figures`` writes there when run inside a checkout; see
+#: :mod:`esba.outputs` for the default elsewhere).
 DEFAULT_OUT = Path(__file__).resolve().parent.parent / "docs" / "figures"
 
 #: Fibre winding angles of Fig. 7b, degrees (10 is Table 1's).
@@ -406,9 +409,10 @@ def figure_11(out_dir: str | Path) -> Path:
         f_min, s_min = fine.forces[k_min], fine.stiffness_n_per_m[k_min]
         ax.plot([f_min], [s_min], "v", color="C2", ms=6, label=f"smallest: {s_min:.2f} N/m at {f_min:.3g} N")
     k0 = fine.tangent.along(90.0)
-    ax.plot([0.0], [k0], "o", mfc="white", mec="C3", ms=6, label=f"tangent stiffness at 0 N: {k0:.1f} N/m")
-    ax.set_xlim(0.0, 2.2)
-    ax.set_ylim(0.0, None)
+    ax.plot([0.0], [k0], "o", mfc="white", mec="C3", ms=6, clip_on=False, zorder=5, label=f"tangent stiffness at 0 N: {k0:.1f} N/m")
+    # room around the marker at F = 0 and above the largest value, so that nothing is cut off
+    ax.set_xlim(-0.05, 2.2)
+    ax.set_ylim(0.0, 1.1 * max(k0, float(np.max(fine.stiffness_n_per_m))))
     ax.set_xlabel("horizontal tip payload F (N)")
     ax.set_ylabel("stiffness K (N/m)")
     ax.set_title(
@@ -457,13 +461,25 @@ def registry() -> dict[str, Callable[[str | Path], Path]]:
     return out
 
 
-def write_all(out_dir: str | Path = DEFAULT_OUT, names: Sequence[str] | None = None) -> dict[str, Path]:
-    """Write figures into ``out_dir`` (created if missing).
+def check_names(names: Sequence[str] | None) -> list[str] | None:
+    """``names`` without repeats when every one is registered (None: all), else :class:`FigureError`."""
+    if names is None:
+        return None
+    figures = registry()
+    for name in names:
+        if name not in figures:
+            raise FigureError(f"unknown figure {name!r}: allowed are {', '.join(figures)}")
+    return list(dict.fromkeys(names))
+
+
+def write_all(out_dir: str | Path | None = None, names: Sequence[str] | None = None) -> dict[str, Path]:
+    """Write figures into ``out_dir`` (created if its parent exists).
 
     Parameters
     ----------
-    out_dir : str or Path
-        Folder for the PNG files.
+    out_dir : str or Path, optional
+        Folder for the PNG files (default :func:`esba.outputs.figures_dir`: ``docs/figures/`` in a
+        checkout, else ``./figures/``).
     names : sequence of str, optional
         Which figures (default: all of :func:`registry`), written in the order given.
 
@@ -480,10 +496,6 @@ def write_all(out_dir: str | Path = DEFAULT_OUT, names: Sequence[str] | None = N
         when a solve behind a figure fails or is not stable.
     """
     figures = registry()
-    chosen = list(figures) if names is None else list(dict.fromkeys(names))
-    for name in chosen:
-        if name not in figures:
-            raise FigureError(f"unknown figure {name!r}: allowed are {', '.join(figures)}")
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    chosen = check_names(names) or list(figures)
+    out = check_folder(figures_dir() if out_dir is None else out_dir, "out_dir")
     return {name: figures[name](out) for name in chosen}

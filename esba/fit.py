@@ -60,7 +60,7 @@ import casadi as ca
 import numpy as np
 from scipy import stats
 
-from . import checks
+from . import checks, jsonsafe
 from .eqnlp import EquilibriumNLP, model_gradient
 from .equilibrium import EquilibriumError, SolverOptions, solve, stability_verdict
 from .measurements import QUANTITIES, Measurement, MeasurementError, MeasurementSet
@@ -389,7 +389,7 @@ class FitResult:
 
     def to_dict(self) -> dict:
         """JSON-ready form (``esba fit --json``)."""
-        return checks.json_ready({
+        return jsonsafe.clean({
             "status": self.status,
             "message": self.message,
             "source": self.data.source,
@@ -657,7 +657,7 @@ class Prediction:
 
     def to_dict(self) -> dict:
         """JSON-ready form."""
-        return checks.json_ready(dataclasses.asdict(self) | {"error": self.error})
+        return jsonsafe.clean(dataclasses.asdict(self) | {"error": self.error})
 
 
 _ROW_FUNCTIONS: dict[tuple, _Row] = {}

@@ -76,6 +76,7 @@ def ipopt_solver(model: Model, tol: float = 1e-10, max_iter: int = 200, linear_s
         "calc_lam_p": False,  # no parametric sensitivities (the payload point s_k is not smooth there)
         "ipopt.print_level": 0,
         "ipopt.sb": "yes",
+        "show_eval_warnings": False,  # a NaN at a trial point is IPOPT's to handle, not a flood on stderr
         "ipopt.tol": tol,
         "ipopt.max_iter": max_iter,
         "ipopt.linear_solver": linear_solver,

@@ -80,13 +80,16 @@ def draw_payloads(ax: Axes, result: Equilibrium, length_mm: float = 25.0, color:
         om = math.radians(p.angle_deg)
         scale = length_mm * p.force / biggest
         dx, dy = scale * math.cos(om), -scale * math.sin(om)
+        # drawn above the shapes and markers, its head ending short of the point so that the
+        # markers at the tip (segment ends, measured tips) do not hide it
         ax.annotate(
             "",
             xy=(pt[1], pt[0]),
             xytext=(pt[1] - dy, pt[0] - dx),
-            arrowprops={"arrowstyle": "-|>", "color": color, "lw": 1.6},
+            arrowprops={"arrowstyle": "-|>,head_length=0.8,head_width=0.4", "color": color, "lw": 2.0, "shrinkA": 0, "shrinkB": 6},
+            zorder=10,
         )
-        ax.annotate(f"{p.force:g} N", xy=(pt[1] - dy, pt[0] - dx), color=color, fontsize=8, ha="center", va="bottom")
+        ax.annotate(f"{p.force:g} N", xy=(pt[1] - dy, pt[0] - dx), color=color, fontsize=8, ha="center", va="bottom", zorder=10)
 
 
 def draw_tip_ellipse(ax: Axes, centre: Sequence[float], cov: np.ndarray, level: float = 0.95, label: str | None = None, **style) -> None:

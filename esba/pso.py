@@ -73,12 +73,20 @@ __all__ = ["PSOOptions", "PSOOptionsError", "PSOHistory", "PSOResult", "minimize
 CLERC_KENNEDY = (0.7298, 1.49618, 1.49618)
 
 
+#: The most objective evaluations a run may ask for, particles x (iterations + 1): the swarm's
+#: history keeps every position, and each evaluation of the ESBA objective solves equilibria
+#: (the paper's run is 30 x 51 = 1530).
+MAX_EVALUATIONS = 1_000_000
+#: Upper bound of the rejection-sampling rounds of the initial swarm.
+MAX_TRIES = 1_000_000
+
+
 class PSOOptionsError(ValueError):
     """A PSO setting that is not allowed: the message names the setting, the value and what is allowed."""
 
 
-def _whole(name: str, value, low: int) -> int:
-    return checks.whole(name, value, low, PSOOptionsError)
+def _whole(name: str, value, low: int, high: int | None = None, why: str = "") -> int:
+    return checks.whole(name, value, low, PSOOptionsError, high, why)
 
 
 def _real(name: str, value, low: float, high: float | None = None, *, open_low: bool = False) -> float:
@@ -103,7 +111,8 @@ class PSOOptions:
     particles : int
         Swarm size (the paper: 30), >= 2.
     iterations : int
-        Velocity-and-position updates after the initial swarm (the paper: 50), >= 1.
+        Velocity-and-position updates after the initial swarm (the paper: 50), >= 1; particles x
+        (iterations + 1) is at most :data:`MAX_EVALUATIONS`.
     inertia : float
         w, 0 <= w < 1 (default Clerc & Kennedy's 0.7298).
     cognitive : float
@@ -137,15 +146,21 @@ class PSOOptions:
     max_tries: int = 1000
 
     def __post_init__(self) -> None:
-        _whole("particles", self.particles, 2)
-        _whole("iterations", self.iterations, 1)
+        why = f"particles x (iterations + 1) is at most {MAX_EVALUATIONS} evaluations"
+        _whole("particles", self.particles, 2, MAX_EVALUATIONS // 2, why)
+        _whole("iterations", self.iterations, 1, MAX_EVALUATIONS // 2 - 1, why)
+        if self.particles * (self.iterations + 1) > MAX_EVALUATIONS:
+            raise PSOOptionsError(
+                f"particles={self.particles} with iterations={self.iterations}: {self.particles * (self.iterations + 1)} "
+                f"evaluations, at most {MAX_EVALUATIONS} (the swarm's history keeps every position; the paper's run is 30 x 51)"
+            )
         _real("inertia", self.inertia, 0.0, 1.0)
         _real("cognitive", self.cognitive, 0.0)
         _real("social", self.social, 0.0)
         _real("max_velocity", self.max_velocity, 0.0, open_low=True)
         if self.seed is not None:
             _whole("seed", self.seed, 0)
-        _whole("max_tries", self.max_tries, 1)
+        _whole("max_tries", self.max_tries, 1, MAX_TRIES)
 
 
 @dataclass(frozen=True, eq=False)

@@ -14,7 +14,7 @@ radians. Units: mm, N, MPa, kg, m/s^2.
 
 A scene file is TOML; every key is optional::
 
-    segments = 3              # n >= 1
+    segments = 3              # n, 1 to 256
     variant = "paper"         # or "printed"
     gravity = false
     fibres = true
@@ -51,7 +51,7 @@ Examples
 >>> Scene(segments=0)
 Traceback (most recent call last):
 ...
-esba.scene.SceneError: segments=0: expected a whole number >= 1
+esba.scene.SceneError: segments=0: expected a whole number from 1 to 256 (the finest model of the accuracy study; larger n costs n^2 memory and minutes to generate for no accuracy)
 """
 
 from __future__ import annotations
@@ -73,7 +73,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict"]
+__all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure"]
 
 #: Standard gravity, m/s^2.
 STANDARD_GRAVITY = 9.81
@@ -92,6 +92,20 @@ def _positive(where: str, value: Any) -> float:
     if value <= 0:
         raise SceneError(f"{where}={value:g}: expected a number > 0")
     return value
+
+
+def check_pressure(value: Any, where: str = "pressure") -> float:
+    """A pressure in MPa: a finite number >= 0 (the check of :attr:`Scene.pressure`, for every entry point).
+
+    >>> check_pressure(float("inf"))
+    Traceback (most recent call last):
+    ...
+    esba.scene.SceneError: pressure=inf: expected a finite number
+    """
+    p = _number(where, value)
+    if p < 0:
+        raise SceneError(f"{where}={p:g}: expected a pressure >= 0 MPa")
+    return p
 
 
 def _flag(where: str, value: Any) -> bool:
@@ -236,7 +250,7 @@ class Scene:
     fibres : bool
         Include the fibre restraint (Eq. 18).
     segments : int
-        Segment count n >= 1.
+        Segment count n, 1 to :data:`esba.checks.MAX_SEGMENTS` (256).
     variant : str
         ``"paper"`` (default) or ``"printed"`` (see :mod:`derive.effects`).
     """
@@ -259,10 +273,7 @@ class Scene:
                 f"pressure={self.pressure!r} and target_angle_deg={self.target_angle_deg!r}: give one of the two, not both"
             )
         if self.pressure is not None:
-            p = _number("pressure", self.pressure)
-            if p < 0:
-                raise SceneError(f"pressure={p:g}: expected a pressure >= 0 MPa")
-            object.__setattr__(self, "pressure", p)
+            object.__setattr__(self, "pressure", check_pressure(self.pressure))
         else:
             target = 90.0 if self.target_angle_deg is None else self.target_angle_deg
             target = _number("target_angle_deg", target)
@@ -278,12 +289,7 @@ class Scene:
         object.__setattr__(self, "gravity", _flag("gravity", self.gravity))
         object.__setattr__(self, "fibres", _flag("fibres", self.fibres))
         object.__setattr__(self, "g", _positive("g", self.g))
-        n = self.segments
-        if isinstance(n, bool) or not isinstance(n, int) and not (isinstance(n, float) and n.is_integer()):
-            raise SceneError(f"segments={n!r}: expected a whole number >= 1")
-        if int(n) < 1:
-            raise SceneError(f"segments={n}: expected a whole number >= 1")
-        object.__setattr__(self, "segments", int(n))
+        object.__setattr__(self, "segments", checks.segments(self.segments, SceneError))
         if self.variant not in VARIANTS:
             raise SceneError(f"variant={self.variant!r}: allowed are {', '.join(VARIANTS)}")
         try:

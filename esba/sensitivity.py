@@ -59,7 +59,7 @@ from typing import Any, Mapping, Sequence
 import casadi as ca
 import numpy as np
 
-from . import checks
+from . import checks, jsonsafe
 from .eqnlp import unloaded_pressure
 from .equilibrium import Equilibrium
 from .model import Model
@@ -402,7 +402,7 @@ class Sensitivities:
 
     def to_dict(self) -> dict:
         """JSON-ready form (``esba solve --sensitivities --json``): per unit of each parameter; None unless ok."""
-        out: dict[str, Any] = {"status": self.status, "message": self.message, "eigenvalue_ratio": checks.json_ready(self.eigenvalue_ratio)}
+        out: dict[str, Any] = {"status": self.status, "message": self.message, "eigenvalue_ratio": jsonsafe.clean(self.eigenvalue_ratio)}
         rows = {}
         ok = self.ok
         for j, p in enumerate(self.parameters):
@@ -417,7 +417,7 @@ class Sensitivities:
                 "fold_distance": float(fd) if ok and math.isfinite(fd) else None,
             }
         out["parameters"] = rows
-        return checks.json_ready(out)
+        return jsonsafe.clean(out)
 
 
 def sensitivities(result: Equilibrium, parameters: Sequence[str] | None = None, options: SensitivityOptions | None = None) -> Sensitivities:

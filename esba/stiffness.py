@@ -31,6 +31,7 @@ from typing import Sequence
 import casadi as ca
 import numpy as np
 
+from . import checks
 from .equilibrium import (
     DEFAULT_OPTIONS,
     Equilibrium,
@@ -40,7 +41,7 @@ from .equilibrium import (
     solve,
 )
 from .model import Model
-from .scene import Payload, Scene, SceneError
+from .scene import Payload, Scene, SceneError, check_pressure
 from .threads import single_threaded
 
 __all__ = [
@@ -57,6 +58,9 @@ __all__ = [
 
 #: The payloads of the paper's stiffness study (Section 4.4.3), N.
 PAPER_FORCES: tuple[float, ...] = (0.5, 1.0, 2.0)
+
+#: The most payloads one stiffness call solves for (one equilibrium each).
+MAX_FORCES = 1_000
 
 _JACOBIANS: dict[str, ca.Function] = {}
 
@@ -198,7 +202,16 @@ class SecantStiffness:
             "segments": self.initial.scene.segments,
             "variant": self.initial.scene.variant,
             "messages": [r.message for r in (self.initial, *self.loaded) if r.message],
+            "validity": self.validity(),
         }
+
+    def validity(self) -> list[dict]:
+        """The validity findings of every solve (:mod:`esba.validity`), each with its payload in N."""
+        out = []
+        for force, r in zip((0.0, *self.forces), (self.initial, *self.loaded)):
+            for f in r.validity:
+                out.append({**f.to_dict(), "payload_n": force, "message": f"at {force:g} N: {f.message}"})
+        return out
 
 
 @single_threaded
@@ -230,9 +243,21 @@ def secant_stiffness(
     SecantStiffness
         Check :attr:`SecantStiffness.ok`.
     """
-    forces = tuple(float(f) for f in forces)
-    if not forces or any(not math.isfinite(f) or f <= 0 for f in forces):
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene={scene!r}: expected an esba.scene.Scene")
+    try:
+        forces = tuple(checks.finite("forces", f, SceneError) for f in forces)
+    except TypeError:
+        raise SceneError(f"forces={forces!r}: expected a list of payloads in N") from None
+    except SceneError:
+        raise SceneError(f"forces={list(forces)!r}: expected one or more finite payloads > 0 N") from None
+    if not forces or any(f <= 0 for f in forces):
         raise SceneError(f"forces={list(forces)!r}: expected one or more payloads > 0 N")
+    if len(forces) > MAX_FORCES:
+        raise SceneError(f"forces: {len(forces)} given, at most {MAX_FORCES} (one solve each)")
+    checks.finite("angle_deg", angle_deg, SceneError)
+    if pressure is not None:
+        check_pressure(pressure)
     options = DEFAULT_OPTIONS if options is None else options
     base = scene.replace(payloads=(Payload(0.0, angle_deg, 1.0),))
     if pressure is None:
@@ -347,8 +372,17 @@ def pressure_for_target(
     >>> t.ok, round(t.equilibrium.total_angle_deg, 6)
     (True, 45.0)
     """
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene={scene!r}: expected an esba.scene.Scene")
     if (total_angle_deg is None) == (tip_mm is None):
         raise SceneError("pressure_for_target: give one of total_angle_deg or tip_mm")
+    if total_angle_deg is not None:
+        checks.finite("total_angle_deg", total_angle_deg, SceneError)
+    if tip_mm is not None and (not isinstance(tip_mm, (list, tuple, np.ndarray)) or len(tip_mm) != 2):
+        raise SceneError(f"tip_mm={tip_mm!r}: expected [x, y] in mm (one may be None, not both)")
+    for name, value in (("tolerance", tolerance), ("max_pressure", max_pressure)):
+        if checks.finite(name, value, SceneError) <= 0:
+            raise SceneError(f"{name}={value!r}: expected a number > 0")
     options = DEFAULT_OPTIONS if options is None else options
     model = scene.model()
     n, names = model.n, model.parameters
@@ -390,6 +424,7 @@ def pressure_for_target(
             "calc_lam_p": False,
             "ipopt.print_level": 0,
             "ipopt.sb": "yes",
+            "show_eval_warnings": False,
             "ipopt.tol": options.tol,
             "ipopt.max_iter": max(options.max_iter, 500),
             "ipopt.linear_solver": options.linear_solver,

@@ -29,7 +29,6 @@ import csv
 import dataclasses
 import io
 import itertools
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,16 +36,23 @@ from typing import Any
 
 import numpy as np
 
-from .batch import BatchOptions, BatchResult, solve_arrays
-from .equilibrium import solve
+from . import checks, jsonsafe, resolution
+from .batch import BatchOptions, BatchResult, check_size, solve_arrays
+from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, pressure_for_angle, solve
 from .loading import follow
 from .path import PathOptions, PathProblem
 from .scene import Payload, Scene, SceneError
+from .validity import Finding, assess_arrays
 
 __all__ = ["AXES", "SweepResult", "LoadPath", "sweep", "load_path", "fig12", "sweep_figure", "parse_values", "SweepError"]
 
 #: The axes of a sweep, in the order of the grid's dimensions, with their units.
 AXES: dict[str, str] = {"pressure": "MPa", "payload": "N", "payload_angle": "deg", "r2": "mm", "d": "mm"}
+
+
+#: The most points a sweep grid may have: its rows are kept and written whole (about 1 kB each in
+#: JSON); a larger study is a set of smaller sweeps.
+MAX_POINTS = 200_000
 
 
 class SweepError(ValueError):
@@ -65,23 +71,24 @@ def parse_values(text: str) -> list[float]:
     >>> parse_values("1:2")
     Traceback (most recent call last):
     ...
-    esba.sweep.SweepError: '1:2': expected start:stop:count (count >= 1) or a comma-separated list of numbers
+    esba.sweep.SweepError: '1:2': expected start:stop:count (count from 1 to 200000) or a comma-separated list of numbers
     """
-    msg = f"{text!r}: expected start:stop:count (count >= 1) or a comma-separated list of numbers"
+    msg = f"{text!r}: expected start:stop:count (count from 1 to {MAX_POINTS}) or a comma-separated list of numbers"
     try:
         if ":" in text:
             parts = text.split(":")
             if len(parts) != 3:
                 raise SweepError(msg)
-            a, b, k = float(parts[0]), float(parts[1]), int(parts[2])
-            if k < 1:
+            a, b = checks.number("start", parts[0]), checks.number("stop", parts[1])
+            k = checks.whole_text("count", parts[2])
+            if not 1 <= k <= MAX_POINTS:
                 raise SweepError(msg)
             values = [a] if k == 1 else [float(v) for v in np.linspace(a, b, k)]
         else:
-            values = [float(v) for v in text.split(",") if v.strip()]
+            values = [checks.number("value", v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise SweepError(msg) from None
-    if not values or not all(math.isfinite(v) for v in values):
+    if not values or not all(math.isfinite(v) for v in values) or len(values) > MAX_POINTS:
         raise SweepError(msg)
     return [round(v, 12) for v in values]
 
@@ -105,6 +112,8 @@ class SweepResult:
         Why a point is not ok (empty when it is).
     notes : tuple of tuple of str
         What happened on a point's load path (a jump, noted by the IPOPT fallback).
+    validity : tuple of tuple of Finding
+        Where each point leaves the range the paper's model describes (:mod:`esba.validity`).
     batch : BatchResult or None
         The solves of the feasible points (None when there is none).
     """
@@ -121,6 +130,7 @@ class SweepResult:
     method: np.ndarray
     batch: BatchResult | None = field(repr=False)
     notes: tuple[tuple[str, ...], ...] = ()
+    validity: tuple[tuple[Finding, ...], ...] = ()
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -152,13 +162,18 @@ class SweepResult:
         return np.asarray(values).reshape(self.shape)
 
     def rows(self) -> list[dict[str, Any]]:
-        """One dict per point: the axes, status, angles (degrees), tip (mm), solver facts."""
+        """One dict per point: the axes, status, angles (degrees), tip (mm), solver facts, validity.
+
+        Values that do not exist (an infeasible point's angles, the pressure of an infeasible
+        point swept by target angle) are None, never NaN.
+        """
         out = []
         n = self.theta.shape[1]
         for i in range(len(self.status)):
             feasible = self.status[i] != "infeasible"
+            pressure = float(self.pressure[i]) if feasible else float(self.points["pressure"][i])
             row: dict[str, Any] = {
-                "pressure_mpa": float(self.pressure[i]) if feasible else float(self.points["pressure"][i]),
+                "pressure_mpa": pressure if math.isfinite(pressure) else None,
                 "payload_n": float(self.points["payload"][i]),
                 "payload_angle_deg": float(self.points["payload_angle"][i]),
                 "r2_mm": float(self.points["r2"][i]),
@@ -174,6 +189,7 @@ class SweepResult:
                 row[f"theta{k + 1}_deg"] = float(math.degrees(self.theta[i, k])) if feasible else None
             row["message"] = self.messages[i]
             row["notes"] = " | ".join(self.notes[i])
+            row["validity"] = " | ".join(f.message for f in self.validity[i]) if self.validity else ""
             out.append(row)
         return out
 
@@ -195,21 +211,21 @@ class SweepResult:
             "segments": self.base.segments,
             "axes": {k: {"values": v, "unit": AXES[k]} for k, v in self.axes.items()},
             "counts": counts,
+            "outside_model_range": sum(1 for v in self.validity if v),
             "backend": self.batch.backend if self.batch is not None else "",
             "timings_s": dict(self.batch.timings) if self.batch is not None else {},
             "rows": self.rows(),
         }
 
     def write(self, path: str | Path) -> Path:
-        """Write CSV (``.csv``) or JSON (``.json``) by the file's suffix."""
+        """Write CSV (``.csv``) or JSON (``.json``, no NaN) by the file's suffix; the folder must exist."""
         path = Path(path)
         if path.suffix.lower() == ".csv":
             text = self.to_csv()
         elif path.suffix.lower() == ".json":
-            text = json.dumps(self.to_dict(), indent=1)
+            text = jsonsafe.dumps(self.to_dict(), indent=1)
         else:
             raise SweepError(f"output {str(path)!r}: expected a .csv or .json file")
-        path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(text, encoding="utf-8")
         return path
 
@@ -272,8 +288,12 @@ def sweep(
         "r2": base.actuator.r2,
         "d": base.actuator.d,
     }
-    grid = list(itertools.product(*axes.values())) if axes else [()]
-    size = len(grid)
+    size = math.prod(len(v) for v in axes.values())
+    if size > MAX_POINTS:
+        counts = " x ".join(f"{len(v)} {k}" for k, v in axes.items())
+        raise SweepError(f"the grid has {size} points ({counts}): at most {MAX_POINTS}; sweep fewer values, or split the grid")
+    check_size(size, base.segments, "the sweep", SweepError)
+    grid = list(itertools.product(*axes.values()))
     cols = {k: np.full(size, float(fixed[k])) for k in AXES}
     for j, name in enumerate(axes):
         cols[name] = np.array([pt[j] for pt in grid])
@@ -300,6 +320,21 @@ def sweep(
         if key in bad:
             status[i], messages[i] = "infeasible", bad[key]
     feasible = np.where(status != "infeasible")[0]
+    if len(feasible):  # scales the solver cannot resolve are refused before the batch starts
+        strongest = float(np.max(cols["payload"][feasible])) if payload_swept else 0.0
+        for r2_, d_ in {(float(cols["r2"][i]), float(cols["d"][i])) for i in feasible}:
+            extreme = base.replace(r2=r2_, d=d_)
+            if payload_swept:
+                extreme = extreme.replace(payloads=(Payload(strongest, first.angle_deg, first.at),))
+            if not angle_mode:
+                extreme = extreme.replace(pressure=float(np.max(cols["pressure"][feasible])))
+                resolution.check_resolvable(extreme, extreme.pressure, DEFAULT_OPTIONS.stationarity_tol)
+                continue
+            try:
+                top = pressure_for_angle(extreme)
+            except EquilibriumError:  # that design's points are reported not ok by the batch
+                continue
+            resolution.check_resolvable(extreme, top, DEFAULT_OPTIONS.stationarity_tol)
 
     n = base.segments
     theta = np.full((size, n), np.nan)
@@ -331,6 +366,15 @@ def sweep(
             notes[i] = batch.notes[j]
             if not batch.ok[j]:
                 status[i], messages[i] = "not ok", batch.messages[j]
+    validity: list[tuple[Finding, ...]] = [()] * size
+    if len(feasible):
+        a = base.actuator
+        found = assess_arrays(
+            n, a.L, a.r1, cols["r2"][feasible], cols["d"][feasible], theta[feasible], tip[feasible, 0], pres[feasible],
+            cols["payload"][feasible] if payload_swept else max((p.force for p in base.payloads), default=0.0),
+        )
+        for j, i in enumerate(feasible):
+            validity[i] = found[j]
     return SweepResult(
         base=base,
         axes=axes,
@@ -344,6 +388,7 @@ def sweep(
         method=method.astype(str),
         batch=batch,
         notes=tuple(notes),
+        validity=tuple(validity),
     )
 
 

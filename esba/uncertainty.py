@@ -50,7 +50,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from . import checks
+from . import checks, jsonsafe
 from .batch import AUTO_COMPILE_MAX_N, BatchOptions, compiler, solve_arrays
 from .equilibrium import Equilibrium
 from .scene import Scene, SceneError
@@ -149,7 +149,7 @@ class Sigma:
 
     def to_dict(self) -> dict:
         """JSON-ready form."""
-        return checks.json_ready(
+        return jsonsafe.clean(
             {"name": self.name, "unit": self.unit, "nominal": self.nominal, "sigma": self.sigma,
              "distribution": self.distribution, "half_width": self.half_width, "given": self.given}
         )
@@ -356,7 +356,7 @@ class Propagation:
         """JSON-ready form (None for every number when there are none)."""
         num = self.has_numbers
         axes, angle = self.ellipse() if num else (None, None)
-        return checks.json_ready({
+        return jsonsafe.clean({
             "status": self.status,
             "message": self.message,
             "sigmas": [s.to_dict() for s in self.sigmas],
@@ -601,7 +601,7 @@ class MonteCarlo:
 
     def to_dict(self) -> dict:
         """JSON-ready summary (no per-sample arrays)."""
-        return checks.json_ready({
+        return jsonsafe.clean({
             "samples": self.options.samples,
             "seed": self.options.seed,
             "chunk": self.options.chunk,
@@ -678,7 +678,7 @@ class Agreement:
 
     def to_dict(self) -> dict:
         """JSON-ready form."""
-        return checks.json_ready({"agree": self.agree, "verdict": self.verdict, "outputs": list(self.rows)})
+        return jsonsafe.clean({"agree": self.agree, "verdict": self.verdict, "outputs": list(self.rows)})
 
 
 def compare(first: Propagation, mc: MonteCarlo) -> Agreement:

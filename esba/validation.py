@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Sequence
 
 from .equilibrium import Equilibrium, SolverOptions, solve
+from .outputs import default_page
 from .scene import MAIN_JOB
 
 __all__ = ["TABLE2", "TOLERANCE_DEG", "TOLERANCE_MM", "Comparison", "Table2Case", "table2", "render_page", "write_page", "check_page", "summary", "DOC_PATH"]
@@ -39,7 +40,8 @@ TOLERANCE_DEG = 0.15
 #: Tolerance on the tip coordinates, mm.
 TOLERANCE_MM = 0.2
 
-#: The page ``esba validate`` writes.
+#: The repository's page (``esba validate`` writes it when run inside a checkout; elsewhere the
+#: default is ``./validation.md``, see :mod:`esba.outputs`).
 DOC_PATH = Path(__file__).resolve().parent.parent / "docs" / "validation.md"
 
 
@@ -203,8 +205,32 @@ def render_page(cases: Sequence[Table2Case], printed: Sequence[Table2Case] = ())
             "",
             *_table(printed),
         ]
+    lines += ["", *_figures_section()]
     lines.append("")
     return "\n".join(lines)
+
+
+#: The paper-style figures of the experiments of Section 4, shown on this page (``esba figures``).
+PAGE_FIGURES = (
+    ("fig7b", "Fig. 7b: the unloaded bending angle against pressure, 0 to 0.2 MPa, for fibre angles 5, 10, 15 and 20°."),
+    ("fig8c", "Fig. 8c: the shapes for n = 1 to 4 under the 2 N horizontal tip payload of Table 2 (the red arrow), with the unloaded 90° shape and the measured and FEM tips."),
+    ("fig10", "Fig. 10: the horizontal tip payload, 0 to 2 N, against the tip position, n = 3, with the paper's secants."),
+    ("fig11", "Fig. 11: the secant stiffness against the payload (the paper's 0.5, 1 and 2 N and a fine curve), and the tangent stiffness at 0 N."),
+)
+
+
+def _figures_section() -> list[str]:
+    out = [
+        "## Figures",
+        "",
+        "The paper's figures of these experiments, drawn from the same model (Table 1 actuator, `paper` variant). "
+        "Each is written into `docs/figures/` by the command beside it (`esba figures` writes them all; see "
+        "`esba/figures.py` for the data behind each).",
+        "",
+    ]
+    for name, caption in PAGE_FIGURES:
+        out += [f"- `esba figures --only {name}`: {caption}", "", f"  ![{name}](figures/{name}.png)", ""]
+    return out[:-1]
 
 
 def _page(cases: Sequence[Table2Case] | None) -> str:
@@ -214,16 +240,15 @@ def _page(cases: Sequence[Table2Case] | None) -> str:
 
 
 def write_page(path: str | Path | None = None, cases: Sequence[Table2Case] | None = None) -> Path:
-    """Write the validation page (default ``docs/validation.md``); return its path."""
-    path = Path(path) if path else DOC_PATH
-    path.parent.mkdir(parents=True, exist_ok=True)
+    """Write the validation page (default :func:`esba.outputs.default_page`); return its path."""
+    path = Path(path) if path else default_page("validation.md")
     path.write_text(_page(cases), encoding="utf-8")
     return path
 
 
 def check_page(path: str | Path | None = None, cases: Sequence[Table2Case] | None = None) -> bool:
     """True when the page at ``path`` is missing or differs from what :func:`write_page` would write."""
-    path = Path(path) if path else DOC_PATH
+    path = Path(path) if path else default_page("validation.md")
     if not path.exists():
         return True
     return path.read_text(encoding="utf-8") != _page(cases)

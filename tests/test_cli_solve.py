@@ -85,9 +85,10 @@ def test_scene_file_and_plot(capsys, tmp_path, monkeypatch):
     assert code == EXIT_OK and "figure" not in d  # a scene file writes a figure only when asked
     assert not (tmp_path / DEFAULT_SOLVE_FIGURE).exists()
     assert [round(t, 2) for t in d["theta_deg"]] == [-3.29, 7.17, 21.44]
+    (tmp_path / "sub").mkdir()
     plot = tmp_path / "sub" / "shape.png"
     code, d = run_json(capsys, "solve", str(EXAMPLES / "table2.toml"), "--segments", "2", "--plot", str(plot))
-    assert code == EXIT_OK and plot.exists() and d["segments"] == 2
+    assert code == EXIT_OK and plot.exists() and d["segments"] == 2 and d["figure"] == str(plot)
 
 
 def test_failed_solve_exits_1(capsys):
@@ -106,8 +107,8 @@ def test_failed_solve_json_says_so(capsys):
 @pytest.mark.parametrize(
     "args, message",
     [
-        (["solve", "--segments", "0"], "argument --segments/-n: segments=0: expected a whole number >= 1"),
-        (["solve", "--segments", "x"], "segments='x': expected a whole number >= 1"),
+        (["solve", "--segments", "0"], "argument --segments/-n: segments=0: expected a whole number from 1 to 256"),
+        (["solve", "--segments", "x"], "segments='x': expected a whole number from 1 to 256"),
         (["solve", "--pressure", "-1"], "pressure=-1: expected a pressure >= 0 MPa"),
         (["solve", "--pressure", "nan"], "pressure=nan: expected a finite number"),
         (["solve", "--pressure", "0.1", "--target-angle", "90"], "argument --target-angle: not allowed with argument --pressure"),
@@ -119,7 +120,7 @@ def test_failed_solve_json_says_so(capsys):
         (["solve", "--no-payload", "--payload-angle", "0"], "--no-payload cannot be combined with --payload"),
         (["solve", "examples/none.toml"], "scene file 'examples/none.toml' does not exist"),
         (["solve", "--variant", "exact"], "argument --variant: invalid choice: 'exact'"),
-        (["solve", "--max-iter", "0"], "argument --max-iter: '0': expected a whole number >= 1"),
+        (["solve", "--max-iter", "0"], "argument --max-iter: max_iter=0: expected a whole number from 1 to 100000"),
         (["stiffness", "--payload", "0"], "forces=[0.0]: expected one or more payloads > 0 N"),
         (["pressure"], "pressure needs a target: --target-angle DEG"),
         (["pressure", "--target-angle", "-3"], "target_angle_deg=-3: expected an angle > 0 degrees"),
@@ -193,3 +194,12 @@ def test_validate_writes_and_checks(capsys, tmp_path):
 def test_committed_validation_page_is_fresh(capsys):
     code, _, err = run(capsys, "validate", "--check")
     assert code == EXIT_OK, f"{DOC_PATH} is stale: run `esba validate` and commit it ({err.strip()})"
+
+
+def test_pressure_table_says_what_the_pressure_is_for(capsys):
+    code, out, _ = run(capsys, "pressure", "--target-angle", "90")
+    assert code == EXIT_OK
+    assert "target: the pressure that bends the unloaded actuator to 90 deg in total (n = 3, paper)" in out
+    assert "{" not in out  # no raw dict
+    code, out, _ = run(capsys, "pressure", "--tip-y", "50")
+    assert code == EXIT_OK and "target: the pressure that puts the loaded actuator's tip at y = 50 mm" in out

@@ -109,9 +109,9 @@ def test_generate_cli_writes_a_model(tmp_path, capsys):
 @pytest.mark.parametrize(
     "argv,needle",
     [
-        (["generate", "--segments", "0"], "segments=0: expected a whole number >= 1"),
-        (["generate", "--segments", "-3"], "expected a whole number >= 1"),
-        (["generate", "--segments", "2.5"], "segments='2.5': expected a whole number >= 1"),
+        (["generate", "--segments", "0"], "segments=0: expected a whole number from 1 to 256"),
+        (["generate", "--segments", "-3"], "expected a whole number from 1 to 256"),
+        (["generate", "--segments", "2.5"], "segments='2.5': expected a whole number from 1 to 256"),
         (["generate", "--segments", "abc"], "segments='abc'"),
         (["generate", "--segments", "3", "--effects", "air,wind"], "unknown effect 'wind': allowed are air, axial, radial, fibres, payload, gravity"),
         (["generate", "--segments", "3", "--effects", ""], "the effect set is empty"),

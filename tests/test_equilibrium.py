@@ -310,13 +310,13 @@ def test_stability_verdict(ev, verdict):
     [
         ({"tol": 0}, "tol=0: expected a finite number > 0"),
         ({"tol": 2.0}, "tol=2.0: expected a number > 0 and < 1"),
-        ({"max_iter": 0}, "max_iter=0: expected a whole number >= 1"),
-        ({"max_iter": 2.5}, "max_iter=2.5: expected a whole number >= 1"),
+        ({"max_iter": 0}, "max_iter=0: expected a whole number from 1 to 100000"),
+        ({"max_iter": 2.5}, "max_iter=2.5: expected a whole number from 1 to 100000"),
         ({"linear_solver": "ma27"}, "linear_solver='ma27': allowed are mumps, spral"),
         ({"continuation": "yes"}, "continuation='yes': expected True or False"),
         ({"path": {"ds": 0.1}}, "path={'ds': 0.1}: expected a PathOptions"),
         ({"stationarity_tol": -1}, "stationarity_tol=-1: expected a finite number > 0"),
-        ({"samples_per_segment": 0}, "samples_per_segment=0: expected a whole number >= 1"),
+        ({"samples_per_segment": 0}, "samples_per_segment=0: expected a whole number from 1 to 1000"),
     ],
 )
 def test_solver_options_validation(kwargs, message):

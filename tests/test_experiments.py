@@ -87,6 +87,7 @@ def test_cli_writes_and_checks_the_page(tmp_path, capsys, study, monkeypatch):
 
     monkeypatch.setattr(ex, "run_study", lambda *a, **k: study)  # the study is deterministic; run it once
     page = tmp_path / "docs" / "experiments.md"
+    page.parent.mkdir()  # an output's folder must exist (esba.outputs): esba creates only figures/ beside the page
     assert main(["experiments", "--write-doc", str(page), "--json"]) == EXIT_OK
     d = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert [c["name"] for c in d["columns"]] == list(COLUMNS) and d["page"] == str(page)

@@ -129,7 +129,7 @@ def test_initial_swarm_is_random_in_the_box_and_feasible():
 @pytest.mark.parametrize(
     "kwargs, message",
     [
-        ({"particles": 1}, "particles=1: expected a whole number >= 2"),
+        ({"particles": 1}, "particles=1: expected a whole number from 2 to 500000"),
         ({"iterations": 0}, "iterations=0"),
         ({"inertia": -0.1}, "inertia=-0.1"),
         ({"cognitive": float("nan")}, "cognitive=nan"),

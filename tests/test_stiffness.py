@@ -155,7 +155,7 @@ def test_multistable_target_is_flagged_off_the_load_path():
         ({"tip_mm": (None, None)}, "expected [x, y] in mm (one may be None, not both)"),
         ({"tip_mm": (1.0,)}, "expected [x, y] in mm"),
         ({"tip_mm": (float("nan"), 1.0)}, "expected finite numbers in mm"),
-        ({"total_angle_deg": float("inf")}, "expected a finite angle in degrees"),
+        ({"total_angle_deg": float("inf")}, "total_angle_deg=inf: expected a finite number"),
     ],
 )
 def test_pressure_for_target_errors(kwargs, message):

@@ -1,0 +1,67 @@
+"""The command line's terminal: closed pipes, progress lines from the library, exit codes.
+
+* A reader that stops early (``esba sweep ... --json | head``) closes the pipe; the next write
+  to stdout raises :class:`BrokenPipeError`, and Python would print a traceback (or "Exception
+  ignored ...") at exit. :func:`run` ends such a command quietly with :data:`EXIT_PIPE` (128 +
+  SIGPIPE, what a shell reports for a command killed by a closed pipe).
+* Library code never prints; it logs to the ``esba`` logger (a model generated on demand, a
+  damaged cache file replaced). :func:`show_library_messages` sends those lines to stderr as
+  ``esba: ...``.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+from typing import Callable
+
+__all__ = ["EXIT_PIPE", "run", "show_library_messages", "LOGGER"]
+
+#: Exit code after the reader closed stdout (128 + SIGPIPE).
+EXIT_PIPE = 141
+
+#: The logger every esba module reports through.
+LOGGER = "esba"
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the flush at exit does not raise again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # stdout without a file descriptor (captured in tests)
+        pass
+
+
+def run(command: Callable[[], int]) -> int:
+    """Run ``command`` and flush stdout; a closed pipe ends it quietly with :data:`EXIT_PIPE`."""
+    try:
+        code = command()
+        sys.stdout.flush()
+        return code
+    except BrokenPipeError:
+        _silence_stdout()
+        return EXIT_PIPE
+
+
+class _Handler(logging.StreamHandler):
+    """Writes to whatever ``sys.stderr`` is at the time (so that captured stderr sees it)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.setFormatter(logging.Formatter("esba: %(message)s"))
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.stream = sys.stderr
+        super().emit(record)
+
+
+def show_library_messages(level: int = logging.INFO) -> None:
+    """Print the ``esba`` logger's messages (``level`` and above) on stderr, once per process."""
+    logger = logging.getLogger(LOGGER)
+    if not any(isinstance(h, _Handler) for h in logger.handlers):
+        logger.addHandler(_Handler())
+    logger.setLevel(level)
+    logger.propagate = False
