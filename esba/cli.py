@@ -1485,18 +1485,18 @@ def _first_line(exc: BaseException) -> str:
 
 
 def _run(argv: Sequence[str] | None) -> int:
-    from esba.equilibrium import EquilibriumError
-
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
         if not getattr(args, "func", None):
             raise UsageError("name a command: " + ", ".join(sorted(parser._subparsers._group_actions[0].choices)))  # type: ignore[union-attr]
         return int(args.func(args))
-    except EquilibriumError as exc:
-        print(f"esba: failed: {_first_line(exc)}", file=sys.stderr)
-        return EXIT_FAILED
     except Exception as exc:
+        # an EquilibriumError can only come from esba.equilibrium once it is imported (--help never imports it)
+        equilibrium = sys.modules.get("esba.equilibrium")
+        if equilibrium is not None and isinstance(exc, equilibrium.EquilibriumError):
+            print(f"esba: failed: {_first_line(exc)}", file=sys.stderr)
+            return EXIT_FAILED
         if _input_error(exc):
             print(f"esba: error: {_first_line(exc)}", file=sys.stderr)
             return EXIT_USAGE

@@ -19,9 +19,8 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from typing import Any
-
-import numpy as np
 
 __all__ = ["clean", "dumps"]
 
@@ -31,6 +30,9 @@ def _why(value: float) -> str:
 
 
 def _plain(value: Any) -> Any:
+    np = sys.modules.get("numpy")  # no NumPy loaded, no NumPy values: the command line starts without it
+    if np is None:
+        return value
     if isinstance(value, np.ndarray):
         return value.tolist()
     if isinstance(value, np.generic):

@@ -128,3 +128,27 @@ def test_blas_threads_are_restored_after_a_solve():
     before = [d["num_threads"] for d in threadpool_info() if d["user_api"] == "blas"]
     solve(SCENES[0])
     assert [d["num_threads"] for d in threadpool_info() if d["user_api"] == "blas"] == before
+
+
+def test_help_imports_no_numerics():
+    """``esba --help`` and every ``esba CMD --help`` start without CasADi, NumPy or SymPy (issue 9)."""
+    import subprocess
+    import sys
+
+    from esba.cli import COMMANDS, build_parser
+
+    names = sorted(build_parser()._subparsers._group_actions[0].choices)  # type: ignore[union-attr]
+    assert len(names) == len(COMMANDS)
+    script = (
+        "import sys, contextlib, io\n"
+        "from esba.cli import main\n"
+        "for argv in [['--help']] + [[c, '--help'] for c in sys.argv[1:]]:\n"
+        "    with contextlib.redirect_stdout(io.StringIO()):\n"
+        "        try:\n"
+        "            main(argv)\n"
+        "        except SystemExit:\n"
+        "            pass\n"
+        "print(sorted(m for m in ('casadi', 'numpy', 'sympy', 'scipy', 'matplotlib') if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", script, *names], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]", out
