@@ -53,7 +53,7 @@ from derive.effects import (
 )
 from derive.provenance import GENERATED_DIR, source_hash
 
-from . import cache, checks
+from . import cache, checks, fncache
 
 __all__ = [
     "Model",
@@ -170,6 +170,13 @@ class Model:
     variant: str
     path: Path
     functions: Mapping[str, ca.Function]
+    key: str = ""  # the SHA-256 of the model file: what Functions derived from it are kept under
+
+    def derived(self, name: str, builder_files: tuple[str, ...], build) -> ca.Function:
+        """A Function esba builds from this model (``build()``), kept in the cache (:mod:`esba.fncache`)
+        under this model's key and the source of ``builder_files`` (the modules that build it)."""
+        parts = [name, self.key or str(self.path), fncache.key_of_files(*builder_files)]
+        return fncache.cached(f"{self.path.stem}_{name}", parts, lambda: {name: build()})[name]
 
     @property
     def parameters(self) -> tuple[str, ...]:
@@ -221,14 +228,7 @@ class Model:
         p = params if isinstance(params, np.ndarray) else self.param_vector(params)
         fun = _STATE.get(str(self.path))
         if fun is None:
-            th = ca.SX.sym("theta", self.n)
-            ps = ca.SX.sym("p", len(self.parameters))
-            args = ca.vertsplit(ps) if len(self.parameters) else []
-            u, terms = self.functions["energy"](th, *args)
-            length = ps[self.parameters.index("L")]
-            tip, points = self.functions["kinematics"](th, length)
-            outs = [u, terms, self.functions["gradient"](th, *args), self.functions["hessian"](th, *args), tip, points]
-            fun = _STATE[str(self.path)] = ca.Function("esba_state", [th, ps], outs, {"cse": True})
+            fun = _STATE[str(self.path)] = self.derived("state", (__file__,), self._build_state)
         u, terms, g, h, tip, points = fun(np.asarray(theta, dtype=float), p)
         return {
             "energy": float(u),
@@ -238,6 +238,16 @@ class Model:
             "tip": np.asarray(tip).ravel(),
             "points": np.asarray(points),
         }
+
+    def _build_state(self) -> ca.Function:
+        th = ca.SX.sym("theta", self.n)
+        ps = ca.SX.sym("p", len(self.parameters))
+        args = ca.vertsplit(ps) if len(self.parameters) else []
+        u, terms = self.functions["energy"](th, *args)
+        length = ps[self.parameters.index("L")]
+        tip, points = self.functions["kinematics"](th, length)
+        outs = [u, terms, self.functions["gradient"](th, *args), self.functions["hessian"](th, *args), tip, points]
+        return ca.Function("esba_state", [th, ps], outs, {"cse": True})
 
     def tip(self, theta, L: float) -> np.ndarray:
         """Tip pose [x, y, angle] (mm, mm, rad)."""
@@ -358,7 +368,11 @@ def _locate_or_generate(n: int, effects: EffectSet, variant: str) -> Path:
 @lru_cache(maxsize=64)
 def _load(n: int, effects: EffectSet, variant: str) -> Model:
     path = _locate_or_generate(n, effects, variant)
-    return Model(n, effects, variant, path, _exec_model(path))
+    # executing the file builds its SX graphs in Python (about 2 s at n = 100); its Functions are kept
+    # in CasADi's own serialisation, keyed by the file's SHA-256, and read back in tens of milliseconds
+    key = hashlib.sha256(path.read_bytes()).hexdigest()
+    functions = fncache.cached(path.stem, ["model", key], lambda: _exec_model(path))
+    return Model(n, effects, variant, path, functions, key)
 
 
 def load_model(n: int = 3, effects: EffectSet | str = DEFAULT_EFFECTS, variant: str = DEFAULT_VARIANT) -> Model:

@@ -38,6 +38,7 @@ import numpy as np
 
 from .model import Model
 from .stability import CRITICAL_TOL
+from . import structured
 from .structured import pivots_sx, solve_sx
 
 __all__ = ["RampRun", "run_ramp", "ramp_function", "ramp_expression", "newton_parts", "parts_function", "STEPS", "NEWTON", "FINAL", "CONTRACTION"]
@@ -85,13 +86,17 @@ def newton_parts(model: Model) -> ca.Function:
     key = str(model.path)
     fun = _PARTS.get(key)
     if fun is None:
-        n, npar = model.n, len(model.parameters)
-        th = ca.SX.sym("theta", n)
-        p = ca.SX.sym("p", npar)
-        args = ca.vertsplit(p) if npar else []
-        gradient = ca.Function("g", [th, p], [model["gradient"](th, *args)])
-        hessian = ca.Function("h", [th, p], [model["hessian"](th, *args)])
-        fun = _PARTS[key] = parts_function(gradient, hessian)
+
+        def build() -> ca.Function:
+            n, npar = model.n, len(model.parameters)
+            th = ca.SX.sym("theta", n)
+            p = ca.SX.sym("p", npar)
+            args = ca.vertsplit(p) if npar else []
+            gradient = ca.Function("g", [th, p], [model["gradient"](th, *args)])
+            hessian = ca.Function("h", [th, p], [model["hessian"](th, *args)])
+            return parts_function(gradient, hessian)
+
+        fun = _PARTS[key] = model.derived("newton_parts", (__file__, structured.__file__), build)
     return fun
 
 
