@@ -57,6 +57,8 @@ import numpy as np
 from . import cache, checks
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve, stability_verdicts
 from .model import Model, domain_lower_bound, near_domain_bound
+from .ramp import CONTRACTION
+from .ramp import TINY as CONTRACTION_TINY
 from .scene import Scene, SceneError
 from .threads import single_threaded
 
@@ -174,7 +176,10 @@ class BatchOptions:
         eigenvalue) has left the stable branch it started on: a snap-through at a fold or a
         buckling at a branch point. It is passed on to :func:`esba.equilibrium.solve`, whose path
         trace locates the special point and notes the jump, so that a jump is never taken silently.
-        The unloaded pressure ramp is not checked: its uniform path is unique and stable.
+        So is an element a load step of which did not contract (its second Newton correction more
+        than a quarter of its first, Deuflhard's test, as :mod:`esba.ramp`): a step that slid to
+        another branch without meeting an indefinite Hessian. The unloaded pressure ramp is not
+        checked: its uniform path is unique and stable.
     progress : bool
         Show a tqdm progress bar on stderr.
     cache : str or None
@@ -474,12 +479,21 @@ def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> 
             for _ in range(options.newton_steps):
                 x = free_step(x, pk)[0]
     pivot = ca.MX(1.0)
+    # continuity of the load ramp: each step's second Newton correction against its first (Deuflhard's
+    # contraction, as esba.ramp): a step that slid to another branch without meeting an indefinite
+    # Hessian does not contract. With one Newton step per load step it cannot be measured: infinite.
+    contraction = ca.MX(0.0) if options.newton_steps >= 2 or not loaded else ca.MX(math.inf)
     if loaded:
         for k in range(1, options.load_steps + 1):
             pk = _scaled(p_full, idx, 1.0, k / options.load_steps)
+            sizes = []
             for _ in range(options.newton_steps):
+                before = x
                 x, piv = step(x, pk)
                 pivot = ca.fmin(pivot, piv)
+                sizes.append(ca.mmax(ca.fabs(x - before)))
+            if len(sizes) >= 2:
+                contraction = ca.fmax(contraction, ca.if_else(sizes[0] > CONTRACTION_TINY, sizes[1] / (sizes[0] + 1e-300), 0.0))
     for _ in range(options.final_steps):
         x, piv = step(x, p_full)
         pivot = ca.fmin(pivot, piv)
@@ -488,9 +502,9 @@ def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> 
     return ca.Function(
         "esba_batch_element",
         [p, target],
-        [x, pressure, g, ca.vec(h), tip, pivot],
+        [x, pressure, g, ca.vec(h), tip, pivot, contraction],
         ["p", "target"],
-        ["theta", "P", "grad", "hess", "tip", "min_pivot"],
+        ["theta", "P", "grad", "hess", "tip", "min_pivot", "contraction"],
     )
 
 
@@ -625,7 +639,7 @@ def _lower_bounds(model: Model, pv: np.ndarray) -> np.ndarray:
 def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, options: BatchOptions, bar, size_hint: int = 0) -> dict:
     (fun_big, fun_small), backend, build_s, compile_s = _mapped(model, options, angle_mode, max(pv.shape[1], size_hint))
     n, size = model.n, pv.shape[1]
-    outs = {k: [] for k in ("theta", "P", "grad", "hess", "tip", "min_pivot")}
+    outs = {k: [] for k in ("theta", "P", "grad", "hess", "tip", "min_pivot", "contraction")}
     t0 = time.perf_counter()
     full = size - size % options.chunk
     small = min(options.chunk, TAIL_CHUNK)
@@ -652,6 +666,7 @@ def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, op
         "hess": data["hess"].T.reshape(size, n, n),
         "tip": data["tip"].T.reshape(size, 3),
         "min_pivot": data["min_pivot"].ravel(),
+        "contraction": data["contraction"].ravel(),
         "backend": backend,
         "build": build_s,
         "compile": compile_s,
@@ -675,7 +690,8 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
         pressure_ok = np.isfinite(P) & (P >= 0)
         stationary = gnorm <= options.stationarity_tol
         left = ~(run["min_pivot"] >= -options.unstable_tol)
-        success = finite & stationary & ~near & pressure_ok & ~left
+        slid = ~(run["contraction"] <= CONTRACTION)
+        success = finite & stationary & ~near & pressure_ok & ~left & ~slid
     messages = [""] * len(P)
     for i in np.flatnonzero(~(success & (stability == "stable"))):
         if not pressure_ok[i]:
@@ -690,6 +706,11 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
             messages[i] = (
                 f"the Hessian lost positive definiteness on the load ramp (smallest relative LDL^T pivot "
                 f"{run['min_pivot'][i]:.3g}): the stable branch ended at a fold or a branch point, for the path solver to locate"
+            )
+        elif slid[i]:
+            messages[i] = (
+                f"a load step's Newton iteration did not contract (ratio {run['contraction'][i]:.3g} > {CONTRACTION:g}; "
+                "infinite with one Newton step per load step): the step may have left its branch, for the path solver to decide"
             )
         elif not stationary[i]:
             messages[i] = f"max |dU/dtheta| = {gnorm[i]:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}"

@@ -166,3 +166,15 @@ def test_bench_accuracy_quick_writes_the_page(tmp_path, capsys):
     assert data["batch"]["counts"]["not_ok"] == 0
     assert data["batch"]["max_theta_difference_vs_ipopt"] < BATCH_THETA_ATOL
     assert all(ref["order"] == pytest.approx(2.0, abs=0.1) for ref in data["reference"].values())
+
+
+def test_a_snap_the_retry_would_cross_with_positive_pivots_is_handed_on():
+    """Found in review: 10 N at 170 deg on P = 0.03 MPa snaps at 24.5 % of the load. The denser retry
+    used to cross that fold with every Hessian positive definite; its load steps do not contract
+    there, so the element goes on to the path solver, which notes the jump."""
+    scene = Scene(pressure=0.03, payloads=(Payload(10.0, 170.0),))
+    r = solve_scenes([scene], INTERPRETED)
+    ref = solve(scene)
+    assert ref.jumps and r.method.tolist() == ["ipopt"]
+    assert r.notes[0] == tuple(ref.notes) and any("snap-through" in note for note in r.notes[0])
+    np.testing.assert_allclose(r.theta[0], ref.theta, atol=BATCH_THETA_ATOL)
