@@ -1241,6 +1241,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
 
         data["figure"] = str(save_figure(study_figure(result, args.y), plot).resolve())
     _emit(args, data, _path_table)
+    _warn(data["validity"])
     reached = result.main.stopped == "loop" or (len(result.main) and result.main.lam[-1] == args.to)
     if not reached:
         print(f"esba: the branch did not reach --to {args.to:g}: {result.main.stop_reason}", file=sys.stderr)

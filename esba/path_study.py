@@ -33,6 +33,7 @@ from .loading import Ramp, history
 from .path import PathOptions, bifurcating_branches, trace
 from .path_problem import PathError, PathProblem
 from .scene import Actuator, Scene
+from .validity import assess
 
 __all__ = ["PathStudy", "study", "column_buckling_load"]
 
@@ -95,6 +96,25 @@ class PathStudy:
         """The main branch first, then the crossing ones."""
         return (self.main, *self.crossing)
 
+    def validity(self) -> list[dict[str, Any]]:
+        """Where each branch leaves the range the paper's model describes (:mod:`esba.validity`): for
+        each kind of finding, the first point of the branch where it appears, with lambda."""
+        out = []
+        for branch in self.branches:
+            seen: set[str] = set()
+            for lam, theta, tip in zip(branch.lam, branch.theta, branch.tip):
+                try:
+                    scene = self.problem.scene_at(float(lam))
+                except PathError:  # on the range's edge (a degenerate geometry): nothing more to assess
+                    continue
+                pressure = float(lam) if self.problem.name == "pressure" else self.problem.pressure
+                for f in assess(scene, theta, pressure, tip):
+                    if f.check not in seen:
+                        seen.add(f.check)
+                        where = f"{branch.label or 'branch'}, from {self.problem.describe(float(lam))} on"
+                        out.append({**f.to_dict(), "branch": branch.label, "lambda": float(lam), "message": f"{where}: {f.message}"})
+        return out
+
     @property
     def hysteresis(self) -> dict[str, Any] | None:
         """When loading up and down jump at different values: where, and the width of the loop."""
@@ -126,6 +146,7 @@ class PathStudy:
                 for r in self.loading
             ],
             "hysteresis": self.hysteresis,
+            "validity": self.validity(),
         }
 
 

@@ -112,3 +112,19 @@ def test_a_branch_that_turns_back_before_to_says_so_and_exits_1(capsys):
     assert code == 1
     assert "turned back and returned to pressure = 0.168 MPa without reaching 0.3 MPa" in out
     assert err.startswith("esba: the branch did not reach --to 0.3")
+
+
+def test_a_branch_leaving_the_models_range_warns(capsys):
+    """One segment, no payload, inflated to 0.8 MPa: the branch passes its clamp, a full turn and an
+    outer-fibre strain of 1; each is a warning line with the first traced point past it, and in JSON."""
+    code, out, err = run(capsys, "path", "-n", "1", "--no-payload", "--param", "pressure", "--to", "0.8", "--no-out", "--no-plot", "--json")
+    assert code == EXIT_OK
+    checks = {v["check"]: v for v in json.loads(out)["validity"]}
+    assert {"tip_behind_base", "total_bend", "axial_strain"} <= set(checks)
+    assert checks["tip_behind_base"]["lambda"] < checks["total_bend"]["lambda"] < checks["axial_strain"]["lambda"]
+    assert err.count("esba: warning: main, from pressure = ") == len(checks)
+
+
+def test_the_table_2_paths_stay_inside_the_models_range(capsys):
+    code, out, err = run(capsys, "path", "--param", "payload", "--to", "0", "--no-out", "--no-plot", "--json")
+    assert code == EXIT_OK and json.loads(out)["validity"] == [] and "warning" not in err
