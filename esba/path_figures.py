@@ -34,21 +34,23 @@ __all__ = ["Y_AXES", "branch_values", "draw_branch", "draw_loading", "study_figu
 Y_AXES = {"total-angle": ("total bending angle", "deg"), "tip-x": ("tip x, vertical, downwards", "mm"), "tip-y": ("tip y, horizontal", "mm")}
 
 
-def branch_values(branch: Branch, y: str) -> np.ndarray:
-    """The quantity ``y`` (a key of :data:`Y_AXES`) at every point of a branch."""
+def values(theta: np.ndarray, tip: np.ndarray, y: str) -> np.ndarray:
+    """The quantity ``y`` (a key of :data:`Y_AXES`) of states: theta (rad) and tip rows, or one state."""
+    theta, tip = np.atleast_2d(theta), np.atleast_2d(tip)
     if y == "total-angle":
-        return branch.total_angle_deg
-    if y == "tip-x":
-        return branch.tip[:, 0]
-    if y == "tip-y":
-        return branch.tip[:, 1]
+        return np.degrees(np.sum(theta, axis=1))
+    if y in ("tip-x", "tip-y"):
+        return tip[:, 0 if y == "tip-x" else 1]
     raise ValueError(f"y={y!r}: allowed are {', '.join(Y_AXES)}")
 
 
+def branch_values(branch: Branch, y: str) -> np.ndarray:
+    """The quantity ``y`` (a key of :data:`Y_AXES`) at every point of a branch."""
+    return values(branch.theta, branch.tip, y)
+
+
 def _point_value(theta: np.ndarray, tip: np.ndarray, y: str) -> float:
-    if y == "total-angle":
-        return float(np.degrees(np.sum(theta)))
-    return float(tip[0] if y == "tip-x" else tip[1])
+    return float(values(theta, tip, y)[0])
 
 
 def draw_branch(ax: Axes, branch: Branch, y: str = "total-angle", color: str = "C0", label: str | None = None, swap: bool = False) -> None:
