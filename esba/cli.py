@@ -732,44 +732,46 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _cmd_bench_solve(args: argparse.Namespace) -> int:
-    from esba import bench, bench_solve
+def _bench_progress(args: argparse.Namespace, form: str):
+    """A progress line per finished part on stderr (none with --json)."""
+
+    def progress(what):
+        if not args.json:
+            print(form.format(what), file=sys.stderr)
+
+    return progress
+
+
+def _bench_section(args: argparse.Namespace, name: str, body: str) -> None:
+    """Write the ``name`` section of the --markdown page (checked when the command started)."""
+    from esba import bench
     from esba.pages import write_section
 
     if args.markdown:
-        outputs.check_file(args.markdown, "--markdown", (".md",))
+        command = f"esba bench {name} --repeat {args.repeat} --markdown {args.markdown}"
+        print(f"wrote {write_section(args.markdown, name, body, command, bench.PERFORMANCE_TITLE)}", file=sys.stderr)
 
-    def progress(msg):
-        if not args.json:
-            print(f"  {msg} done", file=sys.stderr)
 
-    data = bench_solve.solve_benchmark(repeat=args.repeat, progress=progress)
-    _emit(args, data, bench_solve.solve_table)
+def _cmd_bench_solve(args: argparse.Namespace) -> int:
+    from esba import bench_solve
+
     if args.markdown:
-        command = f"esba bench solve --repeat {args.repeat} --markdown {args.markdown}"
-        path = write_section(args.markdown, "solve", bench_solve.solve_section(data), command, bench.PERFORMANCE_TITLE)
-        print(f"wrote {path}", file=sys.stderr)
+        outputs.check_file(args.markdown, "--markdown", (".md",))
+    data = bench_solve.solve_benchmark(repeat=args.repeat, progress=_bench_progress(args, "  {} done"))
+    _emit(args, data, bench_solve.solve_table)
+    _bench_section(args, "solve", bench_solve.solve_section(data))
     return EXIT_OK
 
 
 def _cmd_bench_path(args: argparse.Namespace) -> int:
-    from esba import bench, bench_path
-    from esba.pages import write_section
+    from esba import bench_path
 
     if args.markdown:
         outputs.check_file(args.markdown, "--markdown", (".md",))
-
-    def progress(n):
-        if not args.json:
-            print(f"  n = {n} done", file=sys.stderr)
-
-    rows = bench_path.path_benchmark(repeat=args.repeat, progress=progress)
+    rows = bench_path.path_benchmark(repeat=args.repeat, progress=_bench_progress(args, "  n = {} done"))
     data = {"rows": [dict(r.__dict__, points_per_s=r.points_per_s, floor_s=r.floor_s) for r in rows]}
     _emit(args, data, lambda d: bench_path.path_table(rows))
-    if args.markdown:
-        command = f"esba bench path --repeat {args.repeat} --markdown {args.markdown}"
-        path = write_section(args.markdown, "path", bench_path.path_section(rows), command, bench.PERFORMANCE_TITLE)
-        print(f"wrote {path}", file=sys.stderr)
+    _bench_section(args, "path", bench_path.path_section(rows))
     return EXIT_OK
 
 
