@@ -365,7 +365,17 @@ def trace(
             dlam = b.lam - a.lam
             hidden = a.tangent[-1] * b.tangent[-1] > 0 and dlam * a.tangent[-1] < 0
             hidden = hidden or (opts.detect and b.morse == a.morse and _dips(corr, a, b, ds))
-            reject = (sharp or double or hidden) and ds > opts.ds_min * 1.0000001
+            # the corrector did not contract as Newton does near its root: the predictor was far from
+            # this branch, or the step landed on another one
+            res = b.residuals
+            slack = len(res) >= 3 and res[1] > 1e3 * opts.tol and res[2] > CORRECTOR_CONTRACTION * res[1]
+            reject = (sharp or double or hidden or slack) and ds > opts.ds_min * 1.0000001
+        found = []
+        if not reject:
+            found = _events_on_segment(corr, a, b, ds, lo, hi, marks, events, opts)
+            # a fold or branch point that cannot be located on the segment: the step is not one branch
+            unlocated = any(sp is not None and sp.status == "guess" for _, _, _, sp in found)
+            reject = unlocated and ds > opts.ds_min * 1.0000001
         if reject:
             if ds <= opts.ds_min * 1.0000001:
                 stopped, reason = _why_stuck(corr, a, ds)
@@ -374,7 +384,6 @@ def trace(
             continue
         steps += 1
         s_b = ds
-        found = _events_on_segment(corr, a, b, s_b, lo, hi, marks, events, opts)
         stop_here = None
         for s_pt, kind, pt, sp in found:
             if pt is not a and pt is not b:
@@ -427,6 +436,10 @@ def trace(
                 break
     return _branch(corr, points, specials, stopped, reason, label, kinds, arclength, beyond)
 
+
+#: A step whose corrector's second residual is more than this fraction of its first is rejected (a
+#: Newton iteration from a predictor inside its region of convergence contracts far faster).
+CORRECTOR_CONTRACTION = 0.25
 
 #: The smallest eigenvalue is watched for a hidden sign change (two crossings inside one step) when it
 #: is below this fraction of the largest at both ends of the step.

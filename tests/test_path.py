@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from esba.equilibrium import evaluate, solve
+from esba.equilibrium import SolverOptions, evaluate, solve
 from esba.loading import follow, history
 from esba.path import (
     PathError,
@@ -420,3 +420,20 @@ def test_where_a_snap_lands_does_not_depend_on_how_far_the_ramp_goes(pressure_pa
     far = follow(problem, start.theta, 0.0, 100.0)
     assert far.jumps[0].lam == pytest.approx(near.jumps[0].lam, rel=LOCATE_RTOL)
     np.testing.assert_allclose(far.jumps[0].theta_after, near.jumps[0].theta_after, atol=1e-5)
+
+
+def test_no_branch_point_is_invented_where_a_load_ramp_passes_near_the_cusp():
+    """Inflated to 0.1684-0.1690 MPa and then loaded to 2 N, the load ramp passes close to the cusp
+    of the bistable range (1.645 N). A long step used to land on the unstable middle branch and be
+    reported as a branch point and a buckling; now every such ramp is one stable branch, and which
+    state it reaches changes once, from the lower to the upper, as the pressure rises."""
+    pressures = np.linspace(0.1684, 0.1690, 7)
+    angles = []
+    for p in pressures:
+        scene = Scene(pressure=float(p), payloads=(Payload(2.0, 90.0),))
+        fast, reference = solve(scene), solve(scene, SolverOptions(fast=False))
+        assert fast.ok and reference.ok and fast.switches == () and reference.switches == () and reference.jumps == ()
+        np.testing.assert_allclose(fast.theta, reference.theta, atol=1e-8)
+        angles.append(fast.total_angle_deg)
+    upper = np.array(angles) > 150.0
+    assert upper[-1] and not upper[0] and np.all(np.diff(upper.astype(int)) >= 0)
