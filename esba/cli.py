@@ -282,6 +282,10 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
         rows.append(("Monte Carlo", f"{c['samples']} samples (seed {mc['seed']}, {mc['backend']}): {c['ok']} solved, {c['invalid']} outside the scene's rules, "
                                     f"{c['not_ok']} without a stable equilibrium; std total angle {num(std['total_angle'])} deg, tip x, y "
                                     f"{num(std['tip_x'])}, {num(std['tip_y'])} mm"))
+        st = mc.get("study")
+        if st:
+            where = f"; samples in {st['out']}" + (f" (resumed at sample {st['resumed_from_sample']})" if st.get("resumed_from_sample") else "") if st.get("out") else ""
+            rows.append(("solved", f"{st['runner']} in {st['seconds']:.1f} s{where}"))
         rows.append(("agreement", d["agreement"]["verdict"]))
     return rows
 
@@ -295,12 +299,18 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
         raise UsageError("--monte-carlo needs uncertain parameters: --sigma NAME=SIGMA or an [uncertainty] table in the scene file")
+    chunked = _on_cluster(args) or args.mc_out is not None or args.resume
+    if chunked and args.monte_carlo is None:
+        raise UsageError("--workers, --scheduler, --mc-out and --resume run the Monte Carlo: give --monte-carlo N (and --sigma)")
+    if args.resume and args.mc_out is None:
+        raise UsageError("--resume continues the Monte Carlo in its sample file: give --mc-out FILE.csv")
     mc_options = None
     if args.monte_carlo is not None:
         from esba.uncertainty import MonteCarloOptions, UncertaintyError
 
         try:
-            mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=args.seed)
+            extra = {} if args.mc_chunk is None else {"chunk": args.mc_chunk}
+            mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=args.seed, **extra)
         except UncertaintyError as exc:
             raise UsageError(f"--monte-carlo: {exc}") from None
     options = SolverOptions(max_iter=args.max_iter, continuation=not args.no_continuation)
@@ -322,8 +332,18 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         propagation = propagate(result, sigmas)
         data["uncertainty"] = propagation.to_dict()
         if mc_options is not None:
-            mc = monte_carlo(scene, sigmas, mc_options)
+            if chunked:
+                try:
+                    mc, info = _monte_carlo_in_chunks(args, scene, sigmas, mc_options)
+                except KeyboardInterrupt:
+                    where = f": the samples solved so far are in {args.mc_out}; rerun with --resume to go on" if args.mc_out else ""
+                    print(f"esba: interrupted{where}", file=sys.stderr)
+                    return 130
+            else:
+                mc, info = monte_carlo(scene, sigmas, mc_options), None
             data["monte_carlo"] = mc.to_dict()
+            if info is not None:
+                data["monte_carlo"]["study"] = info
             data["agreement"] = compare(propagation, mc).to_dict()
     plot = args.plot
     if plot is None and args.scene is None and not args.no_plot:
@@ -340,6 +360,26 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         print(f"esba: solve not ok: {result.message or result.status}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
+
+
+def _monte_carlo_in_chunks(args: argparse.Namespace, scene, sigmas, options):
+    """The Monte Carlo on --workers or --scheduler, or streamed to --mc-out (esba.mc_study)."""
+    from esba.distributed import DistributedError, open_runner
+    from esba.study import StudyError
+    from esba.uncertainty import monte_carlo
+
+    progress = sys.stderr.isatty()
+    try:
+        with open_runner(args.workers, args.scheduler, args.connect_timeout) as runner:
+            if args.mc_out is None:
+                t0 = time.perf_counter()
+                mc = monte_carlo(scene, sigmas, options, runner=runner, progress=progress)
+                return mc, {"runner": runner.description, "workers": runner.workers, "seconds": time.perf_counter() - t0}
+            from esba.mc_study import monte_carlo_study
+
+            return monte_carlo_study(scene, sigmas, options, runner=runner, out=args.mc_out, resume=args.resume, progress=progress)
+    except (DistributedError, StudyError) as exc:
+        raise UsageError(str(exc)) from None
 
 
 def _sigmas_for(args: argparse.Namespace, scene) -> tuple:
@@ -385,6 +425,10 @@ def _add_solve(sub) -> None:
     p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="uncertain parameter: E=0.05 (in its unit), E=10%%, r2=±0.1 (a tolerance); repeatable; propagated to first order")
     p.add_argument("--monte-carlo", type=_sample_count, metavar="N", help="check the first-order uncertainty with N Monte Carlo samples on the batch path (e.g. 10000)")
     p.add_argument("--seed", type=_seed, default=0, help="seed of the Monte Carlo samples (default 0)")
+    _add_cluster_flags(p, "the Monte Carlo")
+    p.add_argument("--mc-chunk", type=_chunk_arg, metavar="K", help="Monte Carlo samples per chunk (default 2500)")
+    p.add_argument("--mc-out", type=_output_file(".csv"), metavar="FILE.csv", help="stream every Monte Carlo sample to FILE.csv, chunk by chunk")
+    p.add_argument("--resume", action="store_true", help="continue the Monte Carlo in --mc-out FILE.csv from the samples it holds")
     p.set_defaults(func=_cmd_solve)
 
 
@@ -870,6 +914,75 @@ def _add_design(sub) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
+# studies on Dask (issue 11): --workers, --scheduler (esba.distributed)
+
+
+def _checked(check: Callable) -> Callable[[str], object]:
+    """An argparse type from a check of :mod:`esba.distributed` (imports no Dask)."""
+
+    def parse(text: str):
+        from esba.distributed import DistributedError
+
+        try:
+            return check(text, flag=None)
+        except DistributedError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    return parse
+
+
+def _workers_arg(text: str) -> int:
+    from esba.distributed import check_workers
+
+    return _checked(check_workers)(text)
+
+
+def _scheduler_arg(text: str) -> str:
+    from esba.distributed import check_address
+
+    return _checked(check_address)(text)
+
+
+def _timeout_arg(text: str) -> float:
+    from esba.distributed import check_timeout
+
+    return _checked(check_timeout)(text)
+
+
+def _chunk_arg(text: str) -> int:
+    from esba.study import MAX_CHUNK
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= MAX_CHUNK:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of points per chunk from 1 to {MAX_CHUNK}")
+    return value
+
+
+def _add_cluster_flags(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument("--workers", type=_workers_arg, metavar="N", help=f"solve {what} on a local Dask cluster of N worker processes (the esba[dask] extra)")
+    p.add_argument("--scheduler", type=_scheduler_arg, metavar="ADDRESS", help=f"solve {what} on the Dask cluster of the scheduler at ADDRESS (tcp://HOST:PORT)")
+    p.add_argument("--connect-timeout", type=_timeout_arg, default=10.0, metavar="S", help="seconds to wait for --scheduler and its first worker (default 10)")
+
+
+def _on_cluster(args: argparse.Namespace) -> bool:
+    """Whether the study runs on Dask; checks --workers, --scheduler and the extra before any computation."""
+    if args.workers is not None and args.scheduler is not None:
+        raise UsageError("--workers N starts a local cluster and --scheduler ADDRESS uses an existing one: give one of the two")
+    if args.workers is None and args.scheduler is None:
+        return False
+    from esba.distributed import DistributedError, require_dask
+
+    try:
+        require_dask("--workers" if args.workers is not None else "--scheduler")
+    except DistributedError as exc:
+        raise UsageError(str(exc)) from None
+    return True
+
+
+# ---------------------------------------------------------------------------------------------
 # esba sweep (issue 5): grids on the batch path
 
 
@@ -885,6 +998,10 @@ def _values_arg(text: str) -> list[float]:
 def _sweep_table(d: dict) -> str:
     lines = [f"base: {d['base']}", "axes: " + "; ".join(f"{k} {v['values']} {v['unit']}" for k, v in d["axes"].items())]
     lines.append(f"points: {d['counts']}; {d['backend']}")
+    st = d.get("study")
+    if st:
+        resumed = f", resumed at row {st['resumed_from_row']}" if st["resumed_from_row"] else ""
+        lines.append(f"study: {st['chunks_solved']} chunks of up to {st['chunk']} points {st['runner']} in {st['seconds']:.1f} s{resumed}")
     rows = d["rows"]
     if len(rows) <= 60:
         head = f"{'P MPa':>9} {'F N':>6} {'Om deg':>7} {'r2':>6} {'d':>6} {'angle deg':>10} {'tip x, y mm':>18}  status"
@@ -894,7 +1011,7 @@ def _sweep_table(d: dict) -> str:
             tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
             lines.append(f"{r['pressure_mpa']:9.5f} {r['payload_n']:6.3g} {r['payload_angle_deg']:7.3g} {r['r2_mm']:6.3g} {r['d_mm']:6.3g} {ang:>10} {tip:>18}  {r['status']}")
     else:
-        lines.append(f"{len(rows)} rows: write them with --out FILE.csv or FILE.json")
+        lines.append(f"{len(rows)} rows" + ("" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
     for k in ("out", "figure"):
         if d.get(k):
             lines.append(f"wrote {d[k]}")
@@ -914,6 +1031,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     except SceneError as exc:
         raise UsageError(str(exc)) from None
     options = BatchOptions(compile="never" if args.no_compile else "auto", progress=not (args.json or args.no_progress))
+    if _on_cluster(args) or args.resume:
+        return _sweep_in_chunks(args, base, options)
     if args.fig12:
         if any(v is not None for v in (args.pressure, args.payload, args.payload_angle, args.r2, args.d)):
             raise UsageError("--fig12 draws its own grid (r2 and d at P = 0.2 MPa, no payload): give no axes with it")
@@ -933,6 +1052,55 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             data["figure"] = str(save_figure(sweep_figure(result), args.plot))
     except (SweepError, SceneError) as exc:
         raise UsageError(str(exc)) from None
+    _emit(args, data, _sweep_table)
+    if data["counts"]["not ok"]:
+        print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _sweep_in_chunks(args: argparse.Namespace, base, options) -> int:
+    """``esba sweep`` chunk by chunk (--workers, --scheduler, --resume): esba.sweep_study."""
+    from esba.distributed import DistributedError, open_runner
+    from esba.plots import save_figure
+    from esba.scene import SceneError
+    from esba.study import StudyError
+    from esba.sweep import SweepError, plan_sweep, sweep_figure
+    from esba.sweep_study import sweep_study
+
+    if args.fig12:
+        raise UsageError("--fig12 draws its own small grid in this process: give it without --workers, --scheduler or --resume")
+    out = args.out
+    if out is not None and not out.lower().endswith((".csv", ".json")):
+        raise UsageError(f"--out {out!r}: expected a .csv or .json file")
+    streamed = out is not None and out.lower().endswith(".csv")
+    if args.resume and not streamed:
+        raise UsageError(f"--resume continues a study from the CSV file it streams to: give --out FILE.csv (given: {out!r})")
+    if args.plot and streamed:
+        raise UsageError("--plot needs every row in memory, and with --out FILE.csv on --workers, --scheduler or --resume the rows stream to the file: plot in a run without them")
+    try:
+        plan = plan_sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d)
+    except (SweepError, SceneError) as exc:
+        raise UsageError(str(exc)) from None
+    try:
+        with open_runner(args.workers, args.scheduler, args.connect_timeout) as runner:
+            study = sweep_study(plan, options, runner=runner, chunk=args.chunk, out=out if streamed else None, resume=args.resume, progress=options.progress)
+    except (DistributedError, StudyError) as exc:
+        raise UsageError(str(exc)) from None
+    except KeyboardInterrupt:
+        where = f": the rows solved so far are in {out}; rerun with --resume to go on" if streamed else ""
+        print(f"esba: interrupted{where}", file=sys.stderr)
+        return 130
+    data = study.to_dict()
+    if streamed:
+        data["out"] = out
+    elif out is not None:
+        data["out"] = str(study.result.write(out))
+    if args.plot:
+        try:
+            data["figure"] = str(save_figure(sweep_figure(study.result), args.plot))
+        except SweepError as exc:
+            raise UsageError(str(exc)) from None
     _emit(args, data, _sweep_table)
     if data["counts"]["not ok"]:
         print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
@@ -960,6 +1128,9 @@ def _add_sweep(sub) -> None:
     p.add_argument("--no-compile", action="store_true", help="use CasADi's interpreter, not compiled C")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print JSON (every row)")
+    _add_cluster_flags(p, "the grid")
+    p.add_argument("--chunk", type=_chunk_arg, default=1000, metavar="K", help="points per chunk with --workers, --scheduler or --resume (default 1000)")
+    p.add_argument("--resume", action="store_true", help="stream the rows chunk by chunk to --out FILE.csv and continue the study that file holds (a new one if there is none)")
     p.set_defaults(func=_cmd_sweep)
 
 
