@@ -724,6 +724,59 @@ def _cmd_bench_batch(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_bench_scaling(args: argparse.Namespace) -> int:
+    from esba import bench_scaling, scaling_report
+    from esba.distributed import DistributedError, require_dask
+
+    if args.scheduler is not None and args.workers is not None:
+        raise UsageError("--workers N lists local cluster sizes and --scheduler ADDRESS measures an existing cluster: give one of the two")
+    try:
+        require_dask("esba bench scaling")
+    except DistributedError as exc:
+        raise UsageError(str(exc)) from None
+
+    def say(msg: str) -> None:
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    workers = tuple(args.workers) if args.workers else bench_scaling.DEFAULTS["workers"]
+    try:
+        data = bench_scaling.scaling_study(points=args.points, segments=args.segments, repeat=args.repeat, chunk=args.chunk,
+                                           workers=workers, scheduler=args.scheduler, timeout=args.connect_timeout, progress=say)
+    except DistributedError as exc:
+        raise UsageError(str(exc)) from None
+    if args.markdown:
+        command = "esba bench scaling"
+        defaults = bench_scaling.DEFAULTS
+        for flag, value, default in (("--points", args.points, defaults["points"]), ("--segments", args.segments, defaults["segments"]),
+                                     ("--repeat", args.repeat, defaults["repeat"]), ("--chunk", args.chunk, defaults["chunk"])):
+            if value != default:
+                command += f" {flag} {value}"
+        if args.workers:
+            command += "".join(f" --workers {w}" for w in args.workers)
+        if args.scheduler:
+            command += f" --scheduler {args.scheduler}"
+        command += f" --markdown {args.markdown}"
+        data["page"] = str(scaling_report.write_page(args.markdown, data, command))
+
+    def table(d: dict) -> str:
+        st = d["setup"]
+        lines = [f"{st['points']} equilibria, n = {st['segments']}; {st['backend']}; load {st['load_before'][0]:.2f} -> {st['load_after'][0]:.2f}",
+                 f"{'where':<62} {'chunk':>6} {'median s':>9} {'eq/s':>9}  identical"]
+        for r in d["rows"]:
+            lines.append(f"{r['where']:<62} {r['chunk'] or '-':>6} {r['median_s']:9.2f} {r['per_second']:9.0f}  {r['identical']}")
+        for c in d["chunks"]:
+            lines.append(f"chunk {c['chunk']:>6}: in process {c['in_process_per_second']:9.0f} eq/s; cluster {c['cluster_per_second'] or 0:9.0f} eq/s")
+        if d["overhead"]:
+            lines.append(f"overhead per chunk: {1e3 * d['overhead']['overhead_s']:.1f} ms")
+        if d.get("page"):
+            lines.append(f"wrote {d['page']}")
+        return "\n".join(lines)
+
+    _emit(args, data, table)
+    return EXIT_OK
+
+
 def _add_bench(sub) -> None:
     p = sub.add_parser("bench", help="benchmarks: tables of medians over repeated runs")
     bsub = p.add_subparsers(dest="bench", parser_class=_Parser, required=True)
@@ -756,6 +809,17 @@ def _add_bench(sub) -> None:
     pa.add_argument("--markdown", metavar="FILE", help="also write the path section of a docs page (docs/performance.md)")
     pa.add_argument("--json", action="store_true")
     pa.set_defaults(func=_cmd_bench_path)
+    sc = bsub.add_parser("scaling", help="equilibria per second of a sweep in this process and on Dask (1, 2 workers), chunk sizes, overhead per chunk (docs/scaling.md)")
+    sc.add_argument("--points", type=_segments, default=12_000, help="grid size (default 12000)")
+    sc.add_argument("--segments", "-n", type=_segments, default=16, help="segment count (default 16)")
+    sc.add_argument("--repeat", type=_segments, default=3, help="runs per timing, median reported (default 3)")
+    sc.add_argument("--chunk", type=_chunk_arg, default=1000, metavar="K", help="points per chunk of the worker-count rows (default 1000)")
+    sc.add_argument("--workers", type=_workers_arg, action="append", metavar="N", help="local cluster sizes to measure (repeatable; default 1 and 2)")
+    sc.add_argument("--scheduler", type=_scheduler_arg, metavar="ADDRESS", help="measure the existing Dask cluster at ADDRESS instead (e.g. one started by dask-jobqueue)")
+    sc.add_argument("--connect-timeout", type=_timeout_arg, default=10.0, metavar="S", help="seconds to wait for --scheduler (default 10)")
+    sc.add_argument("--markdown", metavar="FILE", help="also write the page (docs/scaling.md)")
+    sc.add_argument("--json", action="store_true")
+    sc.set_defaults(func=_cmd_bench_scaling)
     b = bsub.add_parser("batch", help="us per equilibrium of the batch path against IPOPT and naive BFGS")
     b.add_argument("--size", type=_segments, default=10_000, help="batch size (default 10000)")
     b.add_argument("--segments", "-n", type=_segments, default=3, help="segment count (default 3)")

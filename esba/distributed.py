@@ -268,7 +268,8 @@ class DaskRunner:
         ``distributed.scheduler.allowed-failures``, then ``KilledWorker`` is raised); each chunk's
         result is taken once. Leaving the generator early cancels the chunks still queued.
         """
-        from distributed import as_completed
+        import dask
+        from distributed import KilledWorker, as_completed
 
         token = uuid.uuid4().hex[:12]
         items = enumerate(args)
@@ -300,7 +301,14 @@ class DaskRunner:
                     continue
                 fut = next(queue)
                 i, _ = pending.pop(fut.key)
-                ready[i] = fut.result()
+                try:
+                    ready[i] = fut.result()
+                except KilledWorker:
+                    tries = dask.config.get("distributed.scheduler.allowed-failures") + 1
+                    raise DistributedError(
+                        f"chunk {i} was started {tries} times and each time its worker process died "
+                        "(out of memory?): the study stops; the chunks before it are kept"
+                    ) from None
                 fut.release()
                 if done is not None:
                     done(i)

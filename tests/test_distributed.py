@@ -341,3 +341,43 @@ def test_missing_dask_is_one_line_that_names_the_extra(capsys, monkeypatch):
         assert ("--workers" in err) != ("--scheduler" in err)
     # without the flags, everything runs in this process as before
     assert main(["sweep", "--pressure", "0.1", "--no-compile", "--no-progress"]) == EXIT_OK
+
+
+def _always_kill(fn, *args):
+    os._exit(1)
+
+
+class _AlwaysKillingRunner(DaskRunner):
+    def __init__(self, runner: DaskRunner) -> None:
+        super().__init__(runner.client, runner.description)
+
+    def map_ordered(self, fn, args, done=None):
+        return super().map_ordered(_always_kill, ((fn, *a) for a in args), done)
+
+
+def test_a_chunk_that_always_kills_its_worker_stops_the_study_with_a_message(tmp_path):
+    out = tmp_path / "grid.csv"
+    with open_runner(workers=2) as runner:
+        with pytest.raises(DistributedError, match=r"chunk \d+ was started 4 times and each time its worker process died"):
+            sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=_AlwaysKillingRunner(runner), chunk=50, out=out)
+    assert read_rows(out) == []  # the header is there, and no row: --resume starts from the first chunk
+
+
+# ---------------------------------------------------------------------------------------------
+# the benchmark
+
+
+@pytest.mark.slow
+@pytest.mark.ci
+def test_bench_scaling_writes_its_page(capsys, tmp_path):
+    page = tmp_path / "scaling.md"
+    assert main(["bench", "scaling", "--points", "400", "--segments", "2", "--repeat", "1", "--markdown", str(page), "--json"]) == EXIT_OK
+    data = json.loads(capsys.readouterr().out)
+    assert [r["workers"] for r in data["rows"]] == [0, 0, 1, 2] and all(r["identical"] for r in data["rows"])
+    assert [c["chunk"] for c in data["chunks"]] == [128, 1000, 4000] and all(c["identical"] for c in data["chunks"])
+    assert data["overhead"]["round_trip_s"] > 0 and len(data["clusters"]) == 2
+    text = page.read_text()
+    assert f"`esba bench scaling --points 400 --segments 2 --repeat 1 --markdown {page}`" in text
+    for heading in ("## Throughput against the worker count", "## What the chunk size does", "## The overhead of one chunk", "dask-jobqueue"):
+        assert heading in text
+    assert "nan" not in text.lower() and "**no**" not in text
