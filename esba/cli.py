@@ -810,9 +810,9 @@ def _add_bench(sub) -> None:
     pa.add_argument("--json", action="store_true")
     pa.set_defaults(func=_cmd_bench_path)
     sc = bsub.add_parser("scaling", help="equilibria per second of a sweep in this process and on Dask (1, 2 workers), chunk sizes, overhead per chunk (docs/scaling.md)")
-    sc.add_argument("--points", type=_segments, default=12_000, help="grid size (default 12000)")
+    sc.add_argument("--points", type=_whole_in(20, 1_000_000, "points"), default=12_000, help="grid size, 20 to 1000000 (default 12000)")
     sc.add_argument("--segments", "-n", type=_segments, default=16, help="segment count (default 16)")
-    sc.add_argument("--repeat", type=_segments, default=3, help="runs per timing, median reported (default 3)")
+    sc.add_argument("--repeat", type=_whole_in(1, 50, "runs"), default=3, help="runs per timing, median reported (default 3)")
     sc.add_argument("--chunk", type=_chunk_arg, default=1000, metavar="K", help="points per chunk of the worker-count rows (default 1000)")
     sc.add_argument("--workers", type=_workers_arg, action="append", metavar="N", help="local cluster sizes to measure (repeatable; default 1 and 2)")
     sc.add_argument("--scheduler", type=_scheduler_arg, metavar="ADDRESS", help="measure the existing Dask cluster at ADDRESS instead (e.g. one started by dask-jobqueue)")
@@ -1011,6 +1011,21 @@ def _timeout_arg(text: str) -> float:
     from esba.distributed import check_timeout
 
     return _checked(check_timeout)(text)
+
+
+def _whole_in(low: int, high: int, what: str) -> Callable[[str], int]:
+    """An argparse type: a whole number from ``low`` to ``high`` (``what`` says what it counts)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = low - 1
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of {what} from {low} to {high}")
+        return value
+
+    return parse
 
 
 def _chunk_arg(text: str) -> int:

@@ -305,6 +305,9 @@ def test_cli_monte_carlo_on_workers(capsys):
         (["solve", "--no-plot", "--workers", "2"], "give --monte-carlo N"),
         (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--resume"], "give --mc-out FILE.csv"),
         (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", "x.json"], "argument --mc-out"),
+        (["bench", "scaling", "--points", "5"], "argument --points: '5': expected a whole number of points from 20 to 1000000"),
+        (["bench", "scaling", "--repeat", "0"], "argument --repeat: '0'"),
+        (["bench", "scaling", "--workers", "1", "--scheduler", "tcp://127.0.0.1:8786"], "give one of the two"),
     ],
 )
 def test_cli_bad_cluster_flags_are_one_line_exit_2(capsys, argv, needle):
