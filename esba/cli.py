@@ -759,21 +759,7 @@ def _cmd_bench_scaling(args: argparse.Namespace) -> int:
         command += f" --markdown {args.markdown}"
         data["page"] = str(scaling_report.write_page(args.markdown, data, command))
 
-    def table(d: dict) -> str:
-        st = d["setup"]
-        lines = [f"{st['points']} equilibria, n = {st['segments']}; {st['backend']}; load {st['load_before'][0]:.2f} -> {st['load_after'][0]:.2f}",
-                 f"{'where':<62} {'chunk':>6} {'median s':>9} {'eq/s':>9}  identical"]
-        for r in d["rows"]:
-            lines.append(f"{r['where']:<62} {r['chunk'] or '-':>6} {r['median_s']:9.2f} {r['per_second']:9.0f}  {r['identical']}")
-        for c in d["chunks"]:
-            lines.append(f"chunk {c['chunk']:>6}: in process {c['in_process_per_second']:9.0f} eq/s; cluster {c['cluster_per_second'] or 0:9.0f} eq/s")
-        if d["overhead"]:
-            lines.append(f"overhead per chunk: {1e3 * d['overhead']['overhead_s']:.1f} ms")
-        if d.get("page"):
-            lines.append(f"wrote {d['page']}")
-        return "\n".join(lines)
-
-    _emit(args, data, table)
+    _emit(args, data, scaling_report.summary)
     return EXIT_OK
 
 
@@ -817,7 +803,7 @@ def _add_bench(sub) -> None:
     sc.add_argument("--workers", type=_workers_arg, action="append", metavar="N", help="local cluster sizes to measure (repeatable; default 1 and 2)")
     sc.add_argument("--scheduler", type=_scheduler_arg, metavar="ADDRESS", help="measure the existing Dask cluster at ADDRESS instead (e.g. one started by dask-jobqueue)")
     sc.add_argument("--connect-timeout", type=_timeout_arg, default=10.0, metavar="S", help="seconds to wait for --scheduler (default 10)")
-    sc.add_argument("--markdown", metavar="FILE", help="also write the page (docs/scaling.md)")
+    sc.add_argument("--markdown", type=_output_file(".md"), metavar="FILE", help="also write the page (docs/scaling.md)")
     sc.add_argument("--json", action="store_true")
     sc.set_defaults(func=_cmd_bench_scaling)
     b = bsub.add_parser("batch", help="us per equilibrium of the batch path against IPOPT and naive BFGS")
@@ -1081,16 +1067,22 @@ def _sweep_table(d: dict) -> str:
     if st:
         resumed = f", resumed at row {st['resumed_from_row']}" if st["resumed_from_row"] else ""
         lines.append(f"study: {st['chunks_solved']} chunks of up to {st['chunk']} points {st['runner']} in {st['seconds']:.1f} s{resumed}")
-    rows = d["rows"]
-    if len(rows) <= 60:
+    rows = d.get("rows")
+
+    def num(v, fmt: str) -> str:
+        return "-" if v is None else format(v, fmt)
+
+    if rows is not None and len(rows) <= 60:
         head = f"{'P MPa':>9} {'F N':>6} {'Om deg':>7} {'r2':>6} {'d':>6} {'angle deg':>10} {'tip x, y mm':>18}  status"
         lines.append(head)
         for r in rows:
             ang = "" if r["total_angle_deg"] is None else f"{r['total_angle_deg']:10.3f}"
             tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
-            lines.append(f"{r['pressure_mpa']:9.5f} {r['payload_n']:6.3g} {r['payload_angle_deg']:7.3g} {r['r2_mm']:6.3g} {r['d_mm']:6.3g} {ang:>10} {tip:>18}  {r['status']}")
+            lines.append(f"{num(r['pressure_mpa'], '9.5f'):>9} {num(r['payload_n'], '6.3g'):>6} {num(r['payload_angle_deg'], '7.3g'):>7} "
+                         f"{num(r['r2_mm'], '6.3g'):>6} {num(r['d_mm'], '6.3g'):>6} {ang:>10} {tip:>18}  {r['status']}")
     else:
-        lines.append(f"{len(rows)} rows" + ("" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
+        total = sum(d["counts"].values())
+        lines.append(f"{total} rows" + (f" in {d['out']}" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
     for k in ("out", "figure"):
         if d.get(k):
             lines.append(f"wrote {d[k]}")
@@ -1170,7 +1162,8 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options) -> int:
         where = f": the rows solved so far are in {out}; rerun with --resume to go on" if streamed else ""
         print(f"esba: interrupted{where}", file=sys.stderr)
         return 130
-    data = study.to_dict()
+    # streamed rows stay in the file (a study may not fit in memory); a small grid's table reads them back
+    data = study.to_dict(rows=not streamed or (plan.size <= 60 and not args.json))
     if streamed:
         data["out"] = out
     elif out is not None:

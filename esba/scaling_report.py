@@ -19,7 +19,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-__all__ = ["scaling_page", "write_page", "SLURM_EXAMPLE"]
+__all__ = ["scaling_page", "write_page", "summary", "SLURM_EXAMPLE"]
 
 #: How to run the same study on a SLURM cluster (documented, not run here).
 SLURM_EXAMPLE = '''\
@@ -181,3 +181,19 @@ def write_page(path: str | Path, data: dict[str, Any], command: str) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(scaling_page(data, command), encoding="utf-8")
     return path
+
+
+def summary(data: dict[str, Any]) -> str:
+    """The table ``esba bench scaling`` prints."""
+    st = data["setup"]
+    lines = [f"{st['points']} equilibria, n = {st['segments']}; {st['backend']}; load {st['load_before'][0]:.2f} -> {st['load_after'][0]:.2f}",
+             f"{'where':<62} {'chunk':>6} {'median s':>9} {'eq/s':>9}  identical"]
+    for r in data["rows"]:
+        lines.append(f"{r['where']:<62} {r['chunk'] or '-':>6} {r['median_s']:9.2f} {r['per_second']:9.0f}  {r['identical']}")
+    for c in data["chunks"]:
+        lines.append(f"chunk {c['chunk']:>6}: in process {_rate(c['in_process_per_second']):>9} eq/s; cluster {_rate(c['cluster_per_second']):>9} eq/s")
+    if data["overhead"]:
+        lines.append(f"overhead per chunk: {1e3 * data['overhead']['overhead_s']:.1f} ms")
+    if data.get("page"):
+        lines.append(f"wrote {data['page']}")
+    return "\n".join(lines)

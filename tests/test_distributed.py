@@ -268,10 +268,11 @@ def test_cli_sweep_on_workers_writes_the_in_process_rows(capsys, tmp_path):
     alone = json.loads(capsys.readouterr().out)
     assert main(["sweep", *grid, "--workers", "2", "--json"]) == EXIT_OK  # rows gathered in memory
     gathered = json.loads(capsys.readouterr().out)
-    assert main(["sweep", *grid, "--workers", "2", "--out", str(there), "--json"]) == EXIT_OK  # rows read back from the file
+    assert main(["sweep", *grid, "--workers", "2", "--out", str(there), "--json"]) == EXIT_OK  # rows in the file only
     streamed = json.loads(capsys.readouterr().out)
-    assert gathered["rows"] == streamed["rows"] == alone["rows"] and len(alone["rows"]) == 16
+    assert gathered["rows"] == alone["rows"] == read_rows(there) and len(alone["rows"]) == 16 and "rows" not in streamed
     assert gathered["study"]["workers"] == streamed["study"]["workers"] == 2 and streamed["out"] == str(there)
+    assert streamed["counts"] == gathered["counts"] == alone["counts"]
 
 
 def test_cli_monte_carlo_on_workers(capsys):
