@@ -120,8 +120,9 @@ def scaling_page(data: dict[str, Any], command: str) -> str:
             lines.append(f"| {c['where']} | {c['start_s']:.2f} | {c['first_chunk_s']:.2f} |")
         lines += [
             "",
-            "The first chunk a worker solves loads esba, the model (`esba.model.load_model`, once per process) and the",
-            "compiled library; the times above exclude both, which a study pays once per worker.",
+            "Starting a local cluster spawns its worker processes; the first chunk a worker solves imports esba and",
+            "loads the model (`esba.model.load_model`, once per process) and the compiled library. A study pays these",
+            "once per cluster and once per worker; the throughput above leaves them out.",
         ]
     if data["chunks"]:
         cl = next((c["cluster_workers"] for c in data["chunks"] if c["cluster_workers"]), None)
@@ -135,6 +136,11 @@ def scaling_page(data: dict[str, Any], command: str) -> str:
         ]
         for c in data["chunks"]:
             lines.append(f"| {c['chunk']} | {c['chunks']} | {_rate(c['in_process_per_second'])} | {_rate(c['cluster_per_second'])} | {'yes' if c['identical'] else '**no**'} |")
+        serial = [c["in_process_per_second"] for c in data["chunks"]]
+        if serial and min(serial) > base:
+            lines += ["", f"In this process every chunk size here ({min(serial) / base:.2f}x to {max(serial) / base:.2f}x) beats one batch of the whole grid."]
+        elif serial and max(serial) < base:
+            lines += ["", "In this process one batch of the whole grid beats every chunk size here."]
         lines += [
             "",
             f"A chunk is one task: its points go to the batch path as calls of the mapped Function on {st['batch_block']} points and,",
