@@ -72,6 +72,8 @@ __all__ = [
     "compile_library",
     "batch_bytes",
     "check_size",
+    "decide_backend",
+    "prepare",
     "METHODS",
 ]
 
@@ -557,13 +559,10 @@ def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
 _FUNCTIONS: dict[tuple, ca.Function] = {}
 
 
-def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) -> tuple[tuple[ca.Function, ca.Function], str, float, float]:
-    """The element Function mapped over ``options.chunk`` and over ``TAIL_CHUNK`` elements
-    (for the rest of a batch), compiled when it pays.
-
-    Returns the two Functions, a backend description, the build time and the compile time (s).
-    """
-    key = _key(model, options, angle_mode)
+def _backend(model: Model, options: BatchOptions, angle_mode: bool, size: int, key: str | None = None) -> tuple[bool, Path, str | None, str]:
+    """Whether the fast path of a batch of ``size`` elements runs compiled: (compiled, the cached
+    library's path, the compiler, a description of the backend and why)."""
+    key = _key(model, options, angle_mode) if key is None else key
     lib = _compiled_dir(options) / f"esba_batch_{key}.so"
     cc = compiler() if options.compile != "never" else None
     have_lib = cc is not None and _usable_library(lib)
@@ -579,11 +578,53 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
             why = f"compile='auto' and n = {model.n} > {AUTO_COMPILE_MAX_N} (compiling would take longer than it saves)"
         elif size < options.compile_min:
             why = f"compile='auto' and {size} elements < compile_min = {options.compile_min}"
-    compiled = not why
-    if compiled:
-        backend = f"compiled C ({Path(cc).name} -O2), cached {lib}"
-    else:
-        backend = f"interpreted (CasADi virtual machine, 2 threads): {why}"
+    if not why:
+        return True, lib, cc, f"compiled C ({Path(cc).name} -O2), cached {lib}"
+    return False, lib, cc, f"interpreted (CasADi virtual machine, 2 threads): {why}"
+
+
+def decide_backend(model: Model, options: BatchOptions | None, angle_mode: bool, size: int) -> tuple[BatchOptions, str]:
+    """Decide once, for a whole study of ``size`` elements, whether the fast path runs compiled.
+
+    A study split into chunks (:mod:`esba.distributed`) must run every chunk on the same backend:
+    compiled C and CasADi's interpreter agree only to round-off, and ``compile="auto"`` would
+    decide per chunk from the chunk's size. Returns ``options`` with ``compile`` set to
+    ``"always"`` or ``"never"`` (the same decision ``"auto"`` makes for one batch of ``size``) and
+    the backend's description.
+
+    Examples
+    --------
+    >>> from esba.model import load_model
+    >>> fixed, why = decide_backend(load_model(3), BatchOptions(compile="never"), False, 10_000)
+    >>> fixed.compile, why
+    ('never', "interpreted (CasADi virtual machine, 2 threads): compile='never'")
+    """
+    options = DEFAULT_BATCH_OPTIONS if options is None else options
+    if not isinstance(options, BatchOptions):
+        raise BatchOptionsError(f"options={options!r}: expected a BatchOptions")
+    compiled, _, _, description = _backend(model, options, angle_mode, size)
+    return dataclasses.replace(options, compile="always" if compiled else "never"), description
+
+
+def prepare(model: Model, options: BatchOptions, angle_mode: bool) -> tuple[float, float]:
+    """Build (and with ``compile="always"`` compile, unless cached) the fast path's Functions now.
+
+    Run once before a study's chunks go to worker processes that share this machine's cache, so
+    that they load one compiled library instead of each compiling it. Returns the seconds spent
+    building the graph and compiling it (0 for what was already built or cached).
+    """
+    _, _, build_s, compile_s = _mapped(model, options, angle_mode, options.compile_min)
+    return build_s, compile_s
+
+
+def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) -> tuple[tuple[ca.Function, ca.Function], str, float, float]:
+    """The element Function mapped over ``options.chunk`` and over ``TAIL_CHUNK`` elements
+    (for the rest of a batch), compiled when it pays.
+
+    Returns the two Functions, a backend description, the build time and the compile time (s).
+    """
+    key = _key(model, options, angle_mode)
+    compiled, lib, cc, backend = _backend(model, options, angle_mode, size, key)
     cached = _FUNCTIONS.get((key, compiled, str(lib)))
     if cached is not None:
         return cached, backend, 0.0, 0.0
@@ -599,7 +640,7 @@ def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) ->
             element.map(f"esba_batch_{key}", "serial", options.chunk, [], []),
             element.map(f"esba_batch_{key}_tail", "serial", small, [], []),
         )
-        if not have_lib:
+        if not _usable_library(lib):
             cache.usable_root(lib.parent)
             t1 = time.perf_counter()
             compile_library(mapped, lib, cc)

@@ -362,6 +362,10 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
         rows.append(("Monte Carlo", f"{c['samples']} samples (seed {mc['seed']}, {mc['backend']}): {c['ok']} solved, {c['invalid']} outside the scene's rules, "
                                     f"{c['not_ok']} without a stable equilibrium; std total angle {num(std['total_angle'])} deg, tip x, y "
                                     f"{num(std['tip_x'])}, {num(std['tip_y'])} mm"))
+        st = mc.get("study")
+        if st:
+            where = f"; samples in {st['out']}" + (f" (resumed at sample {st['resumed_from_sample']})" if st.get("resumed_from_sample") else "") if st.get("out") else ""
+            rows.append(("solved", f"{st['runner']} in {st['seconds']:.1f} s{where}"))
         rows.append(("agreement", d["agreement"]["verdict"]))
     return rows
 
@@ -379,12 +383,18 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
         raise UsageError("--monte-carlo needs uncertain parameters: --sigma NAME=SIGMA or an [uncertainty] table in the scene file")
+    chunked = _on_cluster(args) or args.mc_out is not None or args.resume
+    if chunked and args.monte_carlo is None:
+        raise UsageError("--workers, --scheduler, --mc-out and --resume run the Monte Carlo: give --monte-carlo N (and --sigma)")
+    if args.resume and args.mc_out is None:
+        raise UsageError("--resume continues the Monte Carlo in its sample file: give --mc-out FILE.csv")
     mc_options = None
     if args.monte_carlo is not None:
         from esba.uncertainty import MonteCarloOptions, UncertaintyError
 
         try:
-            mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=args.seed)
+            extra = {} if args.mc_chunk is None else {"chunk": args.mc_chunk}
+            mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=args.seed, **extra)
         except UncertaintyError as exc:
             raise UsageError(f"--monte-carlo: {exc}") from None
     options = SolverOptions(max_iter=args.max_iter, continuation=not args.no_continuation)
@@ -406,8 +416,18 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         propagation = propagate(result, sigmas)
         data["uncertainty"] = propagation.to_dict()
         if mc_options is not None:
-            mc = monte_carlo(scene, sigmas, mc_options)
+            if chunked:
+                try:
+                    mc, info = _monte_carlo_in_chunks(args, scene, sigmas, mc_options)
+                except KeyboardInterrupt:
+                    where = f": the samples solved so far are in {args.mc_out}; rerun with --resume to go on" if args.mc_out else ""
+                    print(f"esba: interrupted{where}", file=sys.stderr)
+                    return 130
+            else:
+                mc, info = monte_carlo(scene, sigmas, mc_options), None
             data["monte_carlo"] = mc.to_dict()
+            if info is not None:
+                data["monte_carlo"]["study"] = info
             data["agreement"] = compare(propagation, mc).to_dict()
     if figure is not None:
         from esba.plots import save_figure, solve_figure
@@ -422,6 +442,26 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         print(f"esba: solve not ok: {result.message or result.status}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
+
+
+def _monte_carlo_in_chunks(args: argparse.Namespace, scene, sigmas, options):
+    """The Monte Carlo on --workers or --scheduler, or streamed to --mc-out (esba.mc_study)."""
+    from esba.distributed import DistributedError, open_runner
+    from esba.study import StudyError
+    from esba.uncertainty import monte_carlo
+
+    progress = sys.stderr.isatty()
+    try:
+        with open_runner(args.workers, args.scheduler, args.connect_timeout) as runner:
+            if args.mc_out is None:
+                t0 = time.perf_counter()
+                mc = monte_carlo(scene, sigmas, options, runner=runner, progress=progress)
+                return mc, {"runner": runner.description, "workers": runner.workers, "seconds": time.perf_counter() - t0}
+            from esba.mc_study import monte_carlo_study
+
+            return monte_carlo_study(scene, sigmas, options, runner=runner, out=args.mc_out, resume=args.resume, progress=progress)
+    except (DistributedError, StudyError) as exc:
+        raise UsageError(str(exc)) from None
 
 
 def _sigmas_for(args: argparse.Namespace, scene) -> tuple:
@@ -467,6 +507,10 @@ def _add_solve(sub) -> None:
     p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="uncertain parameter: E=0.05 (in its unit), E=10%%, r2=±0.1 (a tolerance); repeatable; propagated to first order")
     p.add_argument("--monte-carlo", type=_sample_count, metavar="N", help="check the first-order uncertainty with N Monte Carlo samples on the batch path (e.g. 10000)")
     p.add_argument("--seed", type=_seed, default=0, help="seed of the Monte Carlo samples (default 0)")
+    _add_cluster_flags(p, "the Monte Carlo")
+    p.add_argument("--mc-chunk", type=_chunk_arg, metavar="K", help="Monte Carlo samples per chunk (default 2500)")
+    p.add_argument("--mc-out", type=_output_file(".csv"), metavar="FILE.csv", help="stream every Monte Carlo sample to FILE.csv, chunk by chunk")
+    p.add_argument("--resume", action="store_true", help="continue the Monte Carlo in --mc-out FILE.csv from the samples it holds")
     p.set_defaults(func=_cmd_solve)
 
 
@@ -811,6 +855,45 @@ _MAX_REPEAT = 100
 _MAX_SIZE = 10_000_000
 
 
+def _cmd_bench_scaling(args: argparse.Namespace) -> int:
+    from esba import bench_scaling, scaling_report
+    from esba.distributed import DistributedError, require_dask
+
+    if args.scheduler is not None and args.workers is not None:
+        raise UsageError("--workers N lists local cluster sizes and --scheduler ADDRESS measures an existing cluster: give one of the two")
+    try:
+        require_dask("esba bench scaling")
+    except DistributedError as exc:
+        raise UsageError(str(exc)) from None
+
+    def say(msg: str) -> None:
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    workers = tuple(args.workers) if args.workers else bench_scaling.DEFAULTS["workers"]
+    try:
+        data = bench_scaling.scaling_study(points=args.points, segments=args.segments, repeat=args.repeat, chunk=args.chunk,
+                                           workers=workers, scheduler=args.scheduler, timeout=args.connect_timeout, progress=say)
+    except DistributedError as exc:
+        raise UsageError(str(exc)) from None
+    if args.markdown:
+        command = "esba bench scaling"
+        defaults = bench_scaling.DEFAULTS
+        for flag, value, default in (("--points", args.points, defaults["points"]), ("--segments", args.segments, defaults["segments"]),
+                                     ("--repeat", args.repeat, defaults["repeat"]), ("--chunk", args.chunk, defaults["chunk"])):
+            if value != default:
+                command += f" {flag} {value}"
+        if args.workers:
+            command += "".join(f" --workers {w}" for w in args.workers)
+        if args.scheduler:
+            command += f" --scheduler {args.scheduler}"
+        command += f" --markdown {args.markdown}"
+        data["page"] = str(scaling_report.write_page(args.markdown, data, command))
+
+    _emit(args, data, scaling_report.summary)
+    return EXIT_OK
+
+
 def _add_bench(sub) -> None:
     p = sub.add_parser("bench", help="benchmarks: tables of medians over repeated runs")
     bsub = p.add_subparsers(dest="bench", parser_class=_Parser, required=True)
@@ -843,6 +926,17 @@ def _add_bench(sub) -> None:
     pa.add_argument("--markdown", metavar="FILE", help="also write the path section of a docs page (docs/performance.md)")
     pa.add_argument("--json", action="store_true")
     pa.set_defaults(func=_cmd_bench_path)
+    sc = bsub.add_parser("scaling", help="equilibria per second of a sweep in this process and on Dask (1, 2 workers), chunk sizes, overhead per chunk (docs/scaling.md)")
+    sc.add_argument("--points", type=_count("points", 20, 1_000_000), default=12_000, help="grid size, 20 to 1000000 (default 12000)")
+    sc.add_argument("--segments", "-n", type=_segments, default=16, help="segment count (default 16)")
+    sc.add_argument("--repeat", type=_count("repeat", 1, 50), default=3, help="runs per timing, median reported (default 3)")
+    sc.add_argument("--chunk", type=_chunk_arg, default=1000, metavar="K", help="points per chunk of the worker-count rows (default 1000)")
+    sc.add_argument("--workers", type=_workers_arg, action="append", metavar="N", help="local cluster sizes to measure (repeatable; default 1 and 2)")
+    sc.add_argument("--scheduler", type=_scheduler_arg, metavar="ADDRESS", help="measure the existing Dask cluster at ADDRESS instead (e.g. one started by dask-jobqueue)")
+    sc.add_argument("--connect-timeout", type=_timeout_arg, default=10.0, metavar="S", help="seconds to wait for --scheduler (default 10)")
+    sc.add_argument("--markdown", type=_output_file(".md"), metavar="FILE", help="also write the page (docs/scaling.md)")
+    sc.add_argument("--json", action="store_true")
+    sc.set_defaults(func=_cmd_bench_scaling)
     b = bsub.add_parser("batch", help="us per equilibrium of the batch path against IPOPT and naive BFGS")
     b.add_argument("--size", type=_count("size", 1, _MAX_SIZE), default=10_000, help="batch size (default 10000; bounded by the memory it takes)")
     b.add_argument("--segments", "-n", type=_segments, default=3, help="segment count (default 3)")
@@ -1038,6 +1132,75 @@ def _add_design(sub) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
+# studies on Dask (issue 11): --workers, --scheduler (esba.distributed)
+
+
+def _checked(check: Callable) -> Callable[[str], object]:
+    """An argparse type from a check of :mod:`esba.distributed` (imports no Dask)."""
+
+    def parse(text: str):
+        from esba.distributed import DistributedError
+
+        try:
+            return check(text, flag=None)
+        except DistributedError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    return parse
+
+
+def _workers_arg(text: str) -> int:
+    from esba.distributed import check_workers
+
+    return _checked(check_workers)(text)
+
+
+def _scheduler_arg(text: str) -> str:
+    from esba.distributed import check_address
+
+    return _checked(check_address)(text)
+
+
+def _timeout_arg(text: str) -> float:
+    from esba.distributed import check_timeout
+
+    return _checked(check_timeout)(text)
+
+
+def _chunk_arg(text: str) -> int:
+    from esba.study import MAX_CHUNK
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= MAX_CHUNK:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of points per chunk from 1 to {MAX_CHUNK}")
+    return value
+
+
+def _add_cluster_flags(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument("--workers", type=_workers_arg, metavar="N", help=f"solve {what} on a local Dask cluster of N worker processes (the esba[dask] extra)")
+    p.add_argument("--scheduler", type=_scheduler_arg, metavar="ADDRESS", help=f"solve {what} on the Dask cluster of the scheduler at ADDRESS (tcp://HOST:PORT)")
+    p.add_argument("--connect-timeout", type=_timeout_arg, default=10.0, metavar="S", help="seconds to wait for --scheduler and its first worker (default 10)")
+
+
+def _on_cluster(args: argparse.Namespace) -> bool:
+    """Whether the study runs on Dask; checks --workers, --scheduler and the extra before any computation."""
+    if args.workers is not None and args.scheduler is not None:
+        raise UsageError("--workers N starts a local cluster and --scheduler ADDRESS uses an existing one: give one of the two")
+    if args.workers is None and args.scheduler is None:
+        return False
+    from esba.distributed import DistributedError, require_dask
+
+    try:
+        require_dask("--workers" if args.workers is not None else "--scheduler")
+    except DistributedError as exc:
+        raise UsageError(str(exc)) from None
+    return True
+
+
+# ---------------------------------------------------------------------------------------------
 # esba sweep (issue 5): grids on the batch path
 
 
@@ -1053,17 +1216,26 @@ def _values_arg(text: str) -> list[float]:
 def _sweep_table(d: dict) -> str:
     lines = [f"base: {d['base']}", "axes: " + "; ".join(f"{k} {v['values']} {v['unit']}" for k, v in d["axes"].items())]
     lines.append(f"points: {d['counts']}; {d['backend']}")
-    rows = d["rows"]
-    if len(rows) <= 60:
+    st = d.get("study")
+    if st:
+        resumed = f", resumed at row {st['resumed_from_row']}" if st["resumed_from_row"] else ""
+        lines.append(f"study: {st['chunks_solved']} chunks of up to {st['chunk']} points {st['runner']} in {st['seconds']:.1f} s{resumed}")
+    rows = d.get("rows")
+
+    def num(v, fmt: str) -> str:
+        return "-" if v is None else format(v, fmt)
+
+    if rows is not None and len(rows) <= 60:
         head = f"{'P MPa':>9} {'F N':>6} {'Om deg':>7} {'r2':>6} {'d':>6} {'angle deg':>10} {'tip x, y mm':>18}  status"
         lines.append(head)
         for r in rows:
             ang = "" if r["total_angle_deg"] is None else f"{r['total_angle_deg']:10.3f}"
             tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
-            pres = f"{'-':>9}" if r["pressure_mpa"] is None else f"{r['pressure_mpa']:9.5f}"
-            lines.append(f"{pres} {r['payload_n']:6.3g} {r['payload_angle_deg']:7.3g} {r['r2_mm']:6.3g} {r['d_mm']:6.3g} {ang:>10} {tip:>18}  {r['status']}")
+            lines.append(f"{num(r['pressure_mpa'], '9.5f'):>9} {num(r['payload_n'], '6.3g'):>6} {num(r['payload_angle_deg'], '7.3g'):>7} "
+                         f"{num(r['r2_mm'], '6.3g'):>6} {num(r['d_mm'], '6.3g'):>6} {ang:>10} {tip:>18}  {r['status']}")
     else:
-        lines.append(f"{len(rows)} rows: write them with --out FILE.csv or FILE.json")
+        total = sum(d["counts"].values())
+        lines.append(f"{total} rows" + (f" in {d['out']}" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
     for k in ("out", "figure"):
         if d.get(k):
             lines.append(f"wrote {d[k]}")
@@ -1079,6 +1251,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.fig12:
         _refuse(args, ["pressure", "payload", "payload_angle", "r2", "d", "target_angle", "out", "plot"], "with --fig12 (it draws its own grid: r2 and d at P = 0.2 MPa, no payload)")
         figure = outputs.figure_file(args.fig12, "--fig12", "sweep-fig12.png")
+        out = None
     else:
         if args.pressure is not None:
             _refuse(args, ["target_angle"], "with --pressure (it sets the pressure of designs swept without --pressure)")
@@ -1088,6 +1261,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     changes = _scene_changes(args, skip=("pressure",))
     base = base.replace(**changes) if changes else base
     options = BatchOptions(compile="never" if args.no_compile else "auto", progress=not (args.json or args.no_progress))
+    if _on_cluster(args) or args.resume:
+        return _sweep_in_chunks(args, base, options, out, figure)
     if args.fig12:
         fig, sweeps = fig12(base.replace(pressure=0.2, payloads=()), options=options)
         path = save_figure(fig, figure)
@@ -1105,11 +1280,68 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if figure is not None:
         data["figure"] = str(save_figure(drawn, figure))
     _emit(args, data, _sweep_table)
-    outside = [f for found in result.validity for f in found]
-    for check in dict.fromkeys(f.check for f in outside):
-        first = next(f for f in outside if f.check == check)
-        count = sum(1 for found in result.validity if any(f.check == check for f in found))
+    _warn_sweep(result.validity)
+    if data["counts"]["not ok"]:
+        print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _warn_sweep(validity, outside: int = 0, out: str | None = None) -> None:
+    """One ``esba: warning:`` line per kind of finding of a sweep's points (per-point
+    :mod:`esba.validity` findings), or their count when the rows were streamed to ``out``."""
+    found = [f for point in validity for f in point]
+    for check in dict.fromkeys(f.check for f in found):
+        first = next(f for f in found if f.check == check)
+        count = sum(1 for point in validity if any(f.check == check for f in point))
         print(f"esba: warning: {count} point(s) outside the model's range, e.g. {first.message}", file=sys.stderr)
+    if not validity and outside:
+        print(f"esba: warning: {outside} point(s) outside the model's range: see the validity column of {out}", file=sys.stderr)
+
+
+def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, figure) -> int:
+    """``esba sweep`` chunk by chunk (--workers, --scheduler, --resume): esba.sweep_study."""
+    from esba.distributed import DistributedError, open_runner
+    from esba.plots import save_figure
+    from esba.scene import SceneError
+    from esba.study import StudyError
+    from esba.sweep import SweepError, plan_sweep, sweep_figure
+    from esba.sweep_study import sweep_study
+
+    if args.fig12:
+        raise UsageError("--fig12 draws its own small grid in this process: give it without --workers, --scheduler or --resume")
+    out = None if out is None else str(out)
+    streamed = out is not None and out.lower().endswith(".csv")
+    if args.resume and not streamed:
+        raise UsageError(f"--resume continues a study from the CSV file it streams to: give --out FILE.csv (given: {out!r})")
+    if args.plot and streamed:
+        raise UsageError("--plot needs every row in memory, and with --out FILE.csv on --workers, --scheduler or --resume the rows stream to the file: plot in a run without them")
+    try:
+        plan = plan_sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d)
+    except (SweepError, SceneError) as exc:
+        raise UsageError(str(exc)) from None
+    try:
+        with open_runner(args.workers, args.scheduler, args.connect_timeout) as runner:
+            study = sweep_study(plan, options, runner=runner, chunk=args.chunk, out=out if streamed else None, resume=args.resume, progress=options.progress)
+    except (DistributedError, StudyError) as exc:
+        raise UsageError(str(exc)) from None
+    except KeyboardInterrupt:
+        where = f": the rows solved so far are in {out}; rerun with --resume to go on" if streamed else ""
+        print(f"esba: interrupted{where}", file=sys.stderr)
+        return 130
+    # streamed rows stay in the file (a study may not fit in memory); a small grid's table reads them back
+    data = study.to_dict(rows=not streamed or (plan.size <= 60 and not args.json))
+    if streamed:
+        data["out"] = out
+    elif out is not None:
+        data["out"] = str(study.result.write(out))
+    if args.plot:
+        try:
+            data["figure"] = str(save_figure(sweep_figure(study.result), figure))
+        except SweepError as exc:
+            raise UsageError(str(exc)) from None
+    _emit(args, data, _sweep_table)
+    _warn_sweep(study.result.validity if study.result is not None else (), study.outside, out)
     if data["counts"]["not ok"]:
         print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
         return EXIT_FAILED
@@ -1136,6 +1368,9 @@ def _add_sweep(sub) -> None:
     p.add_argument("--no-compile", action="store_true", help="use CasADi's interpreter, not compiled C")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print JSON (every row)")
+    _add_cluster_flags(p, "the grid")
+    p.add_argument("--chunk", type=_chunk_arg, default=1000, metavar="K", help="points per chunk with --workers, --scheduler or --resume (default 1000)")
+    p.add_argument("--resume", action="store_true", help="stream the rows chunk by chunk to --out FILE.csv and continue the study that file holds (a new one if there is none)")
     p.set_defaults(func=_cmd_sweep)
 
 

@@ -6,6 +6,12 @@ tip), ``payload_angle`` (degrees), ``r2`` and ``d`` (mm), and solves every point
 Cartesian product. Geometries outside the design space (r2 + d >= r1) are rows marked
 ``infeasible`` and not solved; every other row is ok or says why not.
 
+A sweep is a :class:`SweepPlan` (:func:`plan_sweep`: the validated grid, plain values only) and
+:func:`solve_points`, a pure function of (plan, first point, end point, batch options) that solves
+any range of the grid's points and returns plain arrays. :func:`sweep` solves the whole grid with
+it in one call; :mod:`esba.sweep_study` solves it chunk by chunk, in this process or on Dask
+workers (:mod:`esba.distributed`), with the same answers element for element.
+
 :func:`load_path` follows one scene's payloads from 0 to their full magnitude by path tracing
 (:mod:`esba.loading`) and reports where the path jumps (a snap-through at a fold) instead of
 connecting the two branches silently.
@@ -21,6 +27,10 @@ Examples
 ((3, 2), 5, ['ok', 'ok', 'ok', 'ok', 'ok', 'infeasible'])
 >>> s.total_angle_deg[:2].round(1).tolist()
 [34.8, 37.2]
+>>> plan = plan_sweep(Scene(pressure=0.1), r2=[2.0, 3.0, 5.0], d=[2.0, 4.0])
+>>> part = solve_points(plan, 4, 6, BatchOptions(compile="never"))
+>>> part["status"].tolist(), bool(part["theta"][0, 0] == s.theta[4, 0])
+(['ok', 'infeasible'], True)
 """
 
 from __future__ import annotations
@@ -30,29 +40,55 @@ import dataclasses
 import io
 import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from . import checks, jsonsafe, resolution
-from .batch import BatchOptions, BatchResult, check_size, solve_arrays
+from .batch import BatchOptions, check_size, decide_backend, solve_arrays
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, pressure_for_angle, solve
 from .loading import follow
 from .path import PathOptions, PathProblem
 from .scene import Payload, Scene, SceneError
 from .validity import Finding, assess_arrays
 
-__all__ = ["AXES", "SweepResult", "LoadPath", "sweep", "load_path", "fig12", "sweep_figure", "parse_values", "SweepError"]
+__all__ = [
+    "AXES",
+    "SweepPlan",
+    "SweepResult",
+    "LoadPath",
+    "plan_sweep",
+    "solve_points",
+    "sweep",
+    "load_path",
+    "fig12",
+    "sweep_figure",
+    "parse_values",
+    "row_fields",
+    "point_rows",
+    "SweepError",
+    "check_points",
+    "check_resolvable",
+    "MAX_POINTS",
+    "MAX_STUDY_POINTS",
+]
 
 #: The axes of a sweep, in the order of the grid's dimensions, with their units.
 AXES: dict[str, str] = {"pressure": "MPa", "payload": "N", "payload_angle": "deg", "r2": "mm", "d": "mm"}
 
+#: Columns of a sweep's rows that hold text (every other column is a number, empty when undefined).
+TEXT_FIELDS = ("status", "stability", "method", "message", "notes", "validity")
 
-#: The most points a sweep grid may have: its rows are kept and written whole (about 1 kB each in
-#: JSON); a larger study is a set of smaller sweeps.
+
+#: The most points a sweep grid solved in memory (:func:`sweep`, a study gathered in memory) may
+#: have: its rows are kept and written whole (about 1 kB each in JSON).
 MAX_POINTS = 200_000
+
+#: The most points of a grid streamed to a CSV file chunk by chunk (:mod:`esba.sweep_study`): a
+#: few GB of rows at n = 16; a larger study is a set of smaller ones.
+MAX_STUDY_POINTS = 10_000_000
 
 
 class SweepError(ValueError):
@@ -93,6 +129,313 @@ def parse_values(text: str) -> list[float]:
     return [round(v, 12) for v in values]
 
 
+# ---------------------------------------------------------------------------------------------
+# the grid, and solving any range of its points
+
+
+@dataclass(frozen=True, eq=False)
+class SweepPlan:
+    """A validated sweep grid before it is solved: plain values only (no model, no CasADi object),
+    so that it can travel to another process.
+
+    Attributes
+    ----------
+    base : Scene
+        Everything not swept (with one payload when a payload axis is swept).
+    axes : dict
+        Axis name -> values, for the axes swept (in :data:`AXES` order).
+    fixed : dict
+        The value of every axis of :data:`AXES` at the base scene (``pressure`` NaN when each
+        design is at the pressure of its target angle; ``payload`` 0 without payload).
+    at : float
+        Point of application of a swept payload (fraction of L).
+    payload_swept, angle_mode : bool
+        A payload axis is swept; the pressure comes from the base scene's target angle.
+    """
+
+    base: Scene
+    axes: dict[str, list[float]]
+    fixed: dict[str, float]
+    at: float
+    payload_swept: bool
+    angle_mode: bool
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """The grid's shape, one entry per swept axis."""
+        return tuple(len(v) for v in self.axes.values())
+
+    @property
+    def size(self) -> int:
+        """Number of points of the grid."""
+        return math.prod(self.shape)
+
+    def columns(self, start: int = 0, stop: int | None = None) -> dict[str, np.ndarray]:
+        """Axis name -> value of points ``start`` to ``stop`` (flattened grid, C order), for every axis of :data:`AXES`."""
+        stop = self.size if stop is None else stop
+        if not 0 <= start <= stop <= self.size:
+            raise SweepError(f"points {start}:{stop}: expected 0 <= start <= stop <= {self.size}")
+        idx = np.arange(start, stop)
+        cols = {k: np.full(len(idx), float(self.fixed[k])) for k in AXES}
+        multi = np.unravel_index(idx, self.shape)
+        for j, name in enumerate(self.axes):
+            cols[name] = np.asarray(self.axes[name], dtype=float)[multi[j]]
+        return cols
+
+    def scene_of(self, cols: Mapping[str, np.ndarray], i: int) -> Scene:
+        """The scene of point ``i`` of ``cols`` (from :meth:`columns`)."""
+        changes: dict[str, Any] = {"r2": float(cols["r2"][i]), "d": float(cols["d"][i])}
+        if not self.angle_mode:
+            changes["pressure"] = float(cols["pressure"][i])
+        if self.payload_swept:
+            changes["payloads"] = (Payload(float(cols["payload"][i]), float(cols["payload_angle"][i]), self.at),)
+        return self.base.replace(**changes)
+
+    def describe(self) -> dict[str, Any]:
+        """Everything that fixes the grid's answers, as plain JSON-ready values (a study's identity)."""
+        return {
+            "base": dataclasses.asdict(self.base),
+            "axes": {k: list(v) for k, v in self.axes.items()},
+            "segments": self.base.segments,
+            "effects": self.base.effects.spec(),
+            "variant": self.base.variant,
+        }
+
+
+def _axis(name: str, values) -> list[float] | None:
+    if values is None:
+        return None
+    vals = [float(v) for v in (values if isinstance(values, (list, tuple, np.ndarray)) else [values])]
+    if not vals or not all(math.isfinite(v) for v in vals):
+        raise SweepError(f"{name}={values!r}: expected one or more finite numbers")
+    if name in ("pressure", "payload", "d") and min(vals) < 0:
+        raise SweepError(f"{name}: {min(vals):g} {AXES[name]} given; expected values >= 0")
+    if name == "r2" and min(vals) <= 0:
+        raise SweepError(f"r2: {min(vals):g} mm given; expected values > 0")
+    return vals
+
+
+def plan_sweep(base: Scene | None = None, *, pressure=None, payload=None, payload_angle=None, r2=None, d=None) -> SweepPlan:
+    """The validated grid of :func:`sweep` (same arguments but the options), not solved."""
+    base = Scene() if base is None else base
+    if not isinstance(base, Scene):
+        raise SweepError(f"base={base!r}: expected a Scene")
+    given = {"pressure": pressure, "payload": payload, "payload_angle": payload_angle, "r2": r2, "d": d}
+    axes = {k: v for k, v in ((k, _axis(k, given[k])) for k in AXES) if v is not None}
+    if not axes:
+        raise SweepError("sweep needs at least one axis: pressure, payload, payload_angle, r2 or d")
+    payload_swept = "payload" in axes or "payload_angle" in axes
+    first = base.payloads[0] if base.payloads else Payload(0.0, 90.0, 1.0)
+    if payload_swept:
+        base = base.replace(payloads=(first,))
+    fixed = {
+        "pressure": base.pressure if base.pressure is not None else float("nan"),
+        "payload": first.force if base.payloads else 0.0,
+        "payload_angle": first.angle_deg,
+        "r2": base.actuator.r2,
+        "d": base.actuator.d,
+    }
+    angle_mode = "pressure" not in axes and base.pressure is None
+    plan = SweepPlan(base, axes, {k: float(v) for k, v in fixed.items()}, first.at, payload_swept, angle_mode)
+    check_points(plan, MAX_STUDY_POINTS)
+    return plan
+
+
+def check_points(plan: SweepPlan, limit: int = MAX_POINTS) -> None:
+    """A :class:`SweepError` when the grid has more than ``limit`` points, naming its axes and both
+    bounds (:data:`MAX_POINTS` in memory, :data:`MAX_STUDY_POINTS` streamed to a file)."""
+    if plan.size > limit:
+        counts = " x ".join(f"{len(v)} {k}" for k, v in plan.axes.items())
+        raise SweepError(
+            f"the grid has {plan.size} points ({counts}): at most {MAX_POINTS} in memory, {MAX_STUDY_POINTS} streamed "
+            "chunk by chunk to --out FILE.csv with --resume or --workers; sweep fewer values, or split the grid"
+        )
+
+
+def check_resolvable(plan: SweepPlan) -> None:
+    """Refuse, before anything is solved, a grid whose strongest point of some design is at a scale
+    the solver cannot resolve (:func:`esba.resolution.check_resolvable`)."""
+    payloads = plan.axes.get("payload", [plan.fixed["payload"]])
+    strongest = max(payloads) if plan.payload_swept else 0.0
+    top_pressure = None if plan.angle_mode else max(plan.axes.get("pressure", [plan.fixed["pressure"]]))
+    for r2_ in plan.axes.get("r2", [plan.fixed["r2"]]):
+        for d_ in plan.axes.get("d", [plan.fixed["d"]]):
+            try:
+                extreme = plan.base.replace(r2=r2_, d=d_)
+            except SceneError:  # infeasible: reported as such, not solved
+                continue
+            if plan.payload_swept:
+                extreme = extreme.replace(payloads=(Payload(strongest, plan.fixed["payload_angle"], plan.at),))
+            if top_pressure is not None:
+                extreme = extreme.replace(pressure=top_pressure)
+                resolution.check_resolvable(extreme, top_pressure, DEFAULT_OPTIONS.stationarity_tol)
+                continue
+            try:
+                top = pressure_for_angle(extreme)
+            except EquilibriumError:  # that design's points are reported not ok by the batch
+                continue
+            resolution.check_resolvable(extreme, top, DEFAULT_OPTIONS.stationarity_tol)
+
+
+def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions | None = None) -> dict[str, Any]:
+    """Solve points ``start`` to ``stop`` of a sweep grid on the batch path: a pure function of its
+    arguments, so that any chunk of a grid can be solved anywhere (another process, a Dask worker).
+
+    The model is loaded with :meth:`esba.scene.Scene.model` (:func:`esba.model.load_model`, once
+    per process). Each point's answer depends on the point alone: any split of the grid gives
+    the same arrays, element for element, when ``options.compile`` is the same for every chunk
+    (``"always"`` or ``"never"``: see :func:`esba.batch.decide_backend`).
+
+    Returns
+    -------
+    dict
+        ``status`` (str array), ``messages``, ``notes`` and ``validity`` (lists: text, text,
+        :class:`esba.validity.Finding` tuples), ``pressure`` (k,),
+        ``theta`` (k, n) rad, ``tip`` (k, 3), ``stability`` and ``method`` (str arrays),
+        ``backend`` (str) and ``timings`` (dict, s).
+    """
+    cols = plan.columns(start, stop)
+    size = stop - start
+    # geometry: validated once per distinct (r2, d)
+    status = np.full(size, "ok", dtype=object)
+    messages = [""] * size
+    bad: dict[tuple[float, float], str] = {}
+    for key in set(zip(cols["r2"].tolist(), cols["d"].tolist())):
+        try:
+            dataclasses.replace(plan.base.actuator, r2=key[0], d=key[1])
+        except SceneError as exc:
+            bad[key] = str(exc)
+    for i, key in enumerate(zip(cols["r2"].tolist(), cols["d"].tolist())):
+        if key in bad:
+            status[i], messages[i] = "infeasible", bad[key]
+    feasible = np.where(status != "infeasible")[0]
+
+    base = plan.base
+    n = base.segments
+    theta = np.full((size, n), np.nan)
+    tip = np.full((size, 3), np.nan)
+    pres = cols["pressure"].copy()
+    stability = np.full(size, "", dtype=object)
+    method = np.full(size, "", dtype=object)
+    notes: list[tuple[str, ...]] = [()] * size
+    validity: list[tuple[Finding, ...]] = [()] * size
+    backend, timings = "", {}
+    if len(feasible):
+        model = base.model()
+        values: dict[str, Any] = base.parameters(0.0 if plan.angle_mode else plan.fixed["pressure"])
+        values = {k: np.full(len(feasible), float(values[k])) for k in model.parameters}
+        values["r2"] = cols["r2"][feasible]
+        values["d"] = cols["d"][feasible]
+        if not plan.angle_mode:
+            values["P"] = cols["pressure"][feasible]
+        if plan.payload_swept:
+            values["F1"] = cols["payload"][feasible]
+            values["Omega1"] = np.radians(cols["payload_angle"][feasible])
+        target = math.radians(base.target_angle_deg) if plan.angle_mode else None
+        batch = solve_arrays(model, values, target_angle=target, options=options, scene_of=lambda j: plan.scene_of(cols, int(feasible[j])))
+        theta[feasible] = batch.theta
+        tip[feasible] = batch.tip
+        pres[feasible] = batch.pressure
+        stability[feasible] = batch.stability
+        method[feasible] = batch.method
+        for j, i in enumerate(feasible):
+            notes[i] = batch.notes[j]
+            if not batch.ok[j]:
+                status[i], messages[i] = "not ok", batch.messages[j]
+        backend, timings = batch.backend, dict(batch.timings)
+        a = base.actuator
+        found = assess_arrays(
+            n, a.L, a.r1, cols["r2"][feasible], cols["d"][feasible], theta[feasible], tip[feasible, 0], pres[feasible],
+            cols["payload"][feasible] if plan.payload_swept else max((p.force for p in base.payloads), default=0.0),
+        )
+        for j, i in enumerate(feasible):
+            validity[i] = found[j]
+    return {
+        "status": status.astype(str),
+        "messages": messages,
+        "notes": notes,
+        "validity": validity,
+        "pressure": pres,
+        "theta": theta,
+        "tip": tip,
+        "stability": stability.astype(str),
+        "method": method.astype(str),
+        "backend": backend,
+        "timings": timings,
+    }
+
+
+# ---------------------------------------------------------------------------------------------
+# rows
+
+
+def row_fields(n: int) -> list[str]:
+    """The columns of a sweep's rows (and CSV file) for n segments."""
+    head = ["pressure_mpa", "payload_n", "payload_angle_deg", "r2_mm", "d_mm", "status", "stability", "method", "total_angle_deg", "tip_x_mm", "tip_y_mm"]
+    return head + [f"theta{k + 1}_deg" for k in range(n)] + ["message", "notes", "validity"]
+
+
+def _number(v: float) -> float | None:
+    """A finite float, else None (an empty cell, JSON null: never NaN)."""
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def point_rows(points: Mapping[str, np.ndarray], part: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """One dict per point (the columns of :func:`row_fields`): the axes, status, angles (degrees),
+    tip (mm), solver facts; None where a value is undefined (an infeasible point, a solve that
+    left no finite angle).
+
+    ``points`` are the points' axis columns (:meth:`SweepPlan.columns`), ``part`` the arrays of
+    :func:`solve_points` (or of a :class:`SweepResult`).
+    """
+    out = []
+    theta, tip = part["theta"], part["tip"]
+    n = theta.shape[1]
+    for i in range(len(part["status"])):
+        feasible = part["status"][i] != "infeasible"
+        row: dict[str, Any] = {
+            "pressure_mpa": _number(part["pressure"][i] if feasible else points["pressure"][i]),
+            "payload_n": _number(points["payload"][i]),
+            "payload_angle_deg": _number(points["payload_angle"][i]),
+            "r2_mm": _number(points["r2"][i]),
+            "d_mm": _number(points["d"][i]),
+            "status": str(part["status"][i]),
+            "stability": str(part["stability"][i]),
+            "method": str(part["method"][i]),
+            "total_angle_deg": _number(math.degrees(float(np.sum(theta[i])))) if feasible else None,
+            "tip_x_mm": _number(tip[i, 0]) if feasible else None,
+            "tip_y_mm": _number(tip[i, 1]) if feasible else None,
+        }
+        for k in range(n):
+            row[f"theta{k + 1}_deg"] = _number(math.degrees(theta[i, k])) if feasible else None
+        row["message"] = part["messages"][i]
+        row["notes"] = " | ".join(part["notes"][i])
+        found = part.get("validity")
+        row["validity"] = " | ".join(f.message for f in found[i]) if found else ""
+        out.append(row)
+    return out
+
+
+def csv_cells(row: Mapping[str, Any]) -> dict[str, Any]:
+    """A row as CSV cells: None as an empty cell."""
+    return {k: ("" if v is None else v) for k, v in row.items()}
+
+
+def parse_row(cells: Mapping[str, str]) -> dict[str, Any]:
+    """A row read back from CSV: numbers as floats (exact: Python writes floats in their shortest
+    round-trip form), empty cells as None, text as text.
+
+    >>> parse_row({"pressure_mpa": "0.1", "tip_x_mm": "", "status": "ok"})
+    {'pressure_mpa': 0.1, 'tip_x_mm': None, 'status': 'ok'}
+    """
+    return {k: (v if k in TEXT_FIELDS else (float(v) if v != "" else None)) for k, v in cells.items()}
+
+
+# ---------------------------------------------------------------------------------------------
+# the result
+
+
 @dataclass(frozen=True, eq=False)
 class SweepResult:
     """Every point of a sweep grid: the axes, the status and the equilibrium of each point.
@@ -114,8 +457,10 @@ class SweepResult:
         What happened on a point's load path (a jump, noted by the IPOPT fallback).
     validity : tuple of tuple of Finding
         Where each point leaves the range the paper's model describes (:mod:`esba.validity`).
-    batch : BatchResult or None
-        The solves of the feasible points (None when there is none).
+    backend : str
+        How the batch path ran (compiled or interpreted, and why), decided once for the grid.
+    timings : dict
+        Wall times of the batch path in s (summed over chunks).
     """
 
     base: Scene
@@ -128,9 +473,34 @@ class SweepResult:
     tip: np.ndarray
     stability: np.ndarray
     method: np.ndarray
-    batch: BatchResult | None = field(repr=False)
+    backend: str = ""
+    timings: dict = dataclasses.field(default_factory=dict)
     notes: tuple[tuple[str, ...], ...] = ()
     validity: tuple[tuple[Finding, ...], ...] = ()
+
+    @classmethod
+    def from_parts(cls, plan: SweepPlan, parts: Sequence[Mapping[str, Any]], backend: str) -> SweepResult:
+        """The result of a whole grid from the :func:`solve_points` arrays of its chunks, in order."""
+        timings: dict[str, float] = {}
+        for p in parts:
+            for k, v in p["timings"].items():
+                timings[k] = timings.get(k, 0.0) + v
+        return cls(
+            base=plan.base,
+            axes=plan.axes,
+            points=plan.columns(),
+            status=np.concatenate([p["status"] for p in parts]),
+            messages=tuple(m for p in parts for m in p["messages"]),
+            pressure=np.concatenate([p["pressure"] for p in parts]),
+            theta=np.vstack([p["theta"] for p in parts]),
+            tip=np.vstack([p["tip"] for p in parts]),
+            stability=np.concatenate([p["stability"] for p in parts]),
+            method=np.concatenate([p["method"] for p in parts]),
+            backend=backend,
+            timings=timings,
+            notes=tuple(tuple(t) for p in parts for t in p["notes"]),
+            validity=tuple(tuple(v) for p in parts for v in p.get("validity", [()] * len(p["status"]))),
+        )
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -147,6 +517,10 @@ class SweepResult:
         """Total bending angle per point, degrees (NaN where infeasible: see :attr:`status`)."""
         return np.degrees(np.sum(self.theta, axis=1))
 
+    def counts(self) -> dict[str, int]:
+        """Points ok, not ok and infeasible."""
+        return {s: int(np.sum(self.status == s)) for s in ("ok", "not ok", "infeasible")}
+
     def scene(self, i: int) -> Scene:
         """The scene of point ``i`` (the base scene with the point's axis values)."""
         changes: dict[str, Any] = {"r2": float(self.points["r2"][i]), "d": float(self.points["d"][i])}
@@ -162,58 +536,33 @@ class SweepResult:
         return np.asarray(values).reshape(self.shape)
 
     def rows(self) -> list[dict[str, Any]]:
-        """One dict per point: the axes, status, angles (degrees), tip (mm), solver facts, validity.
-
-        Values that do not exist (an infeasible point's angles, the pressure of an infeasible
-        point swept by target angle) are None, never NaN.
-        """
-        out = []
-        n = self.theta.shape[1]
-        for i in range(len(self.status)):
-            feasible = self.status[i] != "infeasible"
-            pressure = float(self.pressure[i]) if feasible else float(self.points["pressure"][i])
-            row: dict[str, Any] = {
-                "pressure_mpa": pressure if math.isfinite(pressure) else None,
-                "payload_n": float(self.points["payload"][i]),
-                "payload_angle_deg": float(self.points["payload_angle"][i]),
-                "r2_mm": float(self.points["r2"][i]),
-                "d_mm": float(self.points["d"][i]),
-                "status": str(self.status[i]),
-                "stability": str(self.stability[i]),
-                "method": str(self.method[i]),
-                "total_angle_deg": float(self.total_angle_deg[i]) if feasible else None,
-                "tip_x_mm": float(self.tip[i, 0]) if feasible else None,
-                "tip_y_mm": float(self.tip[i, 1]) if feasible else None,
-            }
-            for k in range(n):
-                row[f"theta{k + 1}_deg"] = float(math.degrees(self.theta[i, k])) if feasible else None
-            row["message"] = self.messages[i]
-            row["notes"] = " | ".join(self.notes[i])
-            row["validity"] = " | ".join(f.message for f in self.validity[i]) if self.validity else ""
-            out.append(row)
-        return out
+        """One dict per point: the axes, status, angles (degrees), tip (mm), solver facts, validity (:func:`point_rows`)."""
+        part = {
+            "status": self.status, "stability": self.stability, "method": self.method, "pressure": self.pressure,
+            "theta": self.theta, "tip": self.tip, "messages": self.messages, "notes": self.notes,
+            "validity": self.validity,
+        }
+        return point_rows(self.points, part)
 
     def to_csv(self) -> str:
-        """The rows as CSV text (empty cells where a point is infeasible)."""
-        rows = self.rows()
+        """The rows as CSV text (empty cells where a value is undefined)."""
         buf = io.StringIO()
-        writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+        writer = csv.DictWriter(buf, fieldnames=row_fields(self.base.segments), lineterminator="\n")
         writer.writeheader()
-        for r in rows:
-            writer.writerow({k: ("" if v is None else v) for k, v in r.items()})
+        for r in self.rows():
+            writer.writerow(csv_cells(r))
         return buf.getvalue()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the base scene, the axes, counts, the backend and every row."""
-        counts = {s: int(np.sum(self.status == s)) for s in ("ok", "not ok", "infeasible")}
         return {
             "base": self.base.describe(),
             "segments": self.base.segments,
             "axes": {k: {"values": v, "unit": AXES[k]} for k, v in self.axes.items()},
-            "counts": counts,
+            "counts": self.counts(),
             "outside_model_range": sum(1 for v in self.validity if v),
-            "backend": self.batch.backend if self.batch is not None else "",
-            "timings_s": dict(self.batch.timings) if self.batch is not None else {},
+            "backend": self.backend,
+            "timings_s": dict(self.timings),
             "rows": self.rows(),
         }
 
@@ -228,19 +577,6 @@ class SweepResult:
             raise SweepError(f"output {str(path)!r}: expected a .csv or .json file")
         path.write_text(text, encoding="utf-8")
         return path
-
-
-def _axis(name: str, values) -> list[float] | None:
-    if values is None:
-        return None
-    vals = [float(v) for v in (values if isinstance(values, (list, tuple, np.ndarray)) else [values])]
-    if not vals or not all(math.isfinite(v) for v in vals):
-        raise SweepError(f"{name}={values!r}: expected one or more finite numbers")
-    if name in ("pressure", "payload", "d") and min(vals) < 0:
-        raise SweepError(f"{name}: {min(vals):g} {AXES[name]} given; expected values >= 0")
-    if name == "r2" and min(vals) <= 0:
-        raise SweepError(f"r2: {min(vals):g} mm given; expected values > 0")
-    return vals
 
 
 def sweep(
@@ -264,132 +600,19 @@ def sweep(
         Axis values (MPa, N, degrees, mm, mm). A ``payload`` or ``payload_angle`` axis replaces
         the base scene's payloads with one payload.
     options : BatchOptions, optional
+        ``compile="auto"`` is decided once for the whole grid (:func:`esba.batch.decide_backend`).
 
     Returns
     -------
     SweepResult
     """
-    base = Scene() if base is None else base
-    if not isinstance(base, Scene):
-        raise SweepError(f"base={base!r}: expected a Scene")
-    given = {"pressure": pressure, "payload": payload, "payload_angle": payload_angle, "r2": r2, "d": d}
-    axes = {k: v for k, v in ((k, _axis(k, given[k])) for k in AXES) if v is not None}
-    if not axes:
-        raise SweepError("sweep needs at least one axis: pressure, payload, payload_angle, r2 or d")
-
-    payload_swept = "payload" in axes or "payload_angle" in axes
-    first = base.payloads[0] if base.payloads else Payload(0.0, 90.0, 1.0)
-    if payload_swept:
-        base = base.replace(payloads=(first,))
-    fixed = {
-        "pressure": base.pressure if base.pressure is not None else float("nan"),
-        "payload": first.force if base.payloads else 0.0,
-        "payload_angle": first.angle_deg,
-        "r2": base.actuator.r2,
-        "d": base.actuator.d,
-    }
-    size = math.prod(len(v) for v in axes.values())
-    if size > MAX_POINTS:
-        counts = " x ".join(f"{len(v)} {k}" for k, v in axes.items())
-        raise SweepError(f"the grid has {size} points ({counts}): at most {MAX_POINTS}; sweep fewer values, or split the grid")
-    check_size(size, base.segments, "the sweep", SweepError)
-    grid = list(itertools.product(*axes.values()))
-    cols = {k: np.full(size, float(fixed[k])) for k in AXES}
-    for j, name in enumerate(axes):
-        cols[name] = np.array([pt[j] for pt in grid])
-    angle_mode = "pressure" not in axes and base.pressure is None
-
-    def scene_of(i: int) -> Scene:
-        changes: dict[str, Any] = {"r2": float(cols["r2"][i]), "d": float(cols["d"][i])}
-        if not angle_mode:
-            changes["pressure"] = float(cols["pressure"][i])
-        if payload_swept:
-            changes["payloads"] = (Payload(float(cols["payload"][i]), float(cols["payload_angle"][i]), first.at),)
-        return base.replace(**changes)
-
-    # geometry: validated once per distinct (r2, d)
-    status = np.full(size, "ok", dtype=object)
-    messages = [""] * size
-    bad: dict[tuple[float, float], str] = {}
-    for key in set(zip(cols["r2"].tolist(), cols["d"].tolist())):
-        try:
-            dataclasses.replace(base.actuator, r2=key[0], d=key[1])
-        except SceneError as exc:
-            bad[key] = str(exc)
-    for i, key in enumerate(zip(cols["r2"].tolist(), cols["d"].tolist())):
-        if key in bad:
-            status[i], messages[i] = "infeasible", bad[key]
-    feasible = np.where(status != "infeasible")[0]
-    if len(feasible):  # scales the solver cannot resolve are refused before the batch starts
-        strongest = float(np.max(cols["payload"][feasible])) if payload_swept else 0.0
-        for r2_, d_ in {(float(cols["r2"][i]), float(cols["d"][i])) for i in feasible}:
-            extreme = base.replace(r2=r2_, d=d_)
-            if payload_swept:
-                extreme = extreme.replace(payloads=(Payload(strongest, first.angle_deg, first.at),))
-            if not angle_mode:
-                extreme = extreme.replace(pressure=float(np.max(cols["pressure"][feasible])))
-                resolution.check_resolvable(extreme, extreme.pressure, DEFAULT_OPTIONS.stationarity_tol)
-                continue
-            try:
-                top = pressure_for_angle(extreme)
-            except EquilibriumError:  # that design's points are reported not ok by the batch
-                continue
-            resolution.check_resolvable(extreme, top, DEFAULT_OPTIONS.stationarity_tol)
-
-    n = base.segments
-    theta = np.full((size, n), np.nan)
-    tip = np.full((size, 3), np.nan)
-    pres = cols["pressure"].copy()
-    stability = np.full(size, "", dtype=object)
-    method = np.full(size, "", dtype=object)
-    batch = None
-    notes: list[tuple[str, ...]] = [()] * size
-    if len(feasible):
-        model = base.model()
-        values: dict[str, Any] = base.parameters(0.0 if angle_mode else fixed["pressure"])
-        values = {k: np.full(len(feasible), float(values[k])) for k in model.parameters}
-        values["r2"] = cols["r2"][feasible]
-        values["d"] = cols["d"][feasible]
-        if not angle_mode:
-            values["P"] = cols["pressure"][feasible]
-        if payload_swept:
-            values["F1"] = cols["payload"][feasible]
-            values["Omega1"] = np.radians(cols["payload_angle"][feasible])
-        target = math.radians(base.target_angle_deg) if angle_mode else None
-        batch = solve_arrays(model, values, target_angle=target, options=options, scene_of=lambda j: scene_of(int(feasible[j])))
-        theta[feasible] = batch.theta
-        tip[feasible] = batch.tip
-        pres[feasible] = batch.pressure
-        stability[feasible] = batch.stability
-        method[feasible] = batch.method
-        for j, i in enumerate(feasible):
-            notes[i] = batch.notes[j]
-            if not batch.ok[j]:
-                status[i], messages[i] = "not ok", batch.messages[j]
-    validity: list[tuple[Finding, ...]] = [()] * size
-    if len(feasible):
-        a = base.actuator
-        found = assess_arrays(
-            n, a.L, a.r1, cols["r2"][feasible], cols["d"][feasible], theta[feasible], tip[feasible, 0], pres[feasible],
-            cols["payload"][feasible] if payload_swept else max((p.force for p in base.payloads), default=0.0),
-        )
-        for j, i in enumerate(feasible):
-            validity[i] = found[j]
-    return SweepResult(
-        base=base,
-        axes=axes,
-        points=cols,
-        status=status.astype(str),
-        messages=tuple(messages),
-        pressure=pres,
-        theta=theta,
-        tip=tip,
-        stability=stability.astype(str),
-        method=method.astype(str),
-        batch=batch,
-        notes=tuple(notes),
-        validity=tuple(validity),
-    )
+    plan = plan_sweep(base, pressure=pressure, payload=payload, payload_angle=payload_angle, r2=r2, d=d)
+    check_points(plan)
+    check_size(plan.size, plan.base.segments, "the sweep", SweepError)
+    check_resolvable(plan)
+    options, backend = decide_backend(plan.base.model(), options, plan.angle_mode, plan.size)
+    part = solve_points(plan, 0, plan.size, options)
+    return SweepResult.from_parts(plan, [part], backend)
 
 
 # ---------------------------------------------------------------------------------------------

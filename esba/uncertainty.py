@@ -25,8 +25,9 @@ the first-order answer cannot be trusted.
 generator (normal, or uniform for tolerances), then solved in independent chunks on the batch
 path (:mod:`esba.batch`: compiled Newton continuation along each sample's own load path, IPOPT
 for the few it cannot do). Each chunk is :func:`solve_samples`, a pure function of (base scene,
-parameter names, parameter arrays) returning arrays, so the chunks can run anywhere (processes,
-Dask workers) and the result is the same whatever the chunking. Samples the scene's rules do not
+parameter names, parameter arrays) returning arrays, so the chunks can run anywhere (in this
+process, or on Dask workers: ``runner``, :mod:`esba.distributed`) and the result is the same
+whatever the chunking; :mod:`esba.mc_study` streams the samples to a file and resumes it. Samples the scene's rules do not
 allow (e.g. r2 + d >= r1) and samples that end on no stable equilibrium are counted and left out.
 :func:`compare` sets the two side by side and gives a verdict.
 
@@ -46,12 +47,12 @@ import math
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from . import checks, jsonsafe
-from .batch import AUTO_COMPILE_MAX_N, BatchOptions, compiler, solve_arrays
+from .batch import AUTO_COMPILE_MAX_N, BatchOptions, compiler, prepare, solve_arrays
 from .equilibrium import Equilibrium
 from .scene import Scene, SceneError
 from .sensitivity import SensitivityError, SensitivityOptions, check_names, parameter_names, scene_parameters, sensitivities, with_parameters
@@ -614,7 +615,15 @@ class MonteCarlo:
 
 
 def monte_carlo(
-    scene: Scene, sigmas: Sequence[Sigma], options: MonteCarloOptions | None = None, *, chunks: Sequence[int] | None = None
+    scene: Scene,
+    sigmas: Sequence[Sigma],
+    options: MonteCarloOptions | None = None,
+    *,
+    chunks: Sequence[int] | None = None,
+    runner=None,
+    solved: dict[str, np.ndarray] | None = None,
+    on_chunk: Callable[[int, dict[str, np.ndarray]], None] | None = None,
+    progress: bool = False,
 ) -> MonteCarlo:
     """Sample the uncertain parameters and solve every sample on the batch path.
 
@@ -626,9 +635,23 @@ def monte_carlo(
         From :func:`resolve_sigmas` for ``scene``.
     options : MonteCarloOptions, optional
     chunks : sequence of int, optional
-        Chunk sizes summing to ``options.samples`` (default: ``options.chunk`` each). Any split
-        gives the same result.
+        Chunk sizes summing to the samples left to solve (default: ``options.chunk`` each). Any
+        split gives the same result.
+    runner : optional
+        Where the chunks run (:func:`esba.distributed.open_runner`: a local Dask cluster, an
+        existing one); default: in this process, one after the other. Same result.
+    solved : dict of ndarray, optional
+        ``code``, ``theta``, ``tip``, ``total_angle`` of the first k samples, already solved (a
+        resumed study, :mod:`esba.mc_study`): only samples k to N are solved.
+    on_chunk : callable, optional
+        ``on_chunk(start, part)`` with the :func:`solve_samples` arrays of each chunk, in order, as
+        soon as it is solved (to write them to a file).
+    progress : bool
+        A tqdm bar on stderr over the samples of completed chunks.
     """
+    from .distributed import ModelKey, SerialRunner
+    from .study import run_chunks
+
     options = MonteCarloOptions() if options is None else options
     if not isinstance(options, MonteCarloOptions):
         raise UncertaintyError(f"options={options!r}: expected MonteCarloOptions")
@@ -638,17 +661,31 @@ def monte_carlo(
     names = tuple(s.name for s in sigmas)
     values = draw_samples(sigmas, options.samples, options.seed)
     N = options.samples
+    done = 0 if solved is None else len(solved["code"])
+    if not 0 <= done <= N:
+        raise UncertaintyError(f"solved: {done} samples given; expected at most samples={N}")
     if chunks is None:
-        chunks = [min(options.chunk, N - start) for start in range(0, N, options.chunk)]
+        chunks = [min(options.chunk, N - start) for start in range(done, N, options.chunk)]
     chunks = [checks.whole("chunk", c, 1, UncertaintyError) for c in chunks]
-    if sum(chunks) != N:
-        raise UncertaintyError(f"chunks={list(chunks)}: sizes must add up to samples={N}")
-    batch = _batch_options(options, scene)
-    parts, start = [], 0
+    if sum(chunks) != N - done:
+        raise UncertaintyError(f"chunks={list(chunks)}: sizes must add up to samples={N}" + (f" less the {done} solved" if done else ""))
+    bounds = []
     for size in chunks:
-        parts.append(solve_samples(scene, names, values[:, start:start + size], batch))
-        start += size
-    merged = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+        start = bounds[-1][1] if bounds else done
+        bounds.append((start, start + size))
+    batch = _batch_options(options, scene)
+    if batch.compile == "always" and bounds:
+        prepare(scene.model(), batch, scene.pressure is None)  # compiled once here, not once per worker
+    parts: list[dict[str, np.ndarray]] = [] if solved is None else [solved]
+
+    def keep(a: int, b: int, part: dict[str, np.ndarray]) -> None:
+        if on_chunk is not None:
+            on_chunk(a, part)
+        parts.append(part)
+
+    runner = SerialRunner() if runner is None else runner
+    run_chunks(runner, ModelKey.of(scene), solve_samples, bounds, lambda a, b: (scene, names, values[:, a:b], batch), keep, "esba Monte Carlo" if progress else None)
+    merged = {k: np.concatenate([p[k] for p in parts]) for k in ("code", "theta", "tip", "total_angle")}
     backend = "compiled C" if batch.compile == "always" else "CasADi's interpreter"
     return MonteCarlo(sigmas, options, values, merged["code"], merged["theta"], merged["tip"], merged["total_angle"], backend)
 

@@ -128,6 +128,13 @@ def test_cli_sweep_json_and_infeasible(capsys):
     assert data["rows"][0]["total_angle_deg"] == pytest.approx(90.0)
 
 
+def test_cli_sweep_table_of_infeasible_rows(capsys):
+    """Each design at the pressure of its target angle: an infeasible one has no pressure (a dash, never nan)."""
+    assert main(["sweep", "--r2", "2,7", "--d", "4", "--target-angle", "90", "--no-compile", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "infeasible" in out and "nan" not in out.lower()
+
+
 def test_cli_sweep_usage_errors(capsys):
     assert main(["sweep"]) == 2
     assert "at least one axis" in capsys.readouterr().err

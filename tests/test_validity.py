@@ -124,3 +124,28 @@ def test_design_states_carry_validity(capsys, tmp_path, monkeypatch):
     assert err.strip() == f"esba: warning: {found[0]['message']}"
     assert main(["design", "--json"]) == EXIT_OK
     assert json.loads(capsys.readouterr().out)["validity"] == []
+
+
+def test_streamed_sweep_keeps_validity_in_its_file_and_warns(capsys, tmp_path, monkeypatch):
+    from esba.sweep import plan_sweep
+    from esba.sweep_study import read_rows, sweep_study
+
+    plan = plan_sweep(Scene(), pressure=[0.1, 5.0])
+    study = sweep_study(plan, BatchOptions(compile="never"), chunk=1, out=tmp_path / "s.csv")
+    rows = read_rows(tmp_path / "s.csv")
+    assert rows[0]["validity"] == "" and "total bend" in rows[1]["validity"]
+    assert study.outside == 1 and study.to_dict(rows=False)["outside_model_range"] == 1
+    monkeypatch.chdir(tmp_path)
+    assert main(["sweep", "--pressure", "0.1,5", "--no-progress", "--no-compile", "--resume", "--out", "t.csv"]) == EXIT_OK
+    err = capsys.readouterr().err
+    assert "esba: warning: 1 point(s) outside the model's range: see the validity column of t.csv" in err
+
+
+def test_a_sweep_gathered_in_memory_is_bounded_before_it_starts():
+    from esba.sweep import MAX_POINTS, SweepError, plan_sweep
+    from esba.sweep_study import sweep_study
+
+    plan = plan_sweep(Scene(), pressure=[0.1] * 1000, payload=[1.0] * 1000)
+    assert plan.size > MAX_POINTS
+    with pytest.raises(SweepError, match="at most 200000 in memory"):
+        sweep_study(plan, BatchOptions(compile="never"))

@@ -1,0 +1,399 @@
+"""Where the chunks of a study run: in this process, or on the worker processes of a Dask cluster.
+
+A study (a sweep grid, a Monte Carlo) is split into independent chunks, each solved by a pure
+function of plain inputs (:func:`esba.sweep.solve_points`, :func:`esba.uncertainty.solve_samples`)
+that returns plain arrays. A *runner* maps such a function over the chunks and hands the
+results back **in chunk order**, whatever order they finish in:
+
+- :class:`SerialRunner`: one chunk after the other, in this process (no Dask needed);
+- :class:`DaskRunner`: on a ``dask.distributed`` cluster, a local one of N worker processes
+  (:func:`open_runner` with ``workers=N``: a ``LocalCluster`` with one thread per process) or an
+  existing one (``scheduler=ADDRESS``: a scheduler started by ``dask scheduler``, by
+  dask-jobqueue on SLURM/PBS, ...). At most ``window`` chunks are in flight or waiting to be
+  handed back, so neither the scheduler nor this process holds more than that. When a worker
+  dies, the scheduler runs its chunks again on another worker (a chunk's result is taken once:
+  no row is lost or repeated); a chunk that raises an error stops the study with that error.
+
+Every chunk runs through :func:`run_task` with a :class:`ModelKey`: the worker loads the model
+itself with :func:`esba.model.load_model` (once per process, by segment count, effects and
+variant), after checking that its esba and its derivation source are the client's (their
+hashes): no CasADi object is ever pickled. CasADi's ``nlpsol`` (the IPOPT fallback of the batch
+path) is not safe to call from several threads, so local workers are processes with one thread
+each, and a worker process of an existing cluster runs one esba chunk at a time whatever its
+thread count (a lock).
+
+Dask is an optional extra (``pip install "esba[dask]"``): without it, asking for workers or a
+scheduler raises :class:`DistributedError` with a one-line message that names the extra.
+
+Examples
+--------
+>>> runner = SerialRunner()
+>>> list(runner.map_ordered(pow, [(2, 3), (3, 2)]))
+[8, 9]
+>>> check_workers("0")  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+esba.distributed.DistributedError: --workers '0': expected a whole number of worker processes from 1 to ...
+>>> check_address("tcp://127.0.0.1:8786")
+'tcp://127.0.0.1:8786'
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import re
+import signal
+import socket
+import threading
+import uuid
+from contextlib import contextmanager
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Callable, Iterable, Iterator
+
+__all__ = [
+    "DistributedError",
+    "ModelKey",
+    "SerialRunner",
+    "DaskRunner",
+    "open_runner",
+    "run_task",
+    "require_dask",
+    "check_workers",
+    "check_address",
+    "check_timeout",
+    "code_digest",
+    "max_local_workers",
+    "DASK_EXTRA",
+]
+
+#: How to install the optional extra (named in the message when Dask is missing).
+DASK_EXTRA = 'pip install "esba[dask]"'
+
+#: Chunks in flight or waiting to be handed back, per worker.
+WINDOW_PER_WORKER = 4
+
+#: Longest wait for a scheduler to answer or for its first worker, seconds.
+MAX_TIMEOUT_S = 3600.0
+
+_TASK_LOCK = threading.Lock()
+
+
+class DistributedError(ValueError):
+    """A cluster that cannot be used: Dask missing, a bad flag, no scheduler, workers with another esba."""
+
+
+def require_dask(flag: str) -> None:
+    """Raise :class:`DistributedError` naming the extra when ``dask.distributed`` cannot be imported."""
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        raise DistributedError(f"{flag} needs Dask, an optional extra of esba: {DASK_EXTRA}") from None
+
+
+def max_local_workers() -> int:
+    """The most worker processes of a local cluster: 4 per core of this machine."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        cores = os.cpu_count() or 1
+    return 4 * max(1, cores)
+
+
+def _given(flag: str | None, text: Any) -> str:
+    return f"{flag} {str(text)!r}" if flag else repr(str(text))
+
+
+def check_workers(text: Any, flag: str | None = "--workers") -> int:
+    """A local cluster's worker count from a flag's text: a whole number from 1 to :func:`max_local_workers`."""
+    top = max_local_workers()
+    try:
+        value = int(str(text).strip())
+    except ValueError:
+        value = 0
+    if not 1 <= value <= top:
+        raise DistributedError(
+            f"{_given(flag, text)}: expected a whole number of worker processes from 1 to {top} "
+            f"(4 per core of this machine; for more, start a cluster and give --scheduler ADDRESS)"
+        )
+    return value
+
+
+_ADDRESS = re.compile(r"^(?:(?P<scheme>[a-z]+)://)?(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(?P<port>\d{1,5})$")
+_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
+
+
+def check_address(text: Any, flag: str | None = "--scheduler") -> str:
+    """A Dask scheduler address ``[tcp://]HOST:PORT`` (also tls, ws, wss, ucx), checked for its form only."""
+    m = _ADDRESS.match(str(text).strip())
+    if m is None or (m.group("scheme") or "tcp") not in _SCHEMES or not 1 <= int(m.group("port")) <= 65535:
+        raise DistributedError(f"{_given(flag, text)}: expected a Dask scheduler address tcp://HOST:PORT (or HOST:PORT; tls, ws, wss, ucx also)")
+    return str(text).strip()
+
+
+def check_timeout(text: Any, flag: str | None = "--connect-timeout") -> float:
+    """Seconds to wait for a scheduler: a number > 0 and <= 3600."""
+    try:
+        value = float(str(text))
+    except ValueError:
+        value = float("nan")
+    if not 0.0 < value <= MAX_TIMEOUT_S:
+        raise DistributedError(f"{_given(flag, text)}: expected seconds, a number > 0 and <= {MAX_TIMEOUT_S:g}")
+    return value
+
+
+# ---------------------------------------------------------------------------------------------
+# what a worker checks and loads
+
+
+@lru_cache(maxsize=1)
+def code_digest() -> str:
+    """Hash of esba's runtime code (every ``esba/*.py``) and of the derivation source: two
+    processes with the same digest compute the same answers from the same inputs."""
+    from derive.provenance import source_hash
+
+    h = hashlib.sha256(source_hash().encode())
+    for path in sorted(Path(__file__).parent.glob("*.py")):
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _fingerprint() -> dict[str, str]:
+    import casadi
+
+    return {"esba": code_digest(), "casadi": casadi.__version__, "host": socket.gethostname()}
+
+
+@dataclass(frozen=True)
+class ModelKey:
+    """Which model a chunk needs, and which esba must solve it: plain values that travel with
+    every task, so that a worker builds the model itself (:func:`esba.model.load_model`).
+
+    Attributes
+    ----------
+    n : int
+    effects : str
+        The effect set's spec (``"air,axial,radial,fibres,payload"``).
+    variant : str
+    code : str
+        :func:`code_digest` of the client.
+    """
+
+    n: int
+    effects: str
+    variant: str
+    code: str
+
+    @classmethod
+    def of(cls, scene) -> ModelKey:
+        """The key of a scene's model."""
+        return cls(scene.segments, scene.effects.spec(), scene.variant, code_digest())
+
+    def check(self) -> None:
+        """On the worker: refuse a different esba, then load the model (once per process)."""
+        if self in _LOADED:
+            return
+        mine = code_digest()
+        if mine != self.code:
+            raise DistributedError(
+                f"worker on {socket.gethostname()} (pid {os.getpid()}) runs another esba or derivation "
+                f"(code {mine}, the client's {self.code}): install the same esba on the workers"
+            )
+        from .model import load_model
+
+        load_model(self.n, self.effects, self.variant)
+        _LOADED.add(self)
+
+
+_LOADED: set[ModelKey] = set()
+
+
+def run_task(key: ModelKey, fn: Callable[..., Any], *args: Any) -> Any:
+    """One chunk: check ``key`` (loading the model once per process), then ``fn(*args)``, one at a
+    time per process (CasADi's nlpsol is not thread-safe)."""
+    with _TASK_LOCK:
+        key.check()
+        return fn(*args)
+
+
+# ---------------------------------------------------------------------------------------------
+# runners
+
+
+class SerialRunner:
+    """Chunks one after the other in this process."""
+
+    workers = 1
+    description = "in this process"
+
+    def map_ordered(self, fn: Callable[..., Any], args: Iterable[tuple], done: Callable[[int], None] | None = None) -> Iterator[Any]:
+        """``fn(*a)`` for each ``a`` of ``args``, in order; ``done(i)`` after chunk i is solved."""
+        for i, a in enumerate(args):
+            result = fn(*a)
+            if done is not None:
+                done(i)
+            yield result
+
+
+class DaskRunner:
+    """Chunks on a ``dask.distributed`` cluster, handed back in chunk order.
+
+    Parameters
+    ----------
+    client : distributed.Client
+    description : str
+        Where the chunks run, for reports (``"on a local Dask cluster of 2 worker processes"``).
+    window : int, optional
+        Chunks in flight or waiting to be handed back (default :data:`WINDOW_PER_WORKER` per worker).
+    """
+
+    def __init__(self, client, description: str, window: int | None = None) -> None:
+        self.client = client
+        self.description = description
+        self.window = window if window is not None else WINDOW_PER_WORKER * max(1, self.workers)
+
+    @property
+    def workers(self) -> int:
+        """Worker processes of the cluster now."""
+        return len(self.client.scheduler_info().get("workers", {}))
+
+    def map_ordered(self, fn: Callable[..., Any], args: Iterable[tuple], done: Callable[[int], None] | None = None) -> Iterator[Any]:
+        """``fn(*a)`` for each ``a`` of ``args`` on the cluster, yielded in order; ``done(i)`` as chunk i finishes.
+
+        A chunk whose worker dies is run again by the scheduler (up to Dask's
+        ``distributed.scheduler.allowed-failures``, then ``KilledWorker`` is raised); each chunk's
+        result is taken once. Leaving the generator early cancels the chunks still queued.
+        """
+        import dask
+        from distributed import KilledWorker, as_completed
+
+        token = uuid.uuid4().hex[:12]
+        items = enumerate(args)
+        pending: dict[str, tuple[int, Any]] = {}  # key -> (chunk index, future)
+        ready: dict[int, Any] = {}
+        queue = as_completed()
+        nxt = 0
+        exhausted = False
+
+        def fill() -> None:
+            nonlocal exhausted
+            while not exhausted and len(pending) + len(ready) < self.window:
+                item = next(items, None)
+                if item is None:
+                    exhausted = True
+                    return
+                i, a = item
+                fut = self.client.submit(fn, *a, key=f"esba-chunk-{token}-{i}", pure=False)
+                pending[fut.key] = (i, fut)
+                queue.add(fut)
+
+        try:
+            fill()
+            while pending or ready:
+                if nxt in ready:
+                    yield ready.pop(nxt)
+                    nxt += 1
+                    fill()
+                    continue
+                fut = next(queue)
+                i, _ = pending.pop(fut.key)
+                try:
+                    ready[i] = fut.result()
+                except KilledWorker:
+                    tries = dask.config.get("distributed.scheduler.allowed-failures") + 1
+                    raise DistributedError(
+                        f"chunk {i} was started {tries} times and each time its worker process died "
+                        "(out of memory?): the study stops; the chunks before it are kept"
+                    ) from None
+                fut.release()
+                if done is not None:
+                    done(i)
+        finally:
+            if pending:
+                self.client.cancel([f for _, f in pending.values()])
+
+
+@contextmanager
+def open_runner(workers: int | None = None, scheduler: str | None = None, timeout: float = 10.0) -> Iterator[SerialRunner | DaskRunner]:
+    """The runner of a study: in this process (neither given), a local cluster of ``workers``
+    processes, or the cluster of the scheduler at ``scheduler``; closed on leaving the block.
+
+    Raises
+    ------
+    DistributedError
+        for both given, Dask missing, a scheduler that does not answer within ``timeout`` s or has
+        no worker by then, or workers with another esba (:func:`code_digest`) or CasADi.
+    """
+    if workers is None and scheduler is None:
+        yield SerialRunner()
+        return
+    if workers is not None and scheduler is not None:
+        raise DistributedError("--workers N starts a local cluster and --scheduler ADDRESS uses an existing one: give one of the two")
+    require_dask("--workers" if workers is not None else "--scheduler")
+    from distributed import Client, LocalCluster
+
+    cluster = None
+    if workers is not None:
+        workers = check_workers(workers)
+        with _workers_ignore_sigint():
+            cluster = LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", silence_logs=logging.ERROR,
+                dashboard_address=None, scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},  # no dashboard, no fixed port
+            )
+        client = Client(cluster)
+        description = f"on a local Dask cluster of {workers} worker process{'es' if workers > 1 else ''} (1 thread each)"
+    else:
+        scheduler = check_address(scheduler)
+        try:
+            client = Client(scheduler, timeout=timeout)
+        except (OSError, TimeoutError) as exc:
+            raise DistributedError(f"--scheduler {scheduler!r}: no Dask scheduler answered within {timeout:g} s ({type(exc).__name__})") from None
+        try:
+            client.wait_for_workers(1, timeout=timeout)
+        except (OSError, TimeoutError):
+            client.close()
+            raise DistributedError(f"--scheduler {scheduler!r}: the scheduler has no worker after {timeout:g} s: start some (dask worker {scheduler})") from None
+        description = f"on the Dask cluster at {scheduler}"
+    try:
+        _check_cluster(client)
+        runner = DaskRunner(client, description)
+        yield runner
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+@contextmanager
+def _workers_ignore_sigint() -> Iterator[None]:
+    """Worker processes started inside the block ignore SIGINT (an ignored signal stays ignored in
+    a spawned process): Ctrl-C stops the study in this process, which closes the cluster, instead
+    of every worker printing its own KeyboardInterrupt."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _check_cluster(client) -> None:
+    """Every worker runs this process's esba and CasADi."""
+    mine = _fingerprint()
+    try:
+        theirs = client.run(_fingerprint)
+    except ImportError as exc:
+        raise DistributedError(f"a Dask worker cannot import esba ({exc}): install the same esba on the workers") from None
+    for address, fp in sorted(theirs.items()):
+        for what in ("esba", "casadi"):
+            if fp[what] != mine[what]:
+                raise DistributedError(
+                    f"Dask worker {address} on {fp['host']} has another {what} ({fp[what]}; this process {mine[what]}): "
+                    "install the same esba on the workers"
+                )

@@ -1,0 +1,407 @@
+"""Studies on Dask (esba.distributed, esba.study, esba.sweep_study, esba.mc_study): the same rows as
+in this process, a killed worker's chunk solved again, resuming an interrupted study, and the
+flags' one-line errors.
+
+The Dask tests use a local cluster of 2 worker processes (one thread each), as CI does.
+"""
+
+from __future__ import annotations
+
+import csv
+import importlib.util
+import io
+import json
+import os
+import socket
+import sys
+
+import numpy as np
+import pytest
+
+from esba.batch import BatchOptions, compiler
+from esba.cli import EXIT_OK, EXIT_USAGE, main
+from esba.distributed import DASK_EXTRA, DaskRunner, DistributedError, SerialRunner, open_runner
+from esba.mc_study import monte_carlo_study
+from esba.scene import MAIN_JOB, Payload, Scene
+from esba.study import HEADER, StudyError
+from esba.sweep import plan_sweep, sweep
+from esba.sweep_study import read_rows, sweep_study
+from esba.uncertainty import MonteCarloOptions, monte_carlo, parse_sigma, resolve_sigmas
+
+#: The tests that start a cluster or parse cluster flags need the extra (the test extra installs it);
+#: the missing-extra test runs either way.
+needs_dask = pytest.mark.skipif(importlib.util.find_spec("distributed") is None, reason="dask.distributed is not installed (pip install -e '.[test]' installs it)")
+
+INTERPRETED = BatchOptions(compile="never")
+
+#: A grid with every kind of row: infeasible designs (r2 + d >= r1), points the fast path answers,
+#: its denser retry, and the IPOPT fallback (large payloads against the bend).
+BASE = Scene(payloads=(Payload(1.0, 90.0),))
+GRID = dict(pressure=[0.0, 0.1, 0.2, 0.3], payload=[0.0, 2.0, 6.0], payload_angle=[90.0, 180.0], r2=[3.0, 4.5], d=[2.0, 4.0])
+
+
+def _methods(result) -> set[str]:
+    return set(result.method.tolist())
+
+
+@pytest.fixture(scope="module")
+def reference():
+    """The grid solved in this process, in one batch (the in-process sweep)."""
+    ref = sweep(BASE, options=INTERPRETED, **GRID)
+    assert {"newton", "ipopt"} <= _methods(ref) and ref.counts()["infeasible"] > 0
+    return ref
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    with open_runner(workers=2) as runner:
+        assert runner.workers == 2
+        yield runner
+
+
+# ---------------------------------------------------------------------------------------------
+# the same answers, element for element
+
+
+@needs_dask
+def test_sweep_on_two_workers_is_the_in_process_sweep(cluster, reference):
+    study = sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=cluster, chunk=7)
+    got = study.result
+    assert study.chunks == 14 and study.workers == 2 and "2 worker processes" in study.runner
+    assert got.rows() == reference.rows()  # same order, statuses, messages, notes
+    for name in ("theta", "tip", "pressure"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(reference, name))  # bitwise, NaN where NaN
+    assert got.backend == reference.backend
+
+
+@needs_dask
+@pytest.mark.skipif(compiler() is None, reason="no C compiler ($CC, gcc, cc) on this machine")
+def test_compiled_sweep_on_two_workers_is_bitwise_the_in_process_one(cluster):
+    options = BatchOptions(compile="always")
+    ref = sweep(BASE, options=options, **GRID)
+    study = sweep_study(plan_sweep(BASE, **GRID), options, runner=cluster, chunk=20)
+    assert study.backend.startswith("compiled C") and study.result.rows() == ref.rows()
+    np.testing.assert_array_equal(study.result.theta, ref.theta)
+
+
+@needs_dask
+def test_streamed_file_is_the_in_process_csv_after_its_header(cluster, reference, tmp_path):
+    out = tmp_path / "grid.csv"
+    study = sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=cluster, chunk=9, out=out)
+    lines = out.read_text(encoding="utf-8").splitlines(keepends=True)
+    header = json.loads(lines[0][len(HEADER):])
+    assert header["kind"] == "sweep" and header["hash"] == study.hash and header["rows"] == len(reference.status)
+    assert header["settings"]["compile"] == "never"
+    assert "".join(lines[1:]) == reference.to_csv()
+    assert read_rows(out) == reference.rows() and study.counts == reference.counts() and study.result is None
+
+
+@needs_dask
+def test_monte_carlo_on_two_workers_is_the_in_process_one(cluster):
+    sig = resolve_sigmas(MAIN_JOB, [parse_sigma("E=5%"), parse_sigma("s1=±0.01")])  # about half the samples invalid
+    opts = MonteCarloOptions(samples=240, seed=3, chunk=50)
+    here = monte_carlo(MAIN_JOB, sig, opts)
+    there = monte_carlo(MAIN_JOB, sig, opts, runner=cluster)
+    assert 0 < here.counts["invalid"] < 240
+    for name in ("samples", "code", "theta", "tip", "total_angle"):
+        np.testing.assert_array_equal(getattr(there, name), getattr(here, name))
+    assert there.to_dict() == here.to_dict()
+
+
+@needs_dask
+@pytest.mark.slow
+@pytest.mark.ci
+def test_a_larger_compiled_study_on_two_workers(cluster):
+    """n = 8, 3000 points on the compiled batch path (when a compiler is found) in chunks of 250,
+    and 2000 Monte Carlo samples: element for element the in-process answers."""
+    base = Scene(segments=8, payloads=(Payload(1.0, 90.0),))
+    grid = dict(pressure=list(np.linspace(0.0, 0.25, 30)), payload=list(np.linspace(0.0, 4.0, 10)), payload_angle=list(np.linspace(0.0, 180.0, 10)))
+    ref = sweep(base, **grid)  # compile="auto": decided once for the grid, as the study decides it
+    study = sweep_study(plan_sweep(base, **grid), runner=cluster, chunk=250)
+    assert study.backend == ref.backend and len(ref.status) == 3000
+    assert study.result.rows() == ref.rows()
+    np.testing.assert_array_equal(study.result.theta, ref.theta)
+    scene = MAIN_JOB.replace(segments=8)
+    sig = resolve_sigmas(scene, [parse_sigma("E=10%"), parse_sigma("r2=±0.2"), parse_sigma("Omega1=±5")])
+    opts = MonteCarloOptions(samples=2000, seed=11, chunk=300)
+    here, there = monte_carlo(scene, sig, opts), monte_carlo(scene, sig, opts, runner=cluster)
+    for name in ("code", "theta", "tip"):
+        np.testing.assert_array_equal(getattr(there, name), getattr(here, name))
+
+
+@needs_dask
+@pytest.mark.slow
+def test_a_study_of_twenty_thousand_points_at_n16_on_two_workers(cluster, tmp_path):
+    """The issue's scale of design (n = 16), 20 000 points streamed to a file in chunks of 1000."""
+    base = Scene(segments=16, payloads=(Payload(1.0, 90.0),))
+    grid = dict(pressure=list(np.linspace(0.0, 0.2, 100)), payload=list(np.linspace(0.0, 2.0, 20)), r2=[2.5, 3.0, 3.5, 4.0, 4.5, 5.0, 5.5, 6.0, 6.5, 7.0])
+    out = tmp_path / "big.csv"
+    study = sweep_study(plan_sweep(base, **grid), runner=cluster, out=out)
+    ref = sweep(base, **grid)
+    assert study.chunks == 20 and read_rows(out) == ref.rows()
+
+
+# ---------------------------------------------------------------------------------------------
+# a worker that dies
+
+
+def _kill_once(marker: str, fn, *args):
+    """Kill this worker process the first time any chunk runs; later calls solve the chunk."""
+    try:
+        fd = os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+    except FileExistsError:
+        return fn(*args)
+    os.write(fd, str(os.getpid()).encode())
+    os.close(fd)
+    os._exit(1)
+
+
+class _KillingRunner(DaskRunner):
+    """A Dask runner whose first chunk to start kills its worker process."""
+
+    def __init__(self, runner: DaskRunner, marker) -> None:
+        super().__init__(runner.client, runner.description)
+        self.marker = str(marker)
+
+    def map_ordered(self, fn, args, done=None):
+        return super().map_ordered(_kill_once, ((self.marker, fn, *a) for a in args), done)
+
+
+@needs_dask
+def test_a_killed_workers_chunk_is_solved_again_and_every_row_written_once(reference, tmp_path):
+    marker = tmp_path / "killed"
+    out = tmp_path / "grid.csv"
+    with open_runner(workers=2) as runner:
+        pids = set(runner.client.run(os.getpid).values())
+        study = sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=_KillingRunner(runner, marker), chunk=8, out=out)
+    assert marker.exists() and int(marker.read_text()) in pids  # a worker process did die mid-study
+    assert study.chunks == 12
+    assert read_rows(out) == reference.rows()  # nothing lost, nothing twice, in order
+
+
+# ---------------------------------------------------------------------------------------------
+# resuming
+
+
+class _Interrupted(Exception):
+    pass
+
+
+class _StopAfter:
+    """Wraps a runner: the study is interrupted after ``k`` chunks were handed back (as by Ctrl-C)."""
+
+    def __init__(self, runner, k: int) -> None:
+        self.runner, self.k = runner, k
+        self.workers, self.description = runner.workers, runner.description
+
+    def map_ordered(self, fn, args, done=None):
+        for i, result in enumerate(self.runner.map_ordered(fn, args, done)):
+            if i == self.k:
+                raise KeyboardInterrupt
+            yield result
+
+
+@needs_dask
+def test_an_interrupted_study_resumes_from_its_file(cluster, reference, tmp_path):
+    out = tmp_path / "grid.csv"
+    plan = plan_sweep(BASE, **GRID)
+    with pytest.raises(KeyboardInterrupt):
+        sweep_study(plan, INTERPRETED, runner=_StopAfter(cluster, 3), chunk=10, out=out)
+    assert len(read_rows(out)) == 30  # three whole chunks on disk
+    # the last chunk was cut short while being written: its broken tail row is dropped
+    text = out.read_text(encoding="utf-8")
+    out.write_text(text + text.splitlines(keepends=True)[-1][:25], encoding="utf-8")
+    again = sweep_study(plan, INTERPRETED, runner=SerialRunner(), chunk=13, out=out, resume=True)
+    assert again.resumed_from == 30 and again.chunks == 6  # (96 - 30) points in chunks of 13
+    assert read_rows(out) == reference.rows()
+    assert again.counts == reference.counts()
+    # resuming a finished study solves nothing
+    done = sweep_study(plan, INTERPRETED, runner=cluster, out=out, resume=True)
+    assert done.chunks == 0 and done.resumed_from == len(reference.status) and read_rows(out) == reference.rows()
+
+
+@needs_dask
+def test_resume_refuses_another_studys_file(tmp_path):
+    out = tmp_path / "grid.csv"
+    plan = plan_sweep(Scene(pressure=0.1), payload=[0.0, 1.0, 2.0])
+    sweep_study(plan, INTERPRETED, out=out, chunk=2)
+    other = plan_sweep(Scene(pressure=0.1), payload=[0.0, 1.0, 3.0])
+    with pytest.raises(StudyError, match=r"another study .* differs in plan\.axes\.payload"):
+        sweep_study(other, INTERPRETED, out=out, resume=True)
+    with pytest.raises(StudyError, match=r"differs in batch\.load_steps"):
+        sweep_study(plan, BatchOptions(compile="never", load_steps=9), out=out, resume=True)
+    plain = tmp_path / "plain.csv"
+    sweep(Scene(pressure=0.1), payload=[0.0, 1.0, 2.0], options=INTERPRETED).write(plain)
+    with pytest.raises(StudyError, match="not a study file"):
+        sweep_study(plan, INTERPRETED, out=plain, resume=True)
+    lines = out.read_text(encoding="utf-8").splitlines(keepends=True)
+    out.write_text("".join(lines[:3]) + "1,2,3\n" + "".join(lines[3:]), encoding="utf-8")
+    with pytest.raises(StudyError, match="row 2 has 3 cells"):
+        sweep_study(plan, INTERPRETED, out=out, resume=True)
+
+
+@needs_dask
+def test_monte_carlo_streams_its_samples_and_resumes(cluster, tmp_path):
+    sig = resolve_sigmas(MAIN_JOB, [parse_sigma("E=5%")])
+    opts = MonteCarloOptions(samples=120, seed=1, chunk=25)
+    whole = monte_carlo(MAIN_JOB, sig, opts)
+    out = tmp_path / "mc.csv"
+    with pytest.raises(KeyboardInterrupt):
+        monte_carlo_study(MAIN_JOB, sig, opts, runner=_StopAfter(cluster, 2), out=out)
+    mc, info = monte_carlo_study(MAIN_JOB, sig, opts, runner=cluster, out=out, resume=True)
+    assert info["resumed_from_sample"] == 50
+    for name in ("code", "theta", "tip", "total_angle"):
+        np.testing.assert_array_equal(getattr(mc, name), getattr(whole, name))
+    rows = list(csv.DictReader(io.StringIO(out.read_text().split("\n", 1)[1])))
+    assert [int(r["sample"]) for r in rows] == list(range(120)) and rows[0]["outcome"] == "ok"
+    with pytest.raises(StudyError, match="another study"):
+        monte_carlo_study(MAIN_JOB, sig, MonteCarloOptions(samples=120, seed=2), out=out, resume=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# the command line
+
+
+def _one_line_error(capsys, argv, needle):
+    assert main(argv) == EXIT_USAGE
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and err.startswith("esba: error:") and needle in err, err
+    return err
+
+
+@needs_dask
+def test_cli_sweep_on_workers_writes_the_in_process_rows(capsys, tmp_path):
+    grid = ["--pressure", "0:0.2:4", "--payload", "0,2", "--r2", "3,5", "--no-compile", "--no-progress"]
+    here, there = tmp_path / "here.csv", tmp_path / "there.csv"
+    assert main(["sweep", *grid, "--out", str(here)]) == EXIT_OK
+    assert main(["sweep", *grid, "--workers", "2", "--chunk", "5", "--out", str(there)]) == EXIT_OK
+    out = capsys.readouterr().out
+    assert "study: 4 chunks of up to 5 points on a local Dask cluster of 2 worker processes" in out
+    assert there.read_text().split("\n", 1)[1] == here.read_text()
+    assert main(["sweep", *grid, "--json"]) == EXIT_OK
+    alone = json.loads(capsys.readouterr().out)
+    assert main(["sweep", *grid, "--workers", "2", "--json"]) == EXIT_OK  # rows gathered in memory
+    gathered = json.loads(capsys.readouterr().out)
+    assert main(["sweep", *grid, "--workers", "2", "--out", str(there), "--json"]) == EXIT_OK  # rows in the file only
+    streamed = json.loads(capsys.readouterr().out)
+    assert gathered["rows"] == alone["rows"] == read_rows(there) and len(alone["rows"]) == 16 and "rows" not in streamed
+    assert gathered["study"]["workers"] == streamed["study"]["workers"] == 2 and streamed["out"] == str(there)
+    assert streamed["counts"] == gathered["counts"] == alone["counts"]
+
+
+@needs_dask
+def test_cli_monte_carlo_on_workers(capsys):
+    argv = ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "100", "--json"]
+    assert main(argv) == EXIT_OK
+    here = json.loads(capsys.readouterr().out)
+    assert main([*argv, "--workers", "2", "--mc-chunk", "30"]) == EXIT_OK
+    there = json.loads(capsys.readouterr().out)
+    study = there["monte_carlo"].pop("study")
+    assert (there["monte_carlo"].pop("chunk"), here["monte_carlo"].pop("chunk")) == (30, 2500)
+    assert there["monte_carlo"] == here["monte_carlo"] and there["agreement"] == here["agreement"]
+    assert study["workers"] == 2
+
+
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["sweep", "--pressure", "0.1", "--workers", "0"], "argument --workers: '0': expected a whole number of worker processes from 1 to"),
+        (["sweep", "--pressure", "0.1", "--workers", "two"], "argument --workers: 'two'"),
+        (["sweep", "--pressure", "0.1", "--workers", "100000"], "for more, start a cluster and give --scheduler ADDRESS"),
+        (["sweep", "--pressure", "0.1", "--workers", "2", "--scheduler", "tcp://127.0.0.1:8786"], "give one of the two"),
+        (["sweep", "--pressure", "0.1", "--scheduler", "not an address"], "argument --scheduler: 'not an address': expected a Dask scheduler address"),
+        (["sweep", "--pressure", "0.1", "--scheduler", "tcp://host:99999"], "tcp://HOST:PORT"),
+        (["sweep", "--pressure", "0.1", "--scheduler", "tcp://127.0.0.1:8786", "--connect-timeout", "0"], "argument --connect-timeout: '0'"),
+        (["sweep", "--pressure", "0.1", "--chunk", "0"], "argument --chunk: '0': expected a whole number of points per chunk"),
+        (["sweep", "--pressure", "0.1", "--resume"], "--resume continues a study from the CSV file"),
+        (["sweep", "--pressure", "0.1", "--resume", "--out", "x.json"], "give --out FILE.csv"),
+        (["sweep", "--pressure", "0.1", "--workers", "2", "--out", "x.txt"], "--out 'x.txt': '.txt'; expected a file ending in .csv, .json"),
+        (["sweep", "--pressure", "0.1", "--workers", "2", "--out", "x.csv", "--plot", "x.png"], "--plot needs every row in memory"),
+        (["sweep", "--fig12", "f.png", "--workers", "2"], "--fig12 draws its own small grid"),
+        (["solve", "--no-plot", "--workers", "2"], "give --monte-carlo N"),
+        (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--resume"], "give --mc-out FILE.csv"),
+        (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", "x.json"], "argument --mc-out"),
+        (["bench", "scaling", "--points", "5"], "argument --points: points=5: expected a whole number from 20 to 1000000"),
+        (["bench", "scaling", "--repeat", "0"], "argument --repeat: repeat=0: expected a whole number from 1 to 50"),
+        (["bench", "scaling", "--workers", "1", "--scheduler", "tcp://127.0.0.1:8786"], "give one of the two"),
+    ],
+)
+@needs_dask
+def test_cli_bad_cluster_flags_are_one_line_exit_2(capsys, argv, needle):
+    _one_line_error(capsys, argv, needle)
+
+
+@needs_dask
+def test_cli_unreachable_scheduler_is_one_line_exit_2(capsys):
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    _one_line_error(capsys, ["sweep", "--pressure", "0.1", "--scheduler", f"tcp://127.0.0.1:{port}", "--connect-timeout", "1"],
+                    f"--scheduler 'tcp://127.0.0.1:{port}': no Dask scheduler answered within 1 s")
+
+
+@needs_dask
+def test_cli_resume_of_a_mismatched_file_is_one_line_exit_2(capsys, tmp_path):
+    out = tmp_path / "s.csv"
+    assert main(["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress", "--resume", "--out", str(out)]) == EXIT_OK
+    capsys.readouterr()
+    _one_line_error(capsys, ["sweep", "--pressure", "0,0.2", "--no-compile", "--no-progress", "--resume", "--out", str(out)], "belongs to another study")
+    out.write_text("pressure_mpa\n0.1\n", encoding="utf-8")
+    _one_line_error(capsys, ["sweep", "--pressure", "0,0.1", "--no-progress", "--resume", "--out", str(out)], "not a study file")
+
+
+def test_missing_dask_is_one_line_that_names_the_extra(capsys, monkeypatch):
+    """Without the extra (simulated: dask.distributed cannot be imported) --workers and --scheduler say how to get it."""
+    monkeypatch.setitem(sys.modules, "distributed", None)
+    with pytest.raises(DistributedError, match=r'needs Dask, an optional extra of esba: pip install "esba\[dask\]"'):
+        with open_runner(workers=2):
+            pass
+    for argv in (["sweep", "--pressure", "0.1", "--workers", "2"],
+                 ["sweep", "--pressure", "0.1", "--scheduler", "tcp://127.0.0.1:8786"],
+                 ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--workers", "2"]):
+        err = _one_line_error(capsys, argv, DASK_EXTRA)
+        assert ("--workers" in err) != ("--scheduler" in err)
+    # without the flags, everything runs in this process as before
+    assert main(["sweep", "--pressure", "0.1", "--no-compile", "--no-progress"]) == EXIT_OK
+
+
+def _always_kill(fn, *args):
+    os._exit(1)
+
+
+class _AlwaysKillingRunner(DaskRunner):
+    def __init__(self, runner: DaskRunner) -> None:
+        super().__init__(runner.client, runner.description)
+
+    def map_ordered(self, fn, args, done=None):
+        return super().map_ordered(_always_kill, ((fn, *a) for a in args), done)
+
+
+@needs_dask
+def test_a_chunk_that_always_kills_its_worker_stops_the_study_with_a_message(tmp_path):
+    out = tmp_path / "grid.csv"
+    with open_runner(workers=2) as runner:
+        with pytest.raises(DistributedError, match=r"chunk \d+ was started 4 times and each time its worker process died"):
+            sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=_AlwaysKillingRunner(runner), chunk=50, out=out)
+    assert read_rows(out) == []  # the header is there, and no row: --resume starts from the first chunk
+
+
+# ---------------------------------------------------------------------------------------------
+# the benchmark
+
+
+@needs_dask
+@pytest.mark.slow
+@pytest.mark.ci
+def test_bench_scaling_writes_its_page(capsys, tmp_path):
+    page = tmp_path / "scaling.md"
+    assert main(["bench", "scaling", "--points", "400", "--segments", "2", "--repeat", "1", "--markdown", str(page), "--json"]) == EXIT_OK
+    data = json.loads(capsys.readouterr().out)
+    assert [r["workers"] for r in data["rows"]] == [0, 0, 1, 2] and all(r["identical"] for r in data["rows"])
+    assert [c["chunk"] for c in data["chunks"]] == [128, 1000, 4000] and all(c["identical"] for c in data["chunks"])
+    assert data["overhead"]["round_trip_s"] > 0 and len(data["clusters"]) == 2
+    text = page.read_text()
+    assert f"`esba bench scaling --points 400 --segments 2 --repeat 1 --markdown {page}`" in text
+    for heading in ("## Throughput against the worker count", "## What the chunk size does", "## The overhead of one chunk", "dask-jobqueue"):
+        assert heading in text
+    assert "nan" not in text.lower() and "**no**" not in text
