@@ -7,7 +7,8 @@ import json
 
 import pytest
 
-from esba.cli import _PATH_PARAMETERS, DEFAULT_PATH_FIGURE, DEFAULT_PATH_OUT, EXIT_OK, EXIT_USAGE, main
+from esba.cli import EXIT_OK, EXIT_USAGE, main
+from esba.cli.path import _PATH_PARAMETERS, DEFAULT_PATH_FIGURE, DEFAULT_PATH_OUT
 from esba.path_problem import PARAMETERS
 
 from .tolerances import LOCATE_RTOL

@@ -309,8 +309,10 @@ def _run(capsys, *argv):
 
 
 def test_cli_choices_match_the_module():
-    assert cli._DESIGN_METHODS == METHODS
-    assert cli._DESIGN_OBJECTIVES == OBJECTIVES
+    from esba.cli import design as design_cli
+
+    assert design_cli._DESIGN_METHODS == METHODS
+    assert design_cli._DESIGN_OBJECTIVES == OBJECTIVES
 
 
 def test_cli_json_keys(capsys):

@@ -93,6 +93,15 @@ def test_license_is_an_spdx_string():
 
 
 def test_cli_bounds_agree_with_the_library():
-    from esba import cli, equilibrium
+    from esba import equilibrium
+    from esba.cli import scenes
 
-    assert cli._MAX_ITER == equilibrium.MAX_ITER_LIMIT
+    assert scenes._MAX_ITER == equilibrium.MAX_ITER_LIMIT
+
+
+def test_every_package_of_the_source_is_installed():
+    """A subpackage missing from pyproject's list would work in a checkout and fail after `pip install .`."""
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    listed = set(data["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(ROOT).parts) for top in ("esba", "derive") for p in (ROOT / top).rglob("__init__.py")}
+    assert found <= listed, f"add {sorted(found - listed)} to [tool.setuptools] packages"

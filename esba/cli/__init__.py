@@ -1,0 +1,98 @@
+"""The ``esba`` command line.
+
+Every command prints a readable table, or JSON with ``--json`` (valid JSON: no NaN or Infinity,
+see :mod:`esba.jsonsafe`). Bad input (a flag, a scene file, an output path that cannot be
+written, an unusable model cache) ends with one line ``esba: error: ...`` naming the value and
+what is allowed, and exit code 2, before any long computation; a solve that fails or lands on an
+unstable equilibrium says so and exits 1; a result outside the range the paper's model describes
+is printed with ``esba: warning: ...`` lines (and a ``validity`` list in JSON). Where each
+command writes is decided by :mod:`esba.outputs`.
+
+One module per command group (:mod:`esba.cli.scenes`, :mod:`esba.cli.sweep`, ...), each adding its
+subcommands to the parser; :mod:`esba.cli.arguments` and :mod:`esba.cli.results` hold what they
+share. Building the parser imports no numerics: each command imports what it computes with.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from typing import Callable, Sequence
+
+from esba import __version__, console
+
+from .arguments import Parser, UsageError
+from .bench import add_bench
+from .design import add_design
+from .figures import add_figures
+from .fit import add_experiments, add_fit
+from .models import add_audit, add_generate
+from .path import add_path
+from .results import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from .scenes import add_pressure, add_solve, add_stiffness, add_validate
+from .sweep import add_sweep
+
+__all__ = ["main", "build_parser", "COMMANDS", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
+
+#: Functions that add one subcommand each, in the order ``esba --help`` lists them.
+COMMANDS: list[Callable] = [add_generate, add_audit, add_solve, add_path, add_stiffness, add_pressure, add_validate, add_sweep, add_bench, add_figures, add_design, add_fit, add_experiments]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = Parser(prog="esba", description="Models of eccentric soft bending actuators (Yang et al.).")
+    parser.add_argument("--version", action="version", version=f"esba {__version__}")
+    sub = parser.add_subparsers(dest="command", parser_class=Parser)
+    for add in COMMANDS:
+        add(sub)
+    return parser
+
+
+def _input_error(exc: BaseException) -> bool:
+    """An error class of esba's own that reports bad input (SceneError, OutputError, CacheError, ...)."""
+    module = type(exc).__module__
+    return isinstance(exc, ValueError) and (module.startswith("esba.") or module.startswith("derive."))
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            raise UsageError("name a command: " + ", ".join(sorted(parser._subparsers._group_actions[0].choices)))  # type: ignore[union-attr]
+        return int(args.func(args))
+    except Exception as exc:
+        # an EquilibriumError can only come from esba.equilibrium once it is imported (--help never imports it)
+        equilibrium = sys.modules.get("esba.equilibrium")
+        if equilibrium is not None and isinstance(exc, equilibrium.EquilibriumError):
+            print(f"esba: failed: {_first_line(exc)}", file=sys.stderr)
+            return EXIT_FAILED
+        if _input_error(exc):
+            print(f"esba: error: {_first_line(exc)}", file=sys.stderr)
+            return EXIT_USAGE
+        if isinstance(exc, (BrokenPipeError, MemoryError)) or os.environ.get("ESBA_DEBUG"):
+            raise
+        print(
+            f"esba: internal error: {type(exc).__name__}: {_first_line(exc)} (a bug: please report the command; "
+            "ESBA_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return EXIT_FAILED
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit code."""
+    console.show_library_messages()
+    try:
+        return console.run(lambda: _run(argv))
+    except KeyboardInterrupt:
+        print("esba: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except MemoryError:
+        print("esba: out of memory: ask for a smaller run", file=sys.stderr)
+        return EXIT_FAILED

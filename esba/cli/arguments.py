@@ -1,0 +1,167 @@
+"""Argument types and the scene flags shared by ``esba`` commands.
+
+Every type rejects a bad value with one line naming the flag, the value and what is allowed
+(:class:`UsageError`, exit code 2), when the flags are parsed, before any computation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from typing import Callable, Sequence
+
+from derive.effects import DEFAULT_VARIANT, VARIANTS
+from esba import checks, outputs
+
+
+class UsageError(ValueError):
+    """Bad input from the command line: reported in one line with exit code 2."""
+
+
+class Parser(argparse.ArgumentParser):
+    """An argparse parser whose errors are :class:`UsageError` (one line, exit code 2)."""
+
+    def error(self, message: str) -> None:  # one line, exit 2 (argparse prints usage too)
+        raise UsageError(message)
+
+
+_WHOLE = re.compile(r"\s*\d+\s*")
+
+
+def segments_arg(text: str) -> int:
+    """An argparse type: the segment count n, 1 to :data:`esba.checks.MAX_SEGMENTS`."""
+    if not _WHOLE.fullmatch(text):
+        raise argparse.ArgumentTypeError(f"segments={text!r}: expected a whole number from 1 to {checks.MAX_SEGMENTS}")
+    try:
+        return checks.segments(int(text))
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def count_arg(name: str, low: int, high: int, why: str = "") -> Callable[[str], int]:
+    """An argparse type: a whole number from ``low`` to ``high`` (``why`` explains the bound)."""
+
+    def parse(text: str) -> int:
+        value = int(text) if _WHOLE.fullmatch(text) else None
+        if value is None or not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{name}={text}: expected a whole number from {low} to {high}" + (f" ({why})" if why else ""))
+        return value
+
+    return parse
+
+
+def given_flags(args: argparse.Namespace, *dests: str) -> list[str]:
+    """The flags among ``dests`` that were given (not None, not False), as the user spells them."""
+    return ["--" + d.replace("_", "-") for d in dests if getattr(args, d, None) not in (None, False)]
+
+
+def refuse(args: argparse.Namespace, dests: Sequence[str], why: str) -> None:
+    """A usage error when any of ``dests`` was given: they would be silently ignored."""
+    given = given_flags(args, *dests)
+    if given:
+        raise UsageError(f"{', '.join(given)} {'is' if len(given) == 1 else 'are'} not used {why}")
+
+
+def float_arg(text: str) -> float:
+    """A number as people write it; Python's ``float()`` would also read ``0_1`` as 1."""
+    try:
+        return checks.number("value", text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number (expected decimal digits such as 0.1 or 2e-3)") from None
+
+
+def add_scene_flags(p: argparse.ArgumentParser, payloads: bool = True) -> None:
+    p.add_argument("scene", nargs="?", default=None, metavar="SCENE.toml", help="scene file (default: the main job, Table 1 with a 2 N horizontal tip payload, n = 3)")
+    p.add_argument("--segments", "-n", type=segments_arg, help="segment count n, 1 to 256")
+    drive = p.add_mutually_exclusive_group()
+    drive.add_argument("--pressure", type=float_arg, help="pressure, MPa")
+    drive.add_argument("--target-angle", type=float_arg, metavar="DEG", help="use the pressure that bends the unloaded actuator to DEG")
+    if payloads:
+        p.add_argument("--payload", type=float_arg, action="append", metavar="N", help="payload magnitude in N (repeatable; replaces the scene's payloads)")
+        p.add_argument("--payload-angle", type=float_arg, action="append", metavar="DEG", help="direction Omega of the k-th payload from the vertical (90 = horizontal; one value applies to all)")
+        p.add_argument("--payload-at", type=float_arg, action="append", metavar="FRACTION", help="point of the k-th payload as a fraction of L (1 = tip; one value applies to all)")
+        p.add_argument("--no-payload", action="store_true", help="no payloads (and no payload terms)")
+    p.add_argument("--gravity", action="store_true", default=None, help="include the actuator's weight (Eq. 15)")
+    p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
+    p.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default: the scene's, else {DEFAULT_VARIANT})")
+    p.add_argument("--json", action="store_true", help="print JSON")
+
+
+def _per_payload(flag: str, values: list[float] | None, count: int) -> list[float] | None:
+    if values is None:
+        return None
+    if count == 0:
+        raise UsageError(f"{flag} given but there is no payload: add --payload N")
+    if len(values) == 1:
+        return values * count
+    if len(values) != count:
+        raise UsageError(f"{flag} given {len(values)} times for {count} payloads: give it once (for all) or once per payload")
+    return values
+
+
+def scene_changes(args: argparse.Namespace, skip: tuple[str, ...] = ()) -> dict:
+    """The scene fields that the common flags override (flags a command lacks count as unset).
+
+    ``skip`` names flags that mean something else to the command (a sweep's --pressure is a grid).
+    """
+    flags = {"segments": "segments", "pressure": "pressure", "target_angle": "target_angle_deg", "variant": "variant"}
+    changes = {
+        field: getattr(args, flag) for flag, field in flags.items() if flag not in skip and getattr(args, flag, None) is not None
+    }
+    if getattr(args, "gravity", False):
+        changes["gravity"] = True
+    if getattr(args, "no_fibres", False):
+        changes["fibres"] = False
+    return changes
+
+
+def load_scene_file(path: str | None, default):
+    """The scene file ``path`` (an empty name is an error, not the default), else ``default``."""
+    from esba.scene import SceneError, load_scene
+
+    if path is None:
+        return default
+    if not path.strip():
+        raise SceneError(f"scene file {path!r}: expected the path of a TOML scene file (or no argument for the default scene)")
+    return load_scene(path)
+
+
+def scene_from_args(args: argparse.Namespace, payloads: bool = True):
+    """The scene file (or the main job) with the flags applied; bad values are usage errors."""
+    from esba.scene import MAIN_JOB, Payload, SceneError
+
+    try:
+        scene = load_scene_file(args.scene, MAIN_JOB)
+        changes = scene_changes(args)
+        if payloads:
+            if args.no_payload and (args.payload or args.payload_angle or args.payload_at):
+                raise UsageError("--no-payload cannot be combined with --payload, --payload-angle or --payload-at")
+            current = list(scene.payloads)
+            if args.no_payload:
+                current = []
+            elif args.payload is not None:
+                current = [Payload(f) for f in args.payload]
+            angles = _per_payload("--payload-angle", args.payload_angle, len(current))
+            ats = _per_payload("--payload-at", args.payload_at, len(current))
+            if args.no_payload or args.payload is not None or angles or ats:
+                current = [
+                    Payload(p.force, angles[k] if angles else p.angle_deg, ats[k] if ats else p.at) for k, p in enumerate(current)
+                ]
+                changes["payloads"] = tuple(current)
+        return scene.replace(**changes) if changes else scene
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def output_file_arg(*suffixes: str) -> Callable[[str], str]:
+    """An argparse type for a file to write (:func:`esba.outputs.check_file`), checked when the flags are
+    parsed, before any computation."""
+
+    def check(text: str) -> str:
+        try:
+            outputs.check_file(text, "file", suffixes)
+        except outputs.OutputError as exc:
+            raise argparse.ArgumentTypeError(str(exc).removeprefix("file ")) from None
+        return text
+
+    return check

@@ -1,0 +1,277 @@
+"""``esba bench``: the benchmarks, each printing a table of medians and writing its docs section."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from esba import outputs
+
+from .arguments import Parser, UsageError, count_arg, output_file_arg, refuse, segments_arg
+from .cluster import chunk_arg, scheduler_arg, timeout_arg, workers_arg
+from .results import EXIT_OK, print_result
+
+
+def _cmd_bench_generation(args: argparse.Namespace) -> int:
+    from esba import bench
+
+    page = outputs.check_file(args.markdown, "--markdown") if args.markdown else None
+    ns = [n for n in bench.GENERATION_NS if n <= args.max_n]
+
+    def progress(n):
+        print(f"  n = {n} done", file=sys.stderr)
+
+    rows = bench.generation(ns, repeat=args.repeat, naive=not args.no_naive, progress=None if args.json else progress)
+    exponent, why = bench.growth([r.n for r in rows], [r.total_s for r in rows])
+    data = {"rows": [r.__dict__ for r in rows], "growth_exponent": exponent}
+    if exponent is None:
+        data["growth_exponent_reason"] = why
+    print_result(args, data, lambda d: bench.generation_table(rows))
+    if page is not None:
+        command = f"esba bench generation --max-n {args.max_n} --repeat {args.repeat}{' --no-naive' if args.no_naive else ''} --markdown {args.markdown}"
+        path = bench.write_generation_page(page, rows, command)
+        print(f"esba: wrote {path}", file=sys.stderr)
+    return EXIT_OK
+
+
+def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
+    from esba import accuracy as acc
+
+    if args.quick:
+        refuse(args, ["max_n", "reference_n", "fixed_n"], "with --quick (it fixes n <= 4, reference n = 16)")
+    if args.no_write:
+        refuse(args, ["out", "figure"], "with --no-write")
+    max_n = 128 if args.max_n is None else args.max_n
+    reference_n = acc.REFERENCE_N if args.reference_n is None else args.reference_n
+    fixed_n = 16 if args.fixed_n is None else args.fixed_n
+    if args.quick:
+        ns, ref_n, fixed_n, naive_ns, size = (1, 2, 3, 4), 16, 4, (3,), 1000
+    else:
+        ns, ref_n, naive_ns, size = tuple(n for n in acc.ACCURACY_NS if n <= max_n), reference_n, (3, 8, 16), 10_000
+    if ref_n < 4 or ref_n % 4:
+        raise UsageError(f"--reference-n {ref_n}: expected a multiple of 4 (the reference extrapolates from n/4, n/2, n)")
+    doc = fig = None
+    if not args.no_write:
+        doc = outputs.check_file(outputs.default_page("accuracy-vs-time.md") if args.out is None else args.out, "--out")
+        fig = outputs.figures_dir() / "accuracy-vs-time.png" if args.figure is None else args.figure
+        if args.figure is None and outputs.checkout_root() is None:
+            outputs.check_folder(fig.parent, "--figure")
+        fig = outputs.figure_file(fig, "--figure", "accuracy-vs-time.png")
+
+    def say(msg):
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    study = acc.accuracy_study(ns, ref_n, repeat=args.repeat, progress=say)
+    say(f"tolerance study (n = {fixed_n})")
+    tol = acc.tolerance_study(fixed_n, repeat=args.repeat)
+    say(f"effect study (n = {fixed_n})")
+    eff = acc.effect_study(fixed_n, repeat=args.repeat)
+    for rows in (tol, eff):
+        for r in rows:
+            r["n"] = fixed_n
+    say("naive BFGS against esba")
+    naive = acc.naive_study(naive_ns, repeat=args.repeat)
+    say(f"batch of {size}")
+    batch = acc.batch_study(size)
+    data = {
+        "reference": study.reference,
+        "rows": [r.__dict__ for r in study.rows],
+        "costs": {n: c.__dict__ for n, c in study.costs.items()},
+        "reach": {
+            case: {f"{mm:g} mm": (None if (r := study.first_n_below(case, mm)) is None else r.n) for mm in (1.0, 0.1)} for case in study.reference
+        },
+        "tolerance": tol,
+        "effects": eff,
+        "naive": naive,
+        "batch": batch,
+    }
+    if doc is not None:
+        command = "esba bench accuracy" + (" --quick" if args.quick else "")
+        if not args.quick and (max_n, reference_n, fixed_n, args.repeat) != (128, 256, 16, 5):
+            command += f" --max-n {max_n} --reference-n {reference_n} --fixed-n {fixed_n} --repeat {args.repeat}"
+        doc, fig = acc.write_page(study, tol, eff, naive, batch, command, doc=doc, fig_path=fig)
+        data["page"], data["figure"] = str(doc), str(fig)
+
+    def table(d: dict) -> str:
+        lines = [f"{'case':>10} {'n':>4} {'error mm':>9} {'n vs n+1':>9} {'solve ms':>9}"]
+        for r in study.rows:
+            lines.append(f"{r.case:>10} {r.n:>4} {r.error_mm:9.3g} {r.next_mm:9.3g} {1e3 * r.solve_s:9.2f}")
+        lines += [f"{case}: reaches {reach}" for case, reach in d["reach"].items()]
+        lines.append(f"batch: {batch.get('compiled_us', batch['interpreted_us']):.1f} us per equilibrium; naive {batch['naive_us']:.0f} us; IPOPT {batch['ipopt_us']:.0f} us")
+        if "page" in d:
+            lines.append(f"wrote {d['page']} and {d['figure']}")
+        return "\n".join(lines)
+
+    print_result(args, data, table)
+    return EXIT_OK
+
+
+def _bench_progress(args: argparse.Namespace, form: str):
+    """A progress line per finished part on stderr (none with --json)."""
+
+    def progress(what):
+        if not args.json:
+            print(form.format(what), file=sys.stderr)
+
+    return progress
+
+
+def _bench_section(args: argparse.Namespace, name: str, body: str) -> None:
+    """Write the ``name`` section of the --markdown page (checked when the command started)."""
+    from esba import bench
+    from esba.pages import write_section
+
+    if args.markdown:
+        command = f"esba bench {name} --repeat {args.repeat} --markdown {args.markdown}"
+        print(f"wrote {write_section(args.markdown, name, body, command, bench.PERFORMANCE_TITLE)}", file=sys.stderr)
+
+
+def _cmd_bench_solve(args: argparse.Namespace) -> int:
+    from esba import bench_solve
+
+    if args.markdown:
+        outputs.check_file(args.markdown, "--markdown", (".md",))
+    data = bench_solve.solve_benchmark(repeat=args.repeat, progress=_bench_progress(args, "  {} done"))
+    print_result(args, data, bench_solve.solve_table)
+    _bench_section(args, "solve", bench_solve.solve_section(data))
+    return EXIT_OK
+
+
+def _cmd_bench_path(args: argparse.Namespace) -> int:
+    from esba import bench_path
+
+    if args.markdown:
+        outputs.check_file(args.markdown, "--markdown", (".md",))
+    rows = bench_path.path_benchmark(repeat=args.repeat, progress=_bench_progress(args, "  n = {} done"))
+    data = {"rows": [dict(r.__dict__, points_per_s=r.points_per_s, floor_s=r.floor_s) for r in rows]}
+    print_result(args, data, lambda d: bench_path.path_table(rows))
+    _bench_section(args, "path", bench_path.path_section(rows))
+    return EXIT_OK
+
+
+def _cmd_bench_batch(args: argparse.Namespace) -> int:
+    from esba import accuracy as acc
+    from esba.batch import check_size
+
+    check_size(args.size, args.segments, "--size", UsageError)
+    data = acc.batch_study(args.size, args.segments)
+
+    def table(d: dict) -> str:
+        rows = [("batch size", f"{d['size']} equilibria, n = {d['segments']} (pressures 0-0.2 MPa x horizontal tip payloads 0-2 N)")]
+        if "compiled_us" in d:
+            rows += [
+                ("compiled, warm", f"{d['compiled_us']:.1f} us per equilibrium (fast path alone {d['compiled_fast_path_us']:.1f} us)"),
+                ("compiled, first", f"{d['compiled_first_us']:.1f} us per equilibrium (compiling took {d['compiled_first_compile_s']:.1f} s)"),
+            ]
+        diff = d["max_theta_difference_vs_ipopt"]
+        rows += [
+            ("interpreted", f"{d['interpreted_us']:.1f} us per equilibrium"),
+            ("IPOPT solve", f"{d['ipopt_us']:.0f} us per equilibrium (esba.equilibrium.solve, one by one, on {d['ipopt_samples']} of them)"),
+            ("naive BFGS", f"{d['naive_us']:.0f} us per equilibrium (SciPy, numeric gradients)"),
+            ("speed-up", f"{d['speedup_vs_naive']:.0f}x naive, {d['speedup_vs_ipopt']:.0f}x IPOPT"),
+            ("answered by", str(d["counts"])),
+            ("vs IPOPT", "no sample solved ok by both" if diff is None else f"largest angle difference {diff:.2g} rad on a sample"),
+            ("backend", d["backend"]),
+        ]
+        return "\n".join(f"{k:>16}: {v}" for k, v in rows)
+
+    print_result(args, data, table)
+    return EXIT_OK
+
+
+#: ``--repeat``'s bound: medians of more runs change nothing but the wait.
+_MAX_REPEAT = 100
+
+
+#: ``--size``'s bound before the memory check (esba.batch.check_size) refines it per n.
+_MAX_SIZE = 10_000_000
+
+
+def _cmd_bench_scaling(args: argparse.Namespace) -> int:
+    from esba import bench_scaling, scaling_report
+    from esba.distributed import DistributedError, require_dask
+
+    if args.scheduler is not None and args.workers is not None:
+        raise UsageError("--workers N lists local cluster sizes and --scheduler ADDRESS measures an existing cluster: give one of the two")
+    try:
+        require_dask("esba bench scaling")
+    except DistributedError as exc:
+        raise UsageError(str(exc)) from None
+
+    def say(msg: str) -> None:
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    workers = tuple(args.workers) if args.workers else bench_scaling.DEFAULTS["workers"]
+    try:
+        data = bench_scaling.scaling_study(points=args.points, segments=args.segments, repeat=args.repeat, chunk=args.chunk,
+                                           workers=workers, scheduler=args.scheduler, timeout=args.connect_timeout, progress=say)
+    except DistributedError as exc:
+        raise UsageError(str(exc)) from None
+    if args.markdown:
+        command = "esba bench scaling"
+        defaults = bench_scaling.DEFAULTS
+        for flag, value, default in (("--points", args.points, defaults["points"]), ("--segments", args.segments, defaults["segments"]),
+                                     ("--repeat", args.repeat, defaults["repeat"]), ("--chunk", args.chunk, defaults["chunk"])):
+            if value != default:
+                command += f" {flag} {value}"
+        if args.workers:
+            command += "".join(f" --workers {w}" for w in args.workers)
+        if args.scheduler:
+            command += f" --scheduler {args.scheduler}"
+        command += f" --markdown {args.markdown}"
+        data["page"] = str(scaling_report.write_page(args.markdown, data, command))
+
+    print_result(args, data, scaling_report.summary)
+    return EXIT_OK
+
+
+def add_bench(sub) -> None:
+    p = sub.add_parser("bench", help="benchmarks: tables of medians over repeated runs")
+    bsub = p.add_subparsers(dest="bench", parser_class=Parser, required=True)
+    g = bsub.add_parser("generation", help="generation time and size against n; per-call time of U, gradient, Hessian (minutes)")
+    g.add_argument("--max-n", type=segments_arg, default=100, help="largest n (default 100)")
+    g.add_argument("--repeat", type=count_arg("repeat", 1, _MAX_REPEAT), default=3, help="runs per n, median reported (default 3, at most 100)")
+    g.add_argument("--no-naive", action="store_true", help="skip the naive SymPy route")
+    g.add_argument("--markdown", metavar="FILE", help="also write the table as a docs page (docs/performance.md)")
+    g.add_argument("--json", action="store_true")
+    g.set_defaults(func=_cmd_bench_generation)
+
+    a = bsub.add_parser("accuracy", help="tip error against n, tolerance, effects, naive vs esba, batch (about 4 minutes); writes the accuracy page")
+    a.add_argument("--max-n", type=segments_arg, default=None, help="largest n of the study (default 128)")
+    a.add_argument("--reference-n", type=segments_arg, default=None, help="finest n; the reference extrapolates from n/4, n/2, n (default 256)")
+    a.add_argument("--fixed-n", type=segments_arg, default=None, help="n of the tolerance and effect studies (default 16)")
+    a.add_argument("--repeat", type=count_arg("repeat", 1, _MAX_REPEAT), default=5, help="solves per timing, median reported (default 5, at most 100)")
+    a.add_argument("--quick", action="store_true", help="a small smoke run (n <= 4, reference n = 16, batch of 1000)")
+    a.add_argument("--out", default=None, metavar="FILE", help="page to write (default docs/accuracy-vs-time.md in a checkout, else ./accuracy-vs-time.md)")
+    a.add_argument("--figure", default=None, metavar="FILE", help="figure to write (default figures/accuracy-vs-time.png beside the page)")
+    a.add_argument("--no-write", action="store_true", help="print only; write no page or figure")
+    a.add_argument("--json", action="store_true")
+    a.set_defaults(func=_cmd_bench_accuracy)
+    so = bsub.add_parser("solve", help="single-scene calls (solve for n = 3..128, stiffness, design, model load, CLI) against naive SciPy and the compiled limit")
+    so.add_argument("--repeat", type=segments_arg, default=11, help="runs per timing, median reported (default 11)")
+    so.add_argument("--markdown", metavar="FILE", help="also write the solve section of a docs page (docs/performance.md)")
+    so.add_argument("--json", action="store_true")
+    so.set_defaults(func=_cmd_bench_solve)
+    pa = bsub.add_parser("path", help="time to trace the 2 N pressure path 0 -> 0.3 MPa (n = 3, 32) against the IPOPT ramp and naive BFGS")
+    pa.add_argument("--repeat", type=segments_arg, default=5, help="runs per timing, median reported (default 5)")
+    pa.add_argument("--markdown", metavar="FILE", help="also write the path section of a docs page (docs/performance.md)")
+    pa.add_argument("--json", action="store_true")
+    pa.set_defaults(func=_cmd_bench_path)
+    sc = bsub.add_parser("scaling", help="equilibria per second of a sweep in this process and on Dask (1, 2 workers), chunk sizes, overhead per chunk (docs/scaling.md)")
+    sc.add_argument("--points", type=count_arg("points", 20, 1_000_000), default=12_000, help="grid size, 20 to 1000000 (default 12000)")
+    sc.add_argument("--segments", "-n", type=segments_arg, default=16, help="segment count (default 16)")
+    sc.add_argument("--repeat", type=count_arg("repeat", 1, 50), default=3, help="runs per timing, median reported (default 3)")
+    sc.add_argument("--chunk", type=chunk_arg, default=1000, metavar="K", help="points per chunk of the worker-count rows (default 1000)")
+    sc.add_argument("--workers", type=workers_arg, action="append", metavar="N", help="local cluster sizes to measure (repeatable; default 1 and 2)")
+    sc.add_argument("--scheduler", type=scheduler_arg, metavar="ADDRESS", help="measure the existing Dask cluster at ADDRESS instead (e.g. one started by dask-jobqueue)")
+    sc.add_argument("--connect-timeout", type=timeout_arg, default=10.0, metavar="S", help="seconds to wait for --scheduler (default 10)")
+    sc.add_argument("--markdown", type=output_file_arg(".md"), metavar="FILE", help="also write the page (docs/scaling.md)")
+    sc.add_argument("--json", action="store_true")
+    sc.set_defaults(func=_cmd_bench_scaling)
+    b = bsub.add_parser("batch", help="us per equilibrium of the batch path against IPOPT and naive BFGS")
+    b.add_argument("--size", type=count_arg("size", 1, _MAX_SIZE), default=10_000, help="batch size (default 10000; bounded by the memory it takes)")
+    b.add_argument("--segments", "-n", type=segments_arg, default=3, help="segment count (default 3)")
+    b.add_argument("--json", action="store_true")
+    b.set_defaults(func=_cmd_bench_batch)

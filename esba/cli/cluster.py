@@ -1,0 +1,74 @@
+"""The flags of studies on Dask (issue 11): ``--workers``, ``--scheduler``, ``--connect-timeout``,
+``--chunk``; checked by :mod:`esba.distributed` without importing Dask."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Callable
+
+from .arguments import UsageError
+
+
+def _checked(check: Callable) -> Callable[[str], object]:
+    """An argparse type from a check of :mod:`esba.distributed` (imports no Dask)."""
+
+    def parse(text: str):
+        from esba.distributed import DistributedError
+
+        try:
+            return check(text, flag=None)
+        except DistributedError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    return parse
+
+
+def workers_arg(text: str) -> int:
+    from esba.distributed import check_workers
+
+    return _checked(check_workers)(text)
+
+
+def scheduler_arg(text: str) -> str:
+    from esba.distributed import check_address
+
+    return _checked(check_address)(text)
+
+
+def timeout_arg(text: str) -> float:
+    from esba.distributed import check_timeout
+
+    return _checked(check_timeout)(text)
+
+
+def chunk_arg(text: str) -> int:
+    from esba.study import MAX_CHUNK
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= MAX_CHUNK:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of points per chunk from 1 to {MAX_CHUNK}")
+    return value
+
+
+def add_cluster_flags(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument("--workers", type=workers_arg, metavar="N", help=f"solve {what} on a local Dask cluster of N worker processes (the esba[dask] extra)")
+    p.add_argument("--scheduler", type=scheduler_arg, metavar="ADDRESS", help=f"solve {what} on the Dask cluster of the scheduler at ADDRESS (tcp://HOST:PORT)")
+    p.add_argument("--connect-timeout", type=timeout_arg, default=10.0, metavar="S", help="seconds to wait for --scheduler and its first worker (default 10)")
+
+
+def on_cluster(args: argparse.Namespace) -> bool:
+    """Whether the study runs on Dask; checks --workers, --scheduler and the extra before any computation."""
+    if args.workers is not None and args.scheduler is not None:
+        raise UsageError("--workers N starts a local cluster and --scheduler ADDRESS uses an existing one: give one of the two")
+    if args.workers is None and args.scheduler is None:
+        return False
+    from esba.distributed import DistributedError, require_dask
+
+    try:
+        require_dask("--workers" if args.workers is not None else "--scheduler")
+    except DistributedError as exc:
+        raise UsageError(str(exc)) from None
+    return True

@@ -1,0 +1,169 @@
+"""``esba design`` (issue 4): the stiffest (r2, d) by IPOPT on the full-space NLP, and by PSO as the paper did."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from derive.effects import DEFAULT_VARIANT, VARIANTS
+from esba import outputs
+
+from .arguments import UsageError, count_arg, float_arg, refuse, segments_arg
+from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
+
+
+def _design_rows(d: dict) -> list[tuple[str, str]]:
+    def num(v, fmt):
+        return "-" if v is None else format(v, fmt)
+
+    rows = [
+        ("status", d["status"] + (f": {d['message']}" if d.get("message") else "")),
+        ("r2, d", f"{num(d['r2_mm'], '.5f')}, {num(d['d_mm'], '.5f')} mm (wall {num(d['wall_mm'], '.4f')} mm)"),
+        ("pressure", f"{num(d['pressure_mpa'], '.6f')} MPa (unloaded 90 deg)"),
+        ("stiffness", f"{num(d['stiffness_n_per_m'], '.5f')} N/m (load path: {num(d['stiffness_check_n_per_m'], '.5f')})"),
+        ("objective", f"{d['objective']} = {num(d['objective_value'], '.6g')} {d['objective_unit']}"),
+    ]
+    if d.get("best_reachable_stiffness") is not None:
+        rows.append(("best K", f"{d['best_reachable_stiffness']:.5f} N/m reachable"))
+    rows.append(("stable", f"{d['stable']}; on the load path: {d['on_load_path']}"))
+    active = []
+    for c in d["active_constraints"]:
+        sens = "" if c["sensitivity"] is None else f" (d objective / d bound = {c['sensitivity']:+.4g} {d['objective_unit']}/{c['unit']})"
+        active.append(f"{c['name']}: {c['description']}{sens}")
+    rows.append(("active", "; ".join(active) or "none"))
+    work = f"{d['iterations']} iterations, {d['evaluations']} starts" if d["method"] == "ipopt" else f"{d['evaluations']} designs"
+    rows.append(("time", f"{d['solve_time_s']:.3f} s ({work}; set-up {d['setup_time_s']:.3f} s)"))
+    return rows
+
+
+def _design_table(d: dict) -> str:
+    if d.get("method") != "both":
+        lines = [d["problem"], f"method: {d['method']}"] + [f"{k:>10}: {v}" for k, v in _design_rows(d)]
+    else:
+        lines = [d["ipopt"]["problem"]]
+        for name in ("ipopt", "pso"):
+            lines.append(f"-- {name}")
+            lines += [f"{k:>10}: {v}" for k, v in _design_rows(d[name])]
+        diff = d["differences"]
+
+        def num(v, fmt):
+            return "-" if v is None else format(v, fmt)
+
+        lines.append(
+            f"-- PSO - IPOPT: r2 {num(diff['r2_mm'], '+.2e')} mm, d {num(diff['d_mm'], '+.2e')} mm, objective "
+            f"{num(diff['objective_rel'], '+.2e')} (relative); PSO took {num(diff['time_ratio_pso_over_ipopt'], '.0f')} "
+            f"times as long; agree (0.01 mm, 0.1 %): {diff['agree']}"
+        )
+    if d.get("figure"):
+        lines.append(f"wrote {d['figure']}")
+    return "\n".join(lines)
+
+
+def _cmd_design(args: argparse.Namespace) -> int:
+    from esba.design import DesignError, DesignOptions, DesignProblem, compare, optimise_ipopt, optimise_pso
+    from esba.design_report import write_doc
+    from esba.pso import PSOOptions, PSOOptionsError
+
+    if args.write_doc:
+        refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot"], "with --write-doc (the study runs its own problems)")
+        page = outputs.check_file(args.write_doc, "--write-doc")
+    method = args.method or "ipopt"
+    if method == "ipopt":
+        refuse(args, ["particles", "iterations", "seed"], "with --method ipopt (they set the swarm: use --method pso or both)")
+    if method == "pso":
+        refuse(args, ["starts"], "with --method pso (it sets IPOPT's starts: use --method ipopt or both)")
+    figure = outputs.figure_file(args.plot, "--plot", "esba-design.png") if args.plot else None
+    try:
+        pso_options = PSOOptions(
+            particles=30 if args.particles is None else args.particles,
+            iterations=50 if args.iterations is None else args.iterations,
+            seed=0 if args.seed is None else args.seed,
+        )
+        options = DesignOptions(starts=4 if args.starts is None else args.starts)
+        if args.write_doc:
+            path, _ = write_doc(page, segments=args.segments, options=options, pso_options=pso_options)
+            print_result(args, {"page": str(path)}, lambda d: f"wrote {d['page']}")
+            return EXIT_OK
+        problem = DesignProblem(
+            objective=args.objective or "stiffness",
+            segments=args.segments,
+            variant=args.variant or DEFAULT_VARIANT,
+            min_stiffness=args.min_stiffness,
+            max_pressure=args.max_pressure,
+            target_angle_deg=args.target_angle,
+            min_wall=0.0 if args.min_wall is None else args.min_wall,
+        )
+    except (DesignError, PSOOptionsError) as exc:
+        raise UsageError(str(exc)) from None
+    if method == "ipopt":
+        run = optimise_ipopt(problem, options)
+    elif method == "pso":
+        run = optimise_pso(problem, options, pso_options)
+    else:
+        run = compare(problem, options, pso_options)
+    data = run.to_dict()
+    results = [run] if method != "both" else [run.ipopt, run.pso]
+    for r, d in zip(results, [data] if method != "both" else [data["ipopt"], data["pso"]]):
+        d["validity"] = _design_validity(r, d)
+    if figure is not None:
+        from esba.design_figures import design_figure
+
+        data["figure"] = str(design_figure(run, figure).resolve())
+    print_result(args, data, _design_table)
+    for r, d in zip(results, [data] if method != "both" else [data["ipopt"], data["pso"]]):
+        warn_findings(d["validity"])
+    bad = [r for r in results if r.status != "optimal"]
+    for r in bad:
+        print(f"esba: design {r.status} ({r.method}): {r.message}", file=sys.stderr)
+    return EXIT_FAILED if bad else EXIT_OK
+
+
+def _design_validity(result, d: dict) -> list[dict]:
+    """The validity findings (:mod:`esba.validity`) of each state of a design (its start and loaded states)."""
+
+    from esba.validity import assess_angles
+
+    values = (d.get("r2_mm"), d.get("d_mm"), d.get("pressure_mpa"))
+    if any(v is None or not math.isfinite(v) for v in values) or not isinstance(d.get("theta_deg"), dict):
+        return []
+    r2, dd, start_pressure = values
+    # the start and loaded states are at the 90 degree pressure; free at max_pressure; target at its own
+    pressures = {"free": d.get("max_pressure"), "target": d.get("target_pressure_mpa")}
+    out = []
+    for state, degrees in d["theta_deg"].items():
+        pressure = pressures.get(state) or start_pressure
+        if degrees is None or not all(math.isfinite(v) for v in degrees) or not math.isfinite(pressure):
+            continue
+        scene = result.problem.scene(r2, dd, pressure, loaded=(state == "loaded"))
+        for f in assess_angles(scene, [math.radians(v) for v in degrees], pressure):
+            out.append({**f.to_dict(), "state": state, "message": f"{result.method} design, {state} state: {f.message}"})
+    return out
+
+
+#: ``esba.design.METHODS`` and ``esba.design.OBJECTIVES`` (written out so that building the parser
+#: does not import CasADi; a test checks they agree).
+_DESIGN_METHODS = ("ipopt", "pso", "both")
+
+
+_DESIGN_OBJECTIVES = ("stiffness", "angle", "pressure")
+
+
+def add_design(sub) -> None:
+    p = sub.add_parser("design", help="optimise the chamber (r2, d): IPOPT on the full-space NLP, PSO as in the paper")
+    p.add_argument("--segments", "-n", type=segments_arg, default=3, help="segment count n, 1 to 256 (default 3)")
+    p.add_argument("--method", choices=_DESIGN_METHODS, default=None, help="ipopt (default), pso, or both side by side")
+    p.add_argument("--objective", choices=_DESIGN_OBJECTIVES, default=None, help="maximise the stiffness (default), the free angle at --max-pressure, or minimise the pressure for --target-angle")
+    p.add_argument("--min-stiffness", type=float_arg, metavar="K", help="K >= K N/m (required by angle and pressure)")
+    p.add_argument("--max-pressure", type=float_arg, metavar="P", help="pressure budget, MPa (the pressure of the free angle for --objective angle)")
+    p.add_argument("--target-angle", type=float_arg, metavar="DEG", help="target unloaded angle of --objective pressure (default 90)")
+    p.add_argument("--min-wall", type=float_arg, default=None, metavar="T", help="thinnest wall r1 - r2 - d, mm (default 0: r2 + d < r1)")
+    p.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default {DEFAULT_VARIANT})")
+    p.add_argument("--seed", type=count_arg("seed", 0, 2**32 - 1), default=None, help="PSO seed (default 0)")
+    p.add_argument("--particles", type=count_arg("particles", 2, 500_000, "particles x (iterations + 1) is at most 1000000"), default=None, help="PSO swarm size (default 30, the paper's)")
+    p.add_argument("--iterations", type=count_arg("iterations", 1, 500_000, "particles x (iterations + 1) is at most 1000000"), default=None, help="PSO iterations (default 50, the paper's)")
+    p.add_argument("--starts", type=count_arg("starts", 1, 8), default=None, help="IPOPT starts (1 to 8, default 4)")
+    p.add_argument("--plot", metavar="FILE|DIR", help="write the stiffness map with the design(s) (and the swarm); a folder gets esba-design.png")
+    p.add_argument("--write-doc", metavar="FILE", help="run the whole study (both methods, every problem; minutes) and write it, e.g. docs/design.md")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_cmd_design)

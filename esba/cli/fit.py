@@ -1,0 +1,176 @@
+"""``esba fit`` and ``esba experiments`` (issue 10): parameters from measurements, the paper's EXP
+and FEM values against the model."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from derive.effects import VARIANTS
+
+from .arguments import UsageError, output_file_arg, segments_arg
+from .results import EXIT_FAILED, EXIT_OK, print_result
+
+
+def _free_arg(text: str) -> list[str]:
+    names = [s.strip() for s in text.split(",") if s.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected names such as E,rho")
+    return names
+
+
+def _level_arg(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 < value < 1.0:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a confidence level between 0 and 1 (0.95 for 95 %)")
+    return value
+
+
+def _fit_table(d: dict) -> str:
+    def num(v, fmt=".5g"):
+        return "-" if v is None else format(v, fmt)
+
+    level = round(100 * d["level"])
+    lines = [
+        f"fit of {', '.join(d['parameters'])} to {d['measurements']} measured values in {d['rows']} rows of {d['source']}; "
+        f"n = {d['segments']}, {d['variant']}",
+        f"status: {d['status']}" + (f": {d['message']}" if d["message"] else ": every fitted state a stable minimum on its load path")
+        + f" (IPOPT {d['iterations']} iterations, {d['solve_time_s']:.2f} s)",
+        f"{'parameter':<10} {'unit':<5} {'start':>10} {'estimate':>12} {'std error':>11} {level} % interval",
+    ]
+    for name, p in d["parameters"].items():
+        iv = p[f"interval_{level}"]
+        lines.append(f"{name:<10} {p['unit']:<5} {num(p['start']):>10} {num(p['estimate'], '.6g'):>12} {num(p['std_error'], '.3g'):>11} "
+                     f"[{num(iv[0], '.5g')}, {num(iv[1], '.5g')}]")
+    names = list(d["parameters"])
+    if len(names) > 1:
+        pairs = [f"{a}-{b} {num(d['correlation'][i][j], '+.3f')}" for i, a in enumerate(names) for j, b in enumerate(names) if j > i]
+        lines.append("correlation: " + ", ".join(pairs))
+    lines.append(f"residual variance s^2 = {num(d['residual_variance'], '.4g')} ({d['dof']} degrees of freedom; "
+                 "standard errors scaled by it)")
+    lines.append(f"{'row':<22} {'quantity':<12} {'measured':>10} {'predicted':>10} {'residual':>10} {'sd':>7} {'r / sd':>7}")
+    for r in d["residuals"]:
+        sd = f"{r['sd']:.3g}" + ("" if r["sd_given"] else "*")
+        lines.append(f"{r['row'][:22]:<22} {r['quantity']:<12} {r['measured']:>10.4g} {r['predicted']:>10.4g} {r['residual']:>+10.3g} "
+                     f"{sd:>7} {r['normalised']:>+7.2f}")
+    if any(not r["sd_given"] for r in d["residuals"]):
+        lines.append("* no standard deviation given: 1 deg, 1 mm or 1 N/m assumed (only their ratios matter once scaled by s^2)")
+    for s in d["states"]:
+        if s["message"]:
+            lines.append(f"NOT OK: row {s['row']!r}: {s['message']}")
+    for w in d["warnings"]:
+        lines.append(f"WARNING: {w}")
+    if d.get("figure"):
+        lines.append(f"wrote {d['figure']}")
+    return "\n".join(lines)
+
+
+def _cmd_fit(args: argparse.Namespace) -> int:
+    from esba.fit import FitError, FitOptions, fit, predict
+    from esba.measurements import MeasurementError, load_measurements
+    from esba.scene import SceneError, load_scene
+
+    try:
+        base = load_scene(args.scene) if args.scene else None
+        data = load_measurements(args.measurements, base)
+        changes = {k: v for k, v in (("segments", args.segments), ("variant", args.variant)) if v is not None}
+        if changes:  # the flags override the scene (the file's [scene], --scene or Table 1)
+            data = load_measurements(args.measurements, data.base.replace(**changes))
+        result = fit(data, args.free, FitOptions(level=args.level))
+    except (MeasurementError, FitError, SceneError) as exc:
+        raise UsageError(str(exc)) from None
+    out = result.to_dict()
+    if args.plot:
+        from esba.fit_plots import Series, measured_vs_predicted, save_figure
+
+        sds = {(r["row"], r["quantity"]): r["sd"] for r in out["residuals"] if r["sd_given"]}
+        start = predict(data)
+        cov = result.covariance if all(math.isfinite(v) for v in result.covariance.ravel()) else None
+        fitted = predict(data, result.params(), cov)
+        fig = measured_vs_predicted([
+            Series("start: " + ", ".join(f"{n} = {v:g}" for n, v in zip(result.free, result.start)), start, sds, "s", "0.5"),
+            Series("fitted: " + ", ".join(f"{n} = {v:.4g}" for n, v in result.params().items()) + " (95 %)", fitted, sds, "o", "C0"),
+        ], title=f"{data.source}: measured against predicted")
+        try:
+            out["figure"] = str(save_figure(fig, args.plot).resolve())
+        except OSError as exc:
+            raise UsageError(f"--plot {args.plot!r}: cannot write: {exc}") from None
+    print_result(args, out, _fit_table)
+    for w in result.warnings:
+        if w.startswith("not identifiable"):
+            print(f"esba: warning: {w}", file=sys.stderr)
+    if not result.ok:
+        print(f"esba: fit failed: {result.message}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def add_fit(sub) -> None:
+    p = sub.add_parser("fit", help="fit actuator parameters (E, rho, ...) to a measurement file; intervals, correlations, residuals")
+    p.add_argument("measurements", metavar="MEASUREMENTS", help="measurement file, .csv or .toml (see esba/measurements.py for the columns)")
+    p.add_argument("--scene", metavar="SCENE.toml", help="the actuator and model of the rows (default: the file's [scene], else Table 1, n = 3)")
+    p.add_argument("--free", type=_free_arg, default=["E", "rho"], metavar="NAMES", help="parameters to fit, comma-separated (default E,rho; any of L,r1,r2,d,rho,E,M)")
+    p.add_argument("--segments", "-n", type=segments_arg, help="segment count n >= 1 (overrides the scene's)")
+    p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant (overrides the scene's)")
+    p.add_argument("--level", type=_level_arg, default=0.95, help="confidence level of the intervals (default 0.95)")
+    p.add_argument("--plot", type=output_file_arg(".png", ".pdf", ".svg"), metavar="FILE", help="write measured against predicted, with error bars (.png, .pdf, .svg)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_cmd_fit)
+
+
+def _experiments_table(d: dict) -> str:
+    lines = [f"{'column':<6} {'measurement':<22} {'quantity':<12} {'paper':>9} {'esba':>9} {'esba - paper':>13}"]
+    for col in d["columns"]:
+        for p in col["nominal"]:
+            lines.append(f"{col['name']:<6} {p['row'][:22]:<22} {p['quantity']:<12} {p['measured']:>9.4g} {p['predicted']:>9.4g} {p['error']:>+13.3f}")
+    for col in d["columns"]:
+        for key in ("fit_e", "fit_both"):
+            f = col[key]
+            est = ", ".join(f"{n} = {v['estimate']:.5g} +- {'-' if v['std_error'] is None else format(v['std_error'], '.2g')} {v['unit']}"
+                            for n, v in f["parameters"].items())
+            lines.append(f"{col['name']} fit: {est}" + (f" ({'; '.join(f['warnings'])})" if f["warnings"] else ""))
+    lines.append(f"E +-20 % on the main job: {d['modulus']['verdict']}")
+    if d.get("page"):
+        lines.append(f"wrote {d['page']} and its figure")
+    return "\n".join(lines)
+
+
+def _cmd_experiments(args: argparse.Namespace) -> int:
+    from esba import experiments_page
+
+    if args.check:
+        if experiments_page.check_page(args.check):
+            print(f"esba: {args.check} is stale: run `{experiments_page.DOC_COMMAND}` and commit it", file=sys.stderr)
+            return EXIT_FAILED
+        print("experiments page is up to date")
+        return EXIT_OK
+    from esba.experiments import run_study
+
+    study = run_study()
+    data = {
+        "columns": [
+            {"name": c.name, "nominal": [p.to_dict() for p in c.nominal], "fit_e": c.fit_e.to_dict(), "fit_both": c.fit_both.to_dict()}
+            for c in study.columns
+        ],
+        "modulus": study.modulus_agreement.to_dict(),
+    }
+    if args.write_doc:
+        try:
+            path, _ = experiments_page.write_page(args.write_doc, study)
+        except OSError as exc:
+            raise UsageError(f"--write-doc {args.write_doc!r}: cannot write: {exc}") from None
+        data["page"] = str(path)
+    print_result(args, data, _experiments_table)
+    return EXIT_OK
+
+
+def add_experiments(sub) -> None:
+    p = sub.add_parser("experiments", help="the paper's EXP and FEM values against the model, fits and cross-validation (docs/experiments.md)")
+    p.add_argument("--write-doc", type=output_file_arg(".md"), metavar="FILE", help="write the page (e.g. docs/experiments.md) and figures/experiments.png beside it")
+    p.add_argument("--check", metavar="FILE", help="exit 1 when the page FILE differs from what --write-doc would write")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_cmd_experiments)

@@ -1,0 +1,147 @@
+"""``esba path`` (issue 8): branches, special points, hysteresis."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from esba import outputs
+
+from .arguments import UsageError, add_scene_flags, count_arg, float_arg, scene_from_args
+from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
+
+#: Where ``esba path`` writes its branches and figure unless told otherwise (the current folder).
+DEFAULT_PATH_OUT = "esba-path.csv"
+
+
+DEFAULT_PATH_FIGURE = "esba-path.png"
+
+
+#: The parameters of ``esba path --param`` (``esba.path_problem.PARAMETERS``, written out so that
+#: building the parser does not import CasADi; a test checks they agree).
+_PATH_PARAMETERS = ("pressure", "payload", "omega", "at", "load", "r2", "d", "rho", "E", "L", "r1", "M")
+
+
+def _path_table(d: dict) -> str:
+    unit = d["unit"].split(" ")[0]
+    unit = "" if unit == "1" else f" {unit}"
+    lines = [f"scene: {d['scene']}", f"path in {d['parameter']} from {d['from']:g} to {d['to']:g}{unit}"]
+    head = f"  {'':2} {'point':<13} {d['parameter'] + unit:>16} {'angle deg':>10} {'tip x, y mm':>17}  {'Morse':>5}  status"
+    for b in d["branches"]:
+        lines.append(f"{b['label'] or 'branch'}: {b['points']} points; {b['stop_reason']}")
+        if b["special_points"]:
+            lines.append(head)
+        for sp in b["special_points"]:
+            tip = f"{sp['tip_mm'][0]:7.2f}, {sp['tip_mm'][1]:7.2f}"
+            lines.append(
+                f"  {sp['label']:2} {sp['kind']:<13} {sp['lambda']:16.9g} {sp['total_angle_deg']:10.3f} {tip:>17}  "
+                f"{sp['morse_before']} -> {sp['morse_after']}  {sp['status']}"
+            )
+    for r in d["loading"]:
+        what = f"quasi-static {d['parameter']} {r['from']:g} -> {r['to']:g}{unit}"
+        for lam in r["branch_points_crossed"]:
+            lines.append(f"{what}: passes the branch point {lam:.9g}{unit} and goes on along the stable branch crossing there")
+        if not r["jumps"]:
+            lines.append(f"{what}: no jump" + ("" if r["reached"] else f"; NOT reached: {r['message']}"))
+        for j in r["jumps"]:
+            lines.append(
+                f"{what}: jumps at the {j['kind']} {j['lambda']:.9g}{unit}: angle {j['total_angle_before_deg']:.2f} -> "
+                f"{j['total_angle_after_deg']:.2f} deg, tip moves {j['distance_mm']:.1f} mm"
+            )
+    if d.get("hysteresis"):
+        h = d["hysteresis"]
+        lines.append(f"hysteresis: up jumps at {h['up'][0]:.9g}, down at {h['down'][-1]:.9g}{unit}; width {h['width']:.6g}{unit}")
+    for k in ("out", "figure"):
+        if d.get(k):
+            lines.append(f"wrote {d[k]}")
+    return "\n".join(lines)
+
+
+def _path_write_doc(args: argparse.Namespace) -> int:
+    """``esba path --write-doc FILE``: the whole study of docs/paths.md (no other path flags)."""
+    given = [flag for flag, v in (("--to", args.to), ("--from", args.start), ("--out", args.out), ("--plot", args.plot), ("SCENE.toml", args.scene)) if v is not None]
+    if given:
+        raise UsageError(f"--write-doc runs its own studies of the Table 1 actuator: give no {', '.join(given)} with it")
+    outputs.check_file(args.write_doc, "--write-doc", (".md",))
+    from esba.paths_report import paths_data, write_page
+
+    def say(msg):
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    data = paths_data(progress=say)
+    page = write_page(args.write_doc, data, f"esba path --write-doc {args.write_doc}")
+    print_result(args, {"page": str(page.resolve())}, lambda d: f"wrote {d['page']}")
+    return EXIT_OK
+
+
+def _cmd_path(args: argparse.Namespace) -> int:
+
+    if args.write_doc:
+        return _path_write_doc(args)
+    if args.to is None:
+        raise UsageError("the following arguments are required: --to")
+    if not math.isfinite(args.to):
+        raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
+    out = None if args.no_out else outputs.check_file(args.out or DEFAULT_PATH_OUT, "--out", (".csv", ".json"))
+    plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_PATH_FIGURE, "--plot", DEFAULT_PATH_FIGURE)
+    from esba.equilibrium import EquilibriumError
+    from esba.path import PathOptions, write_branches
+    from esba.path_problem import PathError
+    from esba.path_study import study
+
+    scene = scene_from_args(args)
+    param = args.param
+    if args.payload_index != 1:
+        if param not in ("payload", "omega", "at"):
+            raise UsageError(f"--payload-index {args.payload_index}: only means something with --param payload, omega or at")
+        param = f"{param}{args.payload_index}"
+    try:
+        options = PathOptions(locate=args.locate, max_steps=args.max_steps, ds_max=args.ds_max, ds=min(0.05, args.ds_max))
+        result = study(scene, param, args.to, start=args.start, options=options, switch=not args.no_switch, loading=not args.no_loading)
+    except PathError as exc:
+        raise UsageError(str(exc)) from None
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    data = result.to_dict(points=bool(args.json and args.points))
+    if out:
+        extra = {k: v for k, v in result.to_dict(points=False).items() if k != "branches"}
+        data["out"] = str(write_branches(result.branches, out, extra).resolve())
+    if plot:
+        from esba.path_figures import save_figure, study_figure
+
+        data["figure"] = str(save_figure(study_figure(result, args.y), plot).resolve())
+    print_result(args, data, _path_table)
+    warn_findings(data["validity"])
+    reached = result.main.stopped == "loop" or (len(result.main) and result.main.lam[-1] == args.to)
+    if not reached:
+        print(f"esba: the branch did not reach --to {args.to:g}: {result.main.stop_reason}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def add_path(sub) -> None:
+    p = sub.add_parser(
+        "path",
+        help="trace the equilibria as one parameter changes: folds, branch points, stability, hysteresis (CSV/JSON, figure)",
+    )
+    add_scene_flags(p)
+    p.add_argument("--param", choices=_PATH_PARAMETERS, default="pressure", help="the parameter to follow (default pressure; payload, omega and at are payload 1's: use --payload-index for another)")
+    p.add_argument("--payload-index", type=count_arg("--payload-index", 1, 16, "a model carries at most 16 payloads"), default=1, metavar="K", help="which payload --param payload/omega/at means (default 1)")
+    p.add_argument("--to", type=float_arg, metavar="VALUE", help="trace to this value (MPa, N, deg, mm, ... as the parameter; required)")
+    p.add_argument("--from", dest="start", type=float_arg, metavar="VALUE", help="start here (default: the scene's own value)")
+    p.add_argument("--locate", choices=("extended", "bisection"), default="extended", help="how folds are located (default: the extended system)")
+    p.add_argument("--max-steps", type=count_arg("--max-steps", 1, 1_000_000, "each step stores a point"), default=2000, metavar="N", help="steps per branch (default 2000, at most 1000000)")
+    p.add_argument("--ds-max", type=float_arg, default=0.1, metavar="DS", help="largest step in the scaled arclength (default 0.1)")
+    p.add_argument("--no-switch", action="store_true", help="do not trace the branches crossing at branch points")
+    p.add_argument("--no-loading", action="store_true", help="do not follow quasi-static loading up and down (the hysteresis)")
+    p.add_argument("--y", choices=("total-angle", "tip-x", "tip-y"), default="total-angle", help="what the figure shows against the parameter")
+    p.add_argument("--out", metavar="FILE", help=f"the branches as CSV or JSON (default {DEFAULT_PATH_OUT})")
+    p.add_argument("--no-out", action="store_true", help="write no branch file")
+    p.add_argument("--plot", metavar="FILE", help=f"the figure (default {DEFAULT_PATH_FIGURE})")
+    p.add_argument("--no-plot", action="store_true", help="write no figure")
+    p.add_argument("--points", action="store_true", help="with --json: print every point, not only the special ones")
+    p.add_argument("--write-doc", metavar="FILE", help="run the studies of docs/paths.md (Table 1: bistable ranges, buckling for n = 1..8) and write the page and its figures (about a minute)")
+    p.set_defaults(func=_cmd_path)

@@ -1,0 +1,405 @@
+"""``esba solve``, ``stiffness``, ``pressure`` and ``validate``: one scene's equilibria, its
+sensitivities and uncertainty, and its Monte Carlo (in this process or on Dask)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from esba import outputs
+
+from .arguments import UsageError, add_scene_flags, count_arg, float_arg, output_file_arg, refuse, scene_from_args
+from .cluster import add_cluster_flags, chunk_arg, on_cluster
+from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
+
+#: Where ``esba solve`` writes its figure when no scene file is given and no --plot.
+DEFAULT_SOLVE_FIGURE = "esba-solve.png"
+
+
+#: ``--max-iter``'s bound (``esba.equilibrium.MAX_ITER_LIMIT``, written out so that building the
+#: parser does not import CasADi; a test checks they agree).
+_MAX_ITER = 100_000
+
+
+def _fmt(values, digits: int = 3) -> str:
+    return ", ".join(f"{v:.{digits}f}" for v in values)
+
+
+def _solve_table(d: dict) -> str:
+    terms = ", ".join(f"{k} {v:.3f}" for k, v in d["energy_terms_nmm"].items())
+    loads = "; ".join(f"{p['force_n']:g} N at {p['angle_deg']:g} deg, s = {p['at']:g}" for p in d["payloads"]) or "none"
+    rows = [
+        ("scene", d["scene"]),
+        ("effects", ", ".join(d["effects"])),
+        ("payloads", loads),
+        ("pressure", f"{d['pressure_mpa']:.7f} MPa ({d['pressure_from']})"),
+        ("theta", f"({_fmt(d['theta_deg'], 2)}) deg"),
+        ("total angle", f"{d['total_angle_deg']:.3f} deg"),
+        ("tip x, y", f"{d['tip_mm'][0]:.3f}, {d['tip_mm'][1]:.3f} mm (orientation {d['tip_angle_deg']:.2f} deg)"),
+        ("energy", f"{d['energy_nmm']:.4f} N mm ({terms})"),
+        ("stability", f"{d['stability']} (Hessian eigenvalues {_fmt(d['eigenvalues'], 3)} N mm/rad^2)"),
+        ("solver", f"{d['certificate'] or 'IPOPT ' + d['status']}; {d['steps']} path points and solves, {d['iterations']} iterations in all, {d['solve_time_s']:.3f} s"),
+    ]
+    if d.get("message"):
+        rows.append(("NOT OK", d["message"]))
+    for note in d.get("notes", []):
+        rows.append(("note", note))
+    if d.get("sensitivities"):
+        rows += _sensitivity_rows(d)
+    if d.get("uncertainty"):
+        rows += _uncertainty_rows(d)
+    if d.get("figure"):
+        rows.append(("figure", f"wrote {d['figure']}"))
+    return "\n".join(f"{k:>12}: {v}" for k, v in rows)
+
+
+def _sensitivity_rows(d: dict) -> list[tuple[str, str]]:
+    s = d["sensitivities"]
+    if s["status"] != "ok":
+        return [("sensitivity", s["message"])]
+    rows = [("sensitivity", "per unit of each parameter (implicit function theorem, exact AD); fold: linear estimate of the change that reaches it")]
+    rows.append(("", f"{'parameter':<14} {'value':>10} {'unit':<6} {'d angle (deg)':>14} {'d tip x (mm)':>13} {'d tip y (mm)':>13} {'fold':>10}"))
+    for name, r in s["parameters"].items():
+        fold = "-" if r["fold_distance"] is None else f"{r['fold_distance']:+.3g}"
+        rows.append(("", f"{name:<14} {r['value']:>10.5g} {r['unit']:<6} {r['dtotal_angle_deg_per_unit']:>14.5g} "
+                         f"{r['dtip_mm_per_unit'][0]:>13.5g} {r['dtip_mm_per_unit'][1]:>13.5g} {fold:>10}"))
+    return rows
+
+
+def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
+    u = d["uncertainty"]
+    given = ", ".join(f"{s['name']} {s['sigma']:.4g} {s['unit']}" + (" (uniform)" if s["distribution"] == "uniform" else "") for s in u["sigmas"])
+    rows = [("sigmas", given)]
+    if u["std_total_angle_deg"] is None:
+        rows.append(("uncertainty", f"{u['status']}: {u['message']}"))
+        return rows
+    e = u["tip_ellipse_95"]
+    rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
+                                f"95 % tip ellipse {e['semi_axes_mm'][0]:.3g} x {e['semi_axes_mm'][1]:.3g} mm at {e['angle_deg']:.1f} deg from x"))
+    if u["status"] != "ok":
+        rows.append(("NOT LINEAR", u["message"]))
+    mc = d.get("monte_carlo")
+    if mc:
+        c = mc["counts"]
+        std = mc["std"]
+
+        def num(v):
+            return "-" if v is None else f"{v:.4g}"
+
+        rows.append(("Monte Carlo", f"{c['samples']} samples (seed {mc['seed']}, {mc['backend']}): {c['ok']} solved, {c['invalid']} outside the scene's rules, "
+                                    f"{c['not_ok']} without a stable equilibrium; std total angle {num(std['total_angle'])} deg, tip x, y "
+                                    f"{num(std['tip_x'])}, {num(std['tip_y'])} mm"))
+        st = mc.get("study")
+        if st:
+            where = f"; samples in {st['out']}" + (f" (resumed at sample {st['resumed_from_sample']})" if st.get("resumed_from_sample") else "") if st.get("out") else ""
+            rows.append(("solved", f"{st['runner']} in {st['seconds']:.1f} s{where}"))
+        rows.append(("agreement", d["agreement"]["verdict"]))
+    return rows
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from esba.equilibrium import EquilibriumError, SolverOptions, solve
+
+    if args.no_plot and args.plot is not None:
+        raise UsageError("--plot and --no-plot: give one of the two")
+    plot = args.plot
+    if plot is None and args.scene is None and not args.no_plot:
+        plot = DEFAULT_SOLVE_FIGURE
+    figure = outputs.figure_file(plot, "--plot", DEFAULT_SOLVE_FIGURE) if plot and not args.no_plot else None
+    scene = scene_from_args(args)
+    sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
+    if args.monte_carlo is not None and not sigmas:
+        raise UsageError("--monte-carlo needs uncertain parameters: --sigma NAME=SIGMA or an [uncertainty] table in the scene file")
+    chunked = on_cluster(args) or args.mc_out is not None or args.resume
+    if chunked and args.monte_carlo is None:
+        raise UsageError("--workers, --scheduler, --mc-out and --resume run the Monte Carlo: give --monte-carlo N (and --sigma)")
+    if args.resume and args.mc_out is None:
+        raise UsageError("--resume continues the Monte Carlo in its sample file: give --mc-out FILE.csv")
+    mc_options = None
+    if args.monte_carlo is not None:
+        from esba.uncertainty import MonteCarloOptions, UncertaintyError
+
+        try:
+            extra = {} if args.mc_chunk is None else {"chunk": args.mc_chunk}
+            mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=args.seed, **extra)
+        except UncertaintyError as exc:
+            raise UsageError(f"--monte-carlo: {exc}") from None
+    options = SolverOptions(max_iter=args.max_iter, continuation=not args.no_continuation)
+    try:
+        result = solve(scene, options)
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    data = result.to_dict()
+    data["scene"] = scene.describe()
+    propagation = mc = None
+    if args.sensitivities:
+        from esba.sensitivity import sensitivities
+
+        data["sensitivities"] = sensitivities(result).to_dict()
+    if sigmas:
+        from esba.uncertainty import compare, monte_carlo, propagate
+
+        propagation = propagate(result, sigmas)
+        data["uncertainty"] = propagation.to_dict()
+        if mc_options is not None:
+            if chunked:
+                try:
+                    mc, info = _monte_carlo_in_chunks(args, scene, sigmas, mc_options)
+                except KeyboardInterrupt:
+                    where = f": the samples solved so far are in {args.mc_out}; rerun with --resume to go on" if args.mc_out else ""
+                    print(f"esba: interrupted{where}", file=sys.stderr)
+                    return 130
+            else:
+                mc, info = monte_carlo(scene, sigmas, mc_options), None
+            data["monte_carlo"] = mc.to_dict()
+            if info is not None:
+                data["monte_carlo"]["study"] = info
+            data["agreement"] = compare(propagation, mc).to_dict()
+    if figure is not None:
+        from esba.plots import save_figure, solve_figure
+
+        unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False), pressure=result.pressure)
+        cov = propagation.cov_tip if propagation is not None and propagation.has_numbers else None
+        tips = mc.tip[mc.ok] if mc is not None else None
+        data["figure"] = str(save_figure(solve_figure(result, unloaded, tip_cov=cov, samples=tips), figure).resolve())
+    print_result(args, data, _solve_table)
+    warn_findings(result.validity)
+    if not result.ok:
+        print(f"esba: solve not ok: {result.message or result.status}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _monte_carlo_in_chunks(args: argparse.Namespace, scene, sigmas, options):
+    """The Monte Carlo on --workers or --scheduler, or streamed to --mc-out (esba.mc_study)."""
+    from esba.distributed import DistributedError, open_runner
+    from esba.study import StudyError
+    from esba.uncertainty import monte_carlo
+
+    progress = sys.stderr.isatty()
+    try:
+        with open_runner(args.workers, args.scheduler, args.connect_timeout) as runner:
+            if args.mc_out is None:
+                t0 = time.perf_counter()
+                mc = monte_carlo(scene, sigmas, options, runner=runner, progress=progress)
+                return mc, {"runner": runner.description, "workers": runner.workers, "seconds": time.perf_counter() - t0}
+            from esba.mc_study import monte_carlo_study
+
+            return monte_carlo_study(scene, sigmas, options, runner=runner, out=args.mc_out, resume=args.resume, progress=progress)
+    except (DistributedError, StudyError) as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _sigmas_for(args: argparse.Namespace, scene) -> tuple:
+    """The scene file's [uncertainty] table, then --sigma flags (a flag replaces the file's entry)."""
+    from esba.uncertainty import UncertaintyError, load_sigmas, parse_sigma, resolve_sigmas
+
+    try:
+        specs = list(load_sigmas(args.scene)) if args.scene else []
+        specs += [parse_sigma(text) for text in args.sigma or ()]
+        return resolve_sigmas(scene, specs) if specs else ()
+    except UncertaintyError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _sample_count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 10:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of samples >= 10")
+    return value
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number >= 0")
+    return value
+
+
+def add_solve(sub) -> None:
+    p = sub.add_parser("solve", help="solve a scene's equilibrium (no arguments: the paper's Table 2 case, n = 3)")
+    add_scene_flags(p)
+    p.add_argument("--plot", metavar="FILE|DIR", help=f"write the deformed and unloaded shapes (default ./{DEFAULT_SOLVE_FIGURE} when no scene file is given; a folder gets {DEFAULT_SOLVE_FIGURE} inside it; no suffix: .png)")
+    p.add_argument("--no-plot", action="store_true", help="write no figure")
+    p.add_argument("--max-iter", type=count_arg("max_iter", 1, _MAX_ITER, "an equilibrium takes tens of iterations"), default=200, metavar="N", help="IPOPT iterations per solve (default 200, at most 100000)")
+    p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
+    p.add_argument("--sensitivities", action="store_true", help="d(angles, tip)/d(parameter) for every scene parameter (exact, implicit function theorem)")
+    p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="uncertain parameter: E=0.05 (in its unit), E=10%%, r2=±0.1 (a tolerance); repeatable; propagated to first order")
+    p.add_argument("--monte-carlo", type=_sample_count, metavar="N", help="check the first-order uncertainty with N Monte Carlo samples on the batch path (e.g. 10000)")
+    p.add_argument("--seed", type=_seed, default=0, help="seed of the Monte Carlo samples (default 0)")
+    add_cluster_flags(p, "the Monte Carlo")
+    p.add_argument("--mc-chunk", type=chunk_arg, metavar="K", help="Monte Carlo samples per chunk (default 2500)")
+    p.add_argument("--mc-out", type=output_file_arg(".csv"), metavar="FILE.csv", help="stream every Monte Carlo sample to FILE.csv, chunk by chunk")
+    p.add_argument("--resume", action="store_true", help="continue the Monte Carlo in --mc-out FILE.csv from the samples it holds")
+    p.set_defaults(func=_cmd_solve)
+
+
+def _stiffness_table(d: dict) -> str:
+    lines = [
+        f"secant stiffness K = F / delta from the unloaded state ({d['initial_angle_deg']:.2f} deg), "
+        f"P = {d['pressure_mpa']:.7f} MPa held, tip payload at {d['payload_angle_deg']:g} deg; n = {d['segments']}, {d['variant']}",
+        f"{'F (N)':>8} {'delta (mm)':>11} {'K (N/m)':>9} {'tip x, y (mm)':>18}",
+    ]
+    for f, dl, k, tip in zip(d["payloads_n"], d["displacement_mm"], d["stiffness_n_per_m"], d["tip_mm"]):
+        lines.append(f"{f:8.3f} {dl:11.3f} {k:9.3f} {tip[0]:8.2f}, {tip[1]:7.2f}")
+    t = d["tangent"]
+    lines.append(f"tangent at F = 0: horizontal {t['horizontal_n_per_m']:.3f} N/m, vertical {t['vertical_n_per_m']:.3f} N/m")
+    if t["matrix_n_per_m"] is not None:
+        m = t["matrix_n_per_m"]
+        lines.append(f"K_tip (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]")
+    else:
+        lines.append("K_tip: singular (one segment moves the tip along one direction only)")
+    for msg in d["messages"]:
+        lines.append(f"NOT OK: {msg}")
+    return "\n".join(lines)
+
+
+def _cmd_stiffness(args: argparse.Namespace) -> int:
+    from esba.equilibrium import EquilibriumError
+    from esba.scene import SceneError
+    from esba.stiffness import PAPER_FORCES, secant_stiffness
+
+    scene = scene_from_args(args, payloads=False)
+    forces = tuple(args.payload) if args.payload else PAPER_FORCES
+    try:
+        result = secant_stiffness(scene, forces, angle_deg=args.payload_angle)
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    data = result.to_dict()
+    print_result(args, data, _stiffness_table)
+    warn_findings(data.get("validity", []))
+    if not result.ok:
+        print("esba: stiffness not ok: a solve failed or was not stable", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def add_stiffness(sub) -> None:
+    p = sub.add_parser("stiffness", help="secant stiffness of the tip (Section 4.4.3) and its tangent matrix")
+    add_scene_flags(p, payloads=False)
+    p.add_argument("--payload", type=float_arg, action="append", metavar="N", help="tip payload in N (repeatable; default 0.5, 1, 2)")
+    p.add_argument("--payload-angle", type=float_arg, default=90.0, metavar="DEG", help="direction Omega of the payload (default 90, horizontal)")
+    p.set_defaults(func=_cmd_stiffness)
+
+
+def _target_sentence(d: dict) -> str:
+    """What the pressure was found for, as a sentence."""
+    t = d["target"]
+    if "target_angle_deg" in t:
+        return f"bends the unloaded actuator to {t['target_angle_deg']:g} deg in total (n = {d['segments']}, {d['variant']})"
+    if "total_angle_deg" in t:
+        return f"bends the loaded actuator to {t['total_angle_deg']:g} deg in total (n = {d['segments']}, {d['variant']})"
+    parts = [f"{axis} = {v:g} mm" for axis, v in zip(("x", "y"), t["tip_mm"]) if v is not None]
+    return f"puts the loaded actuator's tip at {' and '.join(parts)} (n = {d['segments']}, {d['variant']})"
+
+
+def _pressure_table(d: dict) -> str:
+    rows = [("pressure", f"{d['pressure_mpa']:.7f} MPa"), ("target", f"the pressure that {_target_sentence(d)}"), ("method", d["method"])]
+    if "residual" in d:
+        rows.append(("residual", f"{d['residual']:.3g}"))
+        rows.append(("theta", f"({_fmt(d['equilibrium']['theta_deg'], 2)}) deg"))
+        rows.append(("tip x, y", f"{_fmt(d['equilibrium']['tip_mm'])} mm"))
+    if d.get("message"):
+        rows.append(("note" if d.get("ok", True) else "NOT OK", d["message"]))
+    return "\n".join(f"{k:>10}: {v}" for k, v in rows)
+
+
+def _cmd_pressure(args: argparse.Namespace) -> int:
+    from esba.equilibrium import EquilibriumError, pressure_for_angle
+    from esba.scene import SceneError
+    from esba.stiffness import pressure_for_target
+
+    chosen = [a for a in ("target_angle", "total_angle", "tip_x", "tip_y") if getattr(args, a) is not None]
+    if args.target_angle is not None and len(chosen) > 1 or args.total_angle is not None and len(chosen) > 1:
+        raise UsageError("give one target: --target-angle, --total-angle, or --tip-x/--tip-y")
+    if not chosen:
+        raise UsageError("pressure needs a target: --target-angle DEG (unloaded), --total-angle DEG or --tip-x/--tip-y MM (under the payloads)")
+    if args.pressure is not None:
+        raise UsageError("--pressure is what this command finds: give a target instead")
+    if args.target_angle is not None:
+        refuse(args, ["payload", "payload_angle", "payload_at", "no_payload", "gravity"], "with --target-angle (the closed form is for the unloaded actuator; use --total-angle for a target under payloads)")
+    keep_target, args.target_angle = args.target_angle, None
+    scene = scene_from_args(args)
+    try:
+        if keep_target is not None:
+            scene = scene.replace(target_angle_deg=keep_target)
+            p = pressure_for_angle(scene)
+            data = {
+                "ok": True,
+                "pressure_mpa": p,
+                "method": "closed form (U is linear in P; unloaded, uniform curvature)",
+                "target": {"target_angle_deg": keep_target},
+                "segments": scene.segments,
+                "variant": scene.variant,
+            }
+        else:
+            if not scene.payloads:
+                raise UsageError("--total-angle/--tip-x/--tip-y are targets under payloads: add --payload N (or use --target-angle)")
+            if args.total_angle is not None:
+                r = pressure_for_target(scene, total_angle_deg=args.total_angle)
+            else:
+                r = pressure_for_target(scene, tip_mm=(args.tip_x, args.tip_y))
+            data = r.to_dict()
+            data["method"] = "NLP over (theta, P) with dU/dtheta = 0"
+            data["segments"] = scene.segments
+            data["variant"] = scene.variant
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    print_result(args, data, _pressure_table)
+    warn_findings(data.get("equilibrium", {}).get("validity", []))
+    if not data["ok"]:
+        print(f"esba: pressure not found: {data.get('message', '')}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def add_pressure(sub) -> None:
+    p = sub.add_parser("pressure", help="the pressure for a target angle (closed form) or a loaded target (NLP)")
+    add_scene_flags(p)
+    p.add_argument("--total-angle", type=float_arg, metavar="DEG", help="target total angle under the payloads")
+    p.add_argument("--tip-x", type=float_arg, metavar="MM", help="target tip x under the payloads")
+    p.add_argument("--tip-y", type=float_arg, metavar="MM", help="target tip y under the payloads")
+    p.set_defaults(func=_cmd_pressure)
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from esba import validation
+
+    page = outputs.default_page("validation.md") if args.out is None else args.out
+    if not args.check:
+        page = outputs.check_file(page, "--out")
+    rows = validation.table2()
+    if args.check:
+        stale = validation.check_page(page, rows)
+        if stale:
+            print(f"esba: {page} is stale: run `esba validate` and commit it", file=sys.stderr)
+            return EXIT_FAILED
+    else:
+        page = validation.write_page(page, rows)
+    data = {"passed": all(r.passed for r in rows), "rows": [r.to_dict() for r in rows]}
+    if not args.check:
+        data["page"] = str(page)
+    print_result(args, data, lambda d: validation.summary(rows) + (f"\nwrote {d['page']}" if "page" in d else f"\n{page} is up to date"))
+    return EXIT_OK if data["passed"] else EXIT_FAILED
+
+
+def add_validate(sub) -> None:
+    p = sub.add_parser("validate", help="compare with the paper's Table 2 (n = 1..4); write the validation page")
+    p.add_argument("--check", action="store_true", help="write nothing; exit 1 when the page is stale")
+    p.add_argument("--out", default=None, metavar="FILE.md", help="page to write (default docs/validation.md in a checkout, else ./validation.md)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_cmd_validate)

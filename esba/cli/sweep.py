@@ -1,0 +1,183 @@
+"""``esba sweep`` (issue 5): grids on the batch path, in this process or chunk by chunk on Dask (issue 11)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from derive.effects import VARIANTS
+from esba import outputs
+
+from .arguments import UsageError, float_arg, load_scene_file, refuse, scene_changes, segments_arg
+from .cluster import add_cluster_flags, chunk_arg, on_cluster
+from .results import EXIT_FAILED, EXIT_OK, print_result
+
+
+def _values_arg(text: str) -> list[float]:
+    from esba.sweep import SweepError, parse_values
+
+    try:
+        return parse_values(text)
+    except SweepError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _sweep_table(d: dict) -> str:
+    lines = [f"base: {d['base']}", "axes: " + "; ".join(f"{k} {v['values']} {v['unit']}" for k, v in d["axes"].items())]
+    lines.append(f"points: {d['counts']}; {d['backend']}")
+    st = d.get("study")
+    if st:
+        resumed = f", resumed at row {st['resumed_from_row']}" if st["resumed_from_row"] else ""
+        lines.append(f"study: {st['chunks_solved']} chunks of up to {st['chunk']} points {st['runner']} in {st['seconds']:.1f} s{resumed}")
+    rows = d.get("rows")
+
+    def num(v, fmt: str) -> str:
+        return "-" if v is None else format(v, fmt)
+
+    if rows is not None and len(rows) <= 60:
+        head = f"{'P MPa':>9} {'F N':>6} {'Om deg':>7} {'r2':>6} {'d':>6} {'angle deg':>10} {'tip x, y mm':>18}  status"
+        lines.append(head)
+        for r in rows:
+            ang = "" if r["total_angle_deg"] is None else f"{r['total_angle_deg']:10.3f}"
+            tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
+            lines.append(f"{num(r['pressure_mpa'], '9.5f'):>9} {num(r['payload_n'], '6.3g'):>6} {num(r['payload_angle_deg'], '7.3g'):>7} "
+                         f"{num(r['r2_mm'], '6.3g'):>6} {num(r['d_mm'], '6.3g'):>6} {ang:>10} {tip:>18}  {r['status']}")
+    else:
+        total = sum(d["counts"].values())
+        lines.append(f"{total} rows" + (f" in {d['out']}" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
+    for k in ("out", "figure"):
+        if d.get(k):
+            lines.append(f"wrote {d[k]}")
+    return "\n".join(lines)
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from esba.batch import BatchOptions
+    from esba.plots import save_figure
+    from esba.scene import Scene
+    from esba.sweep import fig12, sweep, sweep_figure
+
+    if args.fig12:
+        refuse(args, ["pressure", "payload", "payload_angle", "r2", "d", "target_angle", "out", "plot"], "with --fig12 (it draws its own grid: r2 and d at P = 0.2 MPa, no payload)")
+        figure = outputs.figure_file(args.fig12, "--fig12", "sweep-fig12.png")
+        out = None
+    else:
+        if args.pressure is not None:
+            refuse(args, ["target_angle"], "with --pressure (it sets the pressure of designs swept without --pressure)")
+        out = outputs.check_file(args.out, "--out", (".csv", ".json")) if args.out else None
+        figure = outputs.figure_file(args.plot, "--plot", "esba-sweep.png") if args.plot else None
+    base = load_scene_file(args.scene, None) or Scene()
+    changes = scene_changes(args, skip=("pressure",))
+    base = base.replace(**changes) if changes else base
+    options = BatchOptions(compile="never" if args.no_compile else "auto", progress=not (args.json or args.no_progress))
+    if on_cluster(args) or args.resume:
+        return _sweep_in_chunks(args, base, options, out, figure)
+    if args.fig12:
+        fig, sweeps = fig12(base.replace(pressure=0.2, payloads=()), options=options)
+        path = save_figure(fig, figure)
+        curves = [s for group in sweeps.values() for s in group]
+        bad = sum(int((s.status == "not ok").sum()) for s in curves)
+        data = {"figure": str(path), "curves": len(curves), "points": sum(len(s.status) for s in curves), "not_ok": bad}
+        print_result(args, data, lambda d: f"wrote {d['figure']}: {d['curves']} curves, {d['points']} points, {d['not_ok']} not ok")
+        return EXIT_OK if bad == 0 else EXIT_FAILED
+    result = sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d, options=options)
+    if figure is not None:
+        drawn = sweep_figure(result)  # refuses a figure with too many curves before anything is written
+    data = result.to_dict()
+    if out is not None:
+        data["out"] = str(result.write(out))
+    if figure is not None:
+        data["figure"] = str(save_figure(drawn, figure))
+    print_result(args, data, _sweep_table)
+    _warn_sweep(result.validity)
+    if data["counts"]["not ok"]:
+        print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _warn_sweep(validity, outside: int = 0, out: str | None = None) -> None:
+    """One ``esba: warning:`` line per kind of finding of a sweep's points (per-point
+    :mod:`esba.validity` findings), or their count when the rows were streamed to ``out``."""
+    found = [f for point in validity for f in point]
+    for check in dict.fromkeys(f.check for f in found):
+        first = next(f for f in found if f.check == check)
+        count = sum(1 for point in validity if any(f.check == check for f in point))
+        print(f"esba: warning: {count} point(s) outside the model's range, e.g. {first.message}", file=sys.stderr)
+    if not validity and outside:
+        print(f"esba: warning: {outside} point(s) outside the model's range: see the validity column of {out}", file=sys.stderr)
+
+
+def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, figure) -> int:
+    """``esba sweep`` chunk by chunk (--workers, --scheduler, --resume): esba.sweep_study."""
+    from esba.distributed import DistributedError, open_runner
+    from esba.plots import save_figure
+    from esba.scene import SceneError
+    from esba.study import StudyError
+    from esba.sweep import SweepError, plan_sweep, sweep_figure
+    from esba.sweep_study import sweep_study
+
+    if args.fig12:
+        raise UsageError("--fig12 draws its own small grid in this process: give it without --workers, --scheduler or --resume")
+    out = None if out is None else str(out)
+    streamed = out is not None and out.lower().endswith(".csv")
+    if args.resume and not streamed:
+        raise UsageError(f"--resume continues a study from the CSV file it streams to: give --out FILE.csv (given: {out!r})")
+    if args.plot and streamed:
+        raise UsageError("--plot needs every row in memory, and with --out FILE.csv on --workers, --scheduler or --resume the rows stream to the file: plot in a run without them")
+    try:
+        plan = plan_sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d)
+    except (SweepError, SceneError) as exc:
+        raise UsageError(str(exc)) from None
+    try:
+        with open_runner(args.workers, args.scheduler, args.connect_timeout) as runner:
+            study = sweep_study(plan, options, runner=runner, chunk=args.chunk, out=out if streamed else None, resume=args.resume, progress=options.progress)
+    except (DistributedError, StudyError) as exc:
+        raise UsageError(str(exc)) from None
+    except KeyboardInterrupt:
+        where = f": the rows solved so far are in {out}; rerun with --resume to go on" if streamed else ""
+        print(f"esba: interrupted{where}", file=sys.stderr)
+        return 130
+    # streamed rows stay in the file (a study may not fit in memory); a small grid's table reads them back
+    data = study.to_dict(rows=not streamed or (plan.size <= 60 and not args.json))
+    if streamed:
+        data["out"] = out
+    elif out is not None:
+        data["out"] = str(study.result.write(out))
+    if args.plot:
+        try:
+            data["figure"] = str(save_figure(sweep_figure(study.result), figure))
+        except SweepError as exc:
+            raise UsageError(str(exc)) from None
+    print_result(args, data, _sweep_table)
+    _warn_sweep(study.result.validity if study.result is not None else (), study.outside, out)
+    if data["counts"]["not ok"]:
+        print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def add_sweep(sub) -> None:
+    p = sub.add_parser("sweep", help="solve a grid over pressure, payload, r2, d as one batch; CSV/JSON out; Fig. 12")
+    p.add_argument("scene", nargs="?", default=None, metavar="SCENE.toml", help="base scene (default: Table 1 at its 90 degree pressure, no payload, n = 3)")
+    values = "VALUES: start:stop:count or v1,v2,..."
+    p.add_argument("--pressure", type=_values_arg, metavar="VALUES", help=f"pressures, MPa ({values}; default: the base scene's)")
+    p.add_argument("--payload", type=_values_arg, metavar="VALUES", help="tip payload magnitudes, N (one payload, horizontal unless --payload-angle)")
+    p.add_argument("--payload-angle", type=_values_arg, metavar="VALUES", help="payload directions Omega from the vertical, degrees")
+    p.add_argument("--r2", type=_values_arg, metavar="VALUES", help="chamber radii, mm")
+    p.add_argument("--d", type=_values_arg, metavar="VALUES", help="eccentric distances, mm")
+    p.add_argument("--segments", "-n", type=segments_arg, help="segment count n, 1 to 256")
+    p.add_argument("--target-angle", type=float_arg, metavar="DEG", help="without --pressure: each design at the pressure that bends it unloaded to DEG")
+    p.add_argument("--gravity", action="store_true", help="include the actuator's weight (Eq. 15)")
+    p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
+    p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant")
+    p.add_argument("--out", metavar="FILE", help="write every point to FILE.csv or FILE.json (no file is written by default)")
+    p.add_argument("--plot", metavar="FILE|DIR", help="total angle against the first swept axis, one curve per other value (a folder gets esba-sweep.png)")
+    p.add_argument("--fig12", metavar="FILE|DIR", help="write the paper's Fig. 12 (angle vs r2 for d = 0, 2, 4, 6; vs d for r2 = 2, 4, 6; P = 0.2 MPa)")
+    p.add_argument("--no-compile", action="store_true", help="use CasADi's interpreter, not compiled C")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true", help="print JSON (every row)")
+    add_cluster_flags(p, "the grid")
+    p.add_argument("--chunk", type=chunk_arg, default=1000, metavar="K", help="points per chunk with --workers, --scheduler or --resume (default 1000)")
+    p.add_argument("--resume", action="store_true", help="stream the rows chunk by chunk to --out FILE.csv and continue the study that file holds (a new one if there is none)")
+    p.set_defaults(func=_cmd_sweep)
