@@ -12,9 +12,10 @@ one model is instead solved here as one CasADi ``Function`` mapped over the batc
    Each Newton step is limited to ``max_step / n`` rad per segment and kept inside the model's
    domain (the bounds of :meth:`esba.model.Model.lower_bounds`). The whole path is one graph of
    fixed size, mapped over a chunk of the batch and, when a C compiler is found, generated to C
-   by CasADi and compiled once (the shared library is cached, keyed by the hash of the model file,
-   the options and this module, with a checksum that is verified before the library is loaded:
-   a damaged one is reported and rebuilt, see :mod:`esba.cache`).
+   by CasADi and compiled once (:mod:`esba.batch_compile`: the shared library is cached, keyed by
+   the hash of the model file, the options and the graph's source, with a checksum that is
+   verified before the library is loaded: a damaged one is reported and rebuilt, see
+   :mod:`esba.cache`). The settings are one frozen :class:`esba.batch_options.BatchOptions`.
 2. **Verification.** Every element is checked the way :func:`solve` checks its answers, from the
    gradient and Hessian evaluated at the final angles: finite, ``max |dU/dtheta| <=
    stationarity_tol``, not on the domain boundary, and a stability verdict from the Hessian's
@@ -38,27 +39,17 @@ True
 
 from __future__ import annotations
 
-import dataclasses
-import hashlib
-import logging
-import math
-import os
-import shutil
-import subprocess
-import tempfile
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
-import casadi as ca
 import numpy as np
 
-from . import cache, checks
-from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, solve, stability_verdicts
+from .batch_compile import compile_library, compiler, decide_backend, mapped_functions, parameter_indices, prepare
+from .batch_options import DEFAULT_BATCH_OPTIONS, TAIL_CHUNK, BatchOptions, BatchOptionsError, batch_bytes, check_size
+from .equilibrium import EquilibriumError, solve, stability_verdicts
 from .model import Model, domain_lower_bound, near_domain_bound
 from .ramp import CONTRACTION
-from .ramp import TINY as CONTRACTION_TINY
 from .scene import Scene, SceneError
 from .threads import single_threaded
 
@@ -79,182 +70,6 @@ __all__ = [
 
 #: How an element's answer was found: the fast path, its denser retry, IPOPT, or not at all.
 METHODS = ("newton", "newton-retry", "ipopt", "none")
-
-#: Up to this n the Newton step solves H dx = -g symbolically (SX, O(n^3) instructions);
-#: above it, with CasADi's QR linear solver inside the graph.
-SX_SOLVE_MAX_N = 8
-
-_COMPILE_MODES = ("auto", "always", "never")
-
-#: The rest of a batch after its full chunks runs in blocks of this size (padding < TAIL_CHUNK).
-TAIL_CHUNK = 64
-
-#: ``compile="auto"`` compiles only up to this n: beyond it gcc takes tens of seconds (n = 64:
-#: about 30 s) for a gain of 2x or less over the interpreter (MEASUREMENTS.md).
-AUTO_COMPILE_MAX_N = 32
-
-
-#: The most memory a batch may take for its results (every element keeps its angles, gradient
-#: and Hessian until it is verified): beyond it a batch is refused, not left to exhaust the machine.
-MAX_BATCH_BYTES = 2 * 1024**3
-
-#: Upper bounds of BatchOptions counts (each multiplies the size of the mapped graph or its calls).
-MAX_CHUNK = 100_000
-MAX_STEPS = 1_000
-
-
-class BatchOptionsError(ValueError):
-    """A batch option that is not allowed: the message names the option, the value and what is allowed."""
-
-
-def batch_bytes(size: int, n: int) -> int:
-    """Estimated memory (bytes) of a batch of ``size`` equilibria of an n-segment model.
-
-    Per element: the outputs of the mapped Function (angles, gradient, n x n Hessian, tip,
-    pressure), the parameters, eigenvalues and the verdict strings of the result.
-
-    >>> batch_bytes(10_000, 3)   # 680 bytes each
-    6800000
-    """
-    return int(size) * (8 * (n * n + 4 * n + 24) + 40 * 8)
-
-
-def check_size(size: int, n: int, what: str = "batch", error: type[Exception] = ValueError) -> int:
-    """``size`` when a batch that large fits in :data:`MAX_BATCH_BYTES`, else ``error`` naming both."""
-    need = batch_bytes(size, n)
-    if need > MAX_BATCH_BYTES:
-        most = MAX_BATCH_BYTES // batch_bytes(1, n)
-        raise error(
-            f"{what} of {size} equilibria at n = {n} would take about {need / 1024**3:.1f} GiB (limit "
-            f"{MAX_BATCH_BYTES / 1024**3:g} GiB): at most {most} at this n; split it into smaller runs"
-        )
-    return size
-
-
-def _whole(name: str, value, low: int, high: int | None = None, why: str = "") -> int:
-    return checks.whole(name, value, low, BatchOptionsError, high, why)
-
-
-@dataclass(frozen=True)
-class BatchOptions:
-    """Settings of the batch solver, validated on creation.
-
-    Parameters
-    ----------
-    compile : str
-        ``"auto"``: compile to C when a compiler is found and it pays (the library is already
-        cached, or the batch has at least ``compile_min`` elements and n <= ``AUTO_COMPILE_MAX_N``),
-        else interpreted, and the result says why; ``"always"`` (an error without a compiler);
-        ``"never"`` (CasADi's interpreter).
-    compile_min : int
-        Smallest batch that ``"auto"`` compiles for (compiling n = 3 takes about 1 s).
-    chunk : int
-        Elements per call of the mapped Function (the progress bar moves per chunk).
-    pressure_steps, load_steps : int
-        Continuation steps of the pressure ramp (when the pressure is given) and of the payload
-        and weight ramp.
-    newton_steps : int
-        Newton iterations per continuation step.
-    final_steps : int
-        Newton iterations at the full load after the ramp.
-    max_step : float
-        Largest Newton step of one segment angle, times n (rad): the step is scaled down to
-        ``max_step / n``.
-    retry : bool
-        Solve the elements that fail again with a denser continuation (4x the steps, 3 Newton
-        iterations each, 8 final, downhill).
-    fallback : bool
-        Solve the elements that still fail with :func:`esba.equilibrium.solve` (needs scenes).
-    stationarity_tol : float
-        Largest accepted max |dU/dtheta_i|, N mm/rad (as :class:`esba.equilibrium.SolverOptions`).
-    critical_tol : float
-        Relative eigenvalue threshold of the stability verdict (as ``SolverOptions``).
-    downhill : bool
-        Reverse Newton steps that climb (where the Hessian is indefinite), so that an element does
-        not settle on a saddle between two stable branches. About a third slower; the retry uses it.
-    unstable_tol : float
-        An element whose Hessian, at any Newton iterate of its load ramp, has a negative LDL^T
-        pivot below ``-unstable_tol`` times the largest (Sylvester's law of inertia: a negative
-        eigenvalue) has left the stable branch it started on: a snap-through at a fold or a
-        buckling at a branch point. It is passed on to :func:`esba.equilibrium.solve`, whose path
-        trace locates the special point and notes the jump, so that a jump is never taken silently.
-        So is an element a load step of which did not contract (its second Newton correction more
-        than a quarter of its first, Deuflhard's test, as :mod:`esba.ramp`): a step that slid to
-        another branch without meeting an indefinite Hessian. The unloaded pressure ramp is not
-        checked: its uniform path is unique and stable.
-    progress : bool
-        Show a tqdm progress bar on stderr.
-    cache : str or None
-        Folder of the compiled libraries (default: ``compiled/`` in esba's cache, beside
-        :func:`esba.model.cache_dir`, i.e. under :func:`esba.cache.root`).
-
-    Examples
-    --------
-    >>> BatchOptions().load_steps
-    8
-    >>> BatchOptions(compile="yes")
-    Traceback (most recent call last):
-    ...
-    esba.batch.BatchOptionsError: compile='yes': allowed are auto, always, never
-    """
-
-    compile: str = "auto"
-    compile_min: int = 500
-    chunk: int = 1000
-    pressure_steps: int = 1
-    load_steps: int = 8
-    newton_steps: int = 2
-    final_steps: int = 4
-    max_step: float = 1.5
-    retry: bool = True
-    fallback: bool = True
-    stationarity_tol: float = DEFAULT_OPTIONS.stationarity_tol
-    critical_tol: float = DEFAULT_OPTIONS.critical_tol
-    unstable_tol: float = DEFAULT_OPTIONS.critical_tol
-    downhill: bool = False
-    progress: bool = False
-    cache: str | None = None
-
-    def __post_init__(self) -> None:
-        if self.compile not in _COMPILE_MODES:
-            raise BatchOptionsError(f"compile={self.compile!r}: allowed are {', '.join(_COMPILE_MODES)}")
-        _whole("chunk", self.chunk, 1, MAX_CHUNK)
-        _whole("compile_min", self.compile_min, 1)
-        for name in ("pressure_steps", "load_steps", "newton_steps"):
-            _whole(name, getattr(self, name), 1, MAX_STEPS, "each step is unrolled into the mapped graph")
-        _whole("final_steps", self.final_steps, 0, MAX_STEPS, "each step is unrolled into the mapped graph")
-        for name in ("max_step", "stationarity_tol", "critical_tol", "unstable_tol"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise BatchOptionsError(f"{name}={v!r}: expected a finite number > 0")
-        if self.cache is not None and not isinstance(self.cache, (str, os.PathLike)):
-            raise BatchOptionsError(f"cache={self.cache!r}: expected a folder path or None")
-        for name in ("retry", "fallback", "progress", "downhill"):
-            if not isinstance(getattr(self, name), bool):
-                raise BatchOptionsError(f"{name}={getattr(self, name)!r}: expected True or False")
-
-    def denser(self) -> BatchOptions:
-        """The retry's settings: four times the continuation steps, 3 Newton iterations each, downhill.
-
-        Its chunk is at most 64: retries are few.
-        """
-        return dataclasses.replace(
-            self,
-            chunk=min(self.chunk, 64),
-            pressure_steps=4 * self.pressure_steps,
-            load_steps=4 * self.load_steps,
-            newton_steps=max(3, self.newton_steps),
-            final_steps=max(8, self.final_steps),
-            downhill=True,
-        )
-
-    def newton_iterations(self, angle_mode: bool, loaded: bool) -> int:
-        """Newton iterations of one element on the fast path."""
-        k = 0 if angle_mode else self.pressure_steps * self.newton_steps
-        return k + (self.load_steps * self.newton_steps if loaded else 0) + self.final_steps
-
-
-DEFAULT_BATCH_OPTIONS = BatchOptions()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -380,305 +195,17 @@ def _concat(parts: Sequence[tuple[np.ndarray, BatchResult]], size: int) -> Batch
 
 
 # ---------------------------------------------------------------------------------------------
-# the graph
-
-
-def _indices(model: Model) -> dict[str, list[int]]:
-    names = model.parameters
-    return {
-        "P": [names.index("P")] if "P" in names else [],
-        "loads": [i for i, p in enumerate(names) if (p.startswith("F") and p[1:].isdigit()) or p == "g"],
-        "geometry": [names.index(k) for k in ("L", "r1", "r2", "d")],
-    }
-
-
-def _lower_bound_sym(p, idx: dict, n: int):
-    """Eq. (10)'s domain (:func:`esba.model.domain_lower_bound`) on symbolic parameters."""
-    L, r1, r2, d = (p[i] for i in idx["geometry"])
-    return domain_lower_bound(n, L, r1, r2, d, maximum=ca.fmax)
-
-
-def _scaled(p, idx: dict, pressure_factor, load_factor, pressure=None):
-    parts = ca.vertsplit(p)
-    for i in idx["P"]:
-        parts[i] = (parts[i] if pressure is None else pressure) * pressure_factor
-    for i in idx["loads"]:
-        parts[i] = parts[i] * load_factor
-    return ca.vertcat(*parts)
-
-
-_PIVOTS: dict[int, ca.Function] = {}
-
-
-def _pivot_function(n: int) -> ca.Function:
-    """H -> the smallest LDL^T pivot of H divided by the largest magnitude (SX, cached per n).
-
-    By Sylvester's law of inertia the pivots have the signs of the eigenvalues: the result is < 0
-    exactly when H has a negative eigenvalue.
-    """
-    fun = _PIVOTS.get(n)
-    if fun is None:
-        h = ca.SX.sym("H", n, n)
-        d, _, _ = ca.ldl(0.5 * (h + h.T), False)
-        fun = ca.Function("esba_min_pivot", [h], [ca.mmin(d) / (ca.mmax(ca.fabs(d)) + 1e-300)], ["H"], ["min_pivot"], {"cse": True})
-        _PIVOTS[n] = fun
-    return fun
-
-
-def _newton_step(model: Model, max_step: float, downhill: bool = False) -> ca.Function:
-    """theta -> theta + s dx with H dx = -g, s = min(1, (max_step/n) / max|dx|), kept in the domain;
-    also the relative smallest LDL^T pivot of H at theta (< 0: H is indefinite there).
-
-    With ``downhill`` a step that climbs (g . dx > 0, H indefinite along it) is reversed, so the
-    iteration does not settle on a saddle between two stable branches.
-    """
-    n, npar = model.n, len(model.parameters)
-    idx = _indices(model)
-    sym = ca.SX if n <= SX_SOLVE_MAX_N else ca.MX
-    th = sym.sym("theta", n)
-    p = sym.sym("p", npar)
-    args = ca.vertsplit(p)
-    g = model["gradient"](th, *args)
-    h = model["hessian"](th, *args)
-    dx = -ca.solve(h, g) if sym is ca.SX else -ca.solve(h, g, "qr")
-    if downhill:
-        dx = dx * (1.0 - 2.0 * (ca.dot(g, dx) > 0))
-    scale = ca.fmin(1.0, (max_step / n) / (ca.mmax(ca.fabs(dx)) + 1e-300))
-    new = ca.fmax(th + scale * dx, _lower_bound_sym(p, idx, n))
-    opts = {"cse": True} if sym is ca.SX else {}
-    pivot = _pivot_function(n)(h)
-    return ca.Function("esba_newton_step", [th, p], [new, pivot], ["theta", "p"], ["theta_new", "min_pivot"], opts)
-
-
-def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> ca.Function:
-    """One element's load path: (p, target) -> theta, P, grad, hess, tip, and the smallest relative
-    LDL^T pivot of the Hessian over the Newton iterates of the load ramp (< 0: it left the stable branch)."""
-    n, npar = model.n, len(model.parameters)
-    idx = _indices(model)
-    step = _newton_step(model, options.max_step, options.downhill)
-    free_step = _newton_step(model, 1e6, options.downhill)  # the unloaded problem is nearly quadratic: no limit
-    th = ca.SX.sym("theta", n)
-    ps = ca.SX.sym("p", npar)
-    gh = ca.Function(
-        "esba_grad_hess", [th, ps], [model["gradient"](th, *ca.vertsplit(ps)), model["hessian"](th, *ca.vertsplit(ps))], {"cse": True}
-    )
-    p = ca.MX.sym("p", npar)
-    target = ca.MX.sym("target")
-    loaded = bool(idx["loads"])
-    if angle_mode:
-        # closed form of pressure_for_angle: the uniform shape, U linear in P
-        x = ca.repmat(target / n, n, 1)
-        g0 = gh(x, _scaled(p, idx, 0.0, 0.0))[0]
-        g1 = gh(x, _scaled(p, idx, 1.0, 0.0, pressure=1.0))[0] - g0
-        pressure = -ca.dot(g0, g1) / ca.dot(g1, g1)
-        p_full = _scaled(p, idx, 1.0, 1.0, pressure=pressure)
-    else:
-        pressure = p[idx["P"][0]] if idx["P"] else ca.MX(0.0)
-        p_full = p
-        x = ca.MX.zeros(n)
-        for k in range(1, options.pressure_steps + 1):
-            pk = _scaled(p_full, idx, k / options.pressure_steps, 0.0)
-            for _ in range(options.newton_steps):
-                x = free_step(x, pk)[0]
-    pivot = ca.MX(1.0)
-    # continuity of the load ramp: each step's second Newton correction against its first (Deuflhard's
-    # contraction, as esba.ramp): a step that slid to another branch without meeting an indefinite
-    # Hessian does not contract. With one Newton step per load step it cannot be measured: infinite.
-    contraction = ca.MX(0.0) if options.newton_steps >= 2 or not loaded else ca.MX(math.inf)
-    if loaded:
-        for k in range(1, options.load_steps + 1):
-            pk = _scaled(p_full, idx, 1.0, k / options.load_steps)
-            sizes = []
-            for _ in range(options.newton_steps):
-                before = x
-                x, piv = step(x, pk)
-                pivot = ca.fmin(pivot, piv)
-                sizes.append(ca.mmax(ca.fabs(x - before)))
-            if len(sizes) >= 2:
-                contraction = ca.fmax(contraction, ca.if_else(sizes[0] > CONTRACTION_TINY, sizes[1] / (sizes[0] + 1e-300), 0.0))
-    for _ in range(options.final_steps):
-        x, piv = step(x, p_full)
-        pivot = ca.fmin(pivot, piv)
-    g, h = gh(x, p_full)
-    tip = model["kinematics"](x, p[idx["geometry"][0]])[0]
-    return ca.Function(
-        "esba_batch_element",
-        [p, target],
-        [x, pressure, g, ca.vec(h), tip, pivot, contraction],
-        ["p", "target"],
-        ["theta", "P", "grad", "hess", "tip", "min_pivot", "contraction"],
-    )
-
-
-# ---------------------------------------------------------------------------------------------
-# compiling
-
-
-def compiler() -> str | None:
-    """The C compiler used for the fast path (``$CC``, else ``gcc``, else ``cc``), or None."""
-    for name in (os.environ.get("CC"), "gcc", "cc"):
-        if name and shutil.which(name):
-            return shutil.which(name)
-    return None
-
-
-def _compiled_dir(options: BatchOptions) -> Path:
-    if options.cache is not None:
-        return Path(options.cache)
-    return cache.root() / "compiled"
-
-
-_log = logging.getLogger("esba.batch")
-
-
-def _usable_library(lib: Path) -> bool:
-    """True when the compiled library is there and intact; a damaged one is reported and removed.
-
-    Loading a truncated shared library can kill the process (a bus error), so it is checked
-    against the checksum recorded when it was built, before ``casadi.external`` loads it.
-    """
-    if not lib.exists():
-        return False
-    why = cache.damage(lib)
-    if why is None:
-        return True
-    _log.warning("compiled batch solver %s is damaged (%s): building it again", lib, why)
-    cache.discard(lib)
-    return False
-
-
-def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
-    h = hashlib.sha256()
-    h.update(model.path.read_bytes())
-    h.update(Path(__file__).read_bytes())
-    settings = (options.chunk, TAIL_CHUNK, options.pressure_steps, options.load_steps, options.newton_steps, options.final_steps, options.max_step, options.downhill, angle_mode, ca.__version__)  # unstable_tol is checked in Python
-    h.update(repr(settings).encode())
-    return h.hexdigest()[:20]
-
-
-_FUNCTIONS: dict[tuple, ca.Function] = {}
-
-
-def _backend(model: Model, options: BatchOptions, angle_mode: bool, size: int, key: str | None = None) -> tuple[bool, Path, str | None, str]:
-    """Whether the fast path of a batch of ``size`` elements runs compiled: (compiled, the cached
-    library's path, the compiler, a description of the backend and why)."""
-    key = _key(model, options, angle_mode) if key is None else key
-    lib = _compiled_dir(options) / f"esba_batch_{key}.so"
-    cc = compiler() if options.compile != "never" else None
-    have_lib = cc is not None and _usable_library(lib)
-    if options.compile == "always" and cc is None:
-        raise BatchOptionsError("compile='always' but no C compiler was found ($CC, gcc, cc): install gcc or use compile='auto'")
-    why = ""
-    if options.compile == "never":
-        why = "compile='never'"
-    elif cc is None:
-        why = "no C compiler found ($CC, gcc, cc)"
-    elif options.compile == "auto" and not have_lib:
-        if model.n > AUTO_COMPILE_MAX_N:
-            why = f"compile='auto' and n = {model.n} > {AUTO_COMPILE_MAX_N} (compiling would take longer than it saves)"
-        elif size < options.compile_min:
-            why = f"compile='auto' and {size} elements < compile_min = {options.compile_min}"
-    if not why:
-        return True, lib, cc, f"compiled C ({Path(cc).name} -O2), cached {lib}"
-    return False, lib, cc, f"interpreted (CasADi virtual machine, 2 threads): {why}"
-
-
-def decide_backend(model: Model, options: BatchOptions | None, angle_mode: bool, size: int) -> tuple[BatchOptions, str]:
-    """Decide once, for a whole study of ``size`` elements, whether the fast path runs compiled.
-
-    A study split into chunks (:mod:`esba.distributed`) must run every chunk on the same backend:
-    compiled C and CasADi's interpreter agree only to round-off, and ``compile="auto"`` would
-    decide per chunk from the chunk's size. Returns ``options`` with ``compile`` set to
-    ``"always"`` or ``"never"`` (the same decision ``"auto"`` makes for one batch of ``size``) and
-    the backend's description.
-
-    Examples
-    --------
-    >>> from esba.model import load_model
-    >>> fixed, why = decide_backend(load_model(3), BatchOptions(compile="never"), False, 10_000)
-    >>> fixed.compile, why
-    ('never', "interpreted (CasADi virtual machine, 2 threads): compile='never'")
-    """
-    options = DEFAULT_BATCH_OPTIONS if options is None else options
-    if not isinstance(options, BatchOptions):
-        raise BatchOptionsError(f"options={options!r}: expected a BatchOptions")
-    compiled, _, _, description = _backend(model, options, angle_mode, size)
-    return dataclasses.replace(options, compile="always" if compiled else "never"), description
-
-
-def prepare(model: Model, options: BatchOptions, angle_mode: bool) -> tuple[float, float]:
-    """Build (and with ``compile="always"`` compile, unless cached) the fast path's Functions now.
-
-    Run once before a study's chunks go to worker processes that share this machine's cache, so
-    that they load one compiled library instead of each compiling it. Returns the seconds spent
-    building the graph and compiling it (0 for what was already built or cached).
-    """
-    _, _, build_s, compile_s = _mapped(model, options, angle_mode, options.compile_min)
-    return build_s, compile_s
-
-
-def _mapped(model: Model, options: BatchOptions, angle_mode: bool, size: int) -> tuple[tuple[ca.Function, ca.Function], str, float, float]:
-    """The element Function mapped over ``options.chunk`` and over ``TAIL_CHUNK`` elements
-    (for the rest of a batch), compiled when it pays.
-
-    Returns the two Functions, a backend description, the build time and the compile time (s).
-    """
-    key = _key(model, options, angle_mode)
-    compiled, lib, cc, backend = _backend(model, options, angle_mode, size, key)
-    cached = _FUNCTIONS.get((key, compiled, str(lib)))
-    if cached is not None:
-        return cached, backend, 0.0, 0.0
-    t0 = time.perf_counter()
-    element = _element_function(model, options, angle_mode)
-    build_s = time.perf_counter() - t0
-    compile_s = 0.0
-    small = min(options.chunk, TAIL_CHUNK)
-    if not compiled:
-        funs = (element.map(options.chunk, "thread", 2), element.map(small, "thread", 2))
-    else:
-        mapped = (
-            element.map(f"esba_batch_{key}", "serial", options.chunk, [], []),
-            element.map(f"esba_batch_{key}_tail", "serial", small, [], []),
-        )
-        if not _usable_library(lib):
-            cache.usable_root(lib.parent)
-            t1 = time.perf_counter()
-            compile_library(mapped, lib, cc)
-            compile_s = time.perf_counter() - t1
-        funs = tuple(ca.external(f.name(), str(lib)) for f in mapped)
-    _FUNCTIONS[(key, compiled, str(lib))] = funs
-    return funs, backend, build_s, compile_s
-
-
-def compile_library(funs: Sequence[ca.Function], lib: Path, cc: str) -> None:
-    """Generate C for ``funs`` and compile them into the shared library ``lib`` (atomically)."""
-    lib.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="esba-cg-") as tmp:
-        name = lib.stem
-        cg = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-        for fun in funs:
-            cg.add(fun)
-        cg.generate(tmp + os.sep)
-        src = Path(tmp) / f"{name}.c"
-        out = Path(tmp) / lib.name
-        proc = subprocess.run([cc, "-O2", "-shared", "-fPIC", str(src), "-o", str(out), "-lm"], capture_output=True, text=True)
-        if proc.returncode != 0:
-            raise RuntimeError(f"compiling the batch solver failed ({cc}): {proc.stderr.strip()[:2000]}")
-        cache.install(lib, out)
-
-
-# ---------------------------------------------------------------------------------------------
 # solving arrays of parameters
 
 
 def _lower_bounds(model: Model, pv: np.ndarray) -> np.ndarray:
     """:meth:`Model.lower_bounds` for every column of ``pv``."""
-    L, r1, r2, d = (pv[i] for i in _indices(model)["geometry"])
+    L, r1, r2, d = (pv[i] for i in parameter_indices(model)["geometry"])
     return domain_lower_bound(model.n, L, r1, r2, d)
 
 
 def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, options: BatchOptions, bar, size_hint: int = 0) -> dict:
-    (fun_big, fun_small), backend, build_s, compile_s = _mapped(model, options, angle_mode, max(pv.shape[1], size_hint))
+    (fun_big, fun_small), backend, build_s, compile_s = mapped_functions(model, options, angle_mode, max(pv.shape[1], size_hint))
     n, size = model.n, pv.shape[1]
     outs = {k: [] for k in ("theta", "P", "grad", "hess", "tip", "min_pivot", "contraction")}
     t0 = time.perf_counter()

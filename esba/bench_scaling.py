@@ -26,7 +26,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .batch import TAIL_CHUNK, BatchOptions, decide_backend, prepare
+from .batch import BatchOptions, decide_backend, prepare
+from .batch_options import TAIL_CHUNK
 from .distributed import WINDOW_PER_WORKER, ModelKey, SerialRunner, open_runner, run_task
 from .scene import Payload, Scene
 from .sweep import SweepPlan, plan_sweep, solve_points, sweep

@@ -174,7 +174,7 @@ def design_report(
         "c1 = c2 = 1.49618), r2 + d <= r1 - wall enforced (a particle stops where its step crosses the boundary), "
         f"K_min and P_max by Deb's feasibility rules, seed {pso_options.seed}. Each iteration evaluates the whole swarm "
         "in one call: a CasADi Function mapped over the particles gives each design's 90 deg pressure in closed form "
-        f"(U is linear in P) and its loaded state by Newton's method along a {options.load_steps}-step ramp of the payload "
+        f"(U is linear in P) and its loaded state by Newton's method along a ramp of the payload in {options.load_steps} steps "
         "(the generated gradient, with the generated Hessian as Jacobian)."
     )
     L.append("")

@@ -33,7 +33,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .batch import DEFAULT_BATCH_OPTIONS, BatchOptions, BatchOptionsError, check_size, decide_backend, prepare
+from .batch import BatchOptions, BatchOptionsError, check_size, decide_backend, prepare
+from .batch_options import DEFAULT_BATCH_OPTIONS
 from .distributed import ModelKey, SerialRunner, code_digest
 from .study import MAX_CHUNK, StudyError, StudyFile, chunk_bounds, run_chunks
 from .sweep import AXES, SweepPlan, SweepResult, check_points, check_resolvable, parse_row, point_rows, row_fields, solve_points

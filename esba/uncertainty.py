@@ -52,7 +52,8 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from . import checks, jsonsafe
-from .batch import AUTO_COMPILE_MAX_N, BatchOptions, compiler, prepare, solve_arrays
+from .batch import BatchOptions, compiler, prepare, solve_arrays
+from .batch_options import AUTO_COMPILE_MAX_N
 from .equilibrium import Equilibrium
 from .scene import Scene, SceneError
 from .sensitivity import SensitivityError, SensitivityOptions, check_names, parameter_names, scene_parameters, sensitivities, with_parameters

@@ -14,7 +14,8 @@ from esba.batch import BatchOptions
 from esba.cli import main
 from esba.equilibrium import pressure_for_angle, solve
 from esba.scene import Actuator, Payload, Scene
-from esba.sweep import AXES, SweepError, fig12, parse_values, sweep, sweep_figure
+from esba.sweep import AXES, SweepError, parse_values, sweep
+from esba.sweep_figures import fig12, sweep_figure
 
 from .tolerances import BATCH_THETA_ATOL
 

@@ -90,7 +90,9 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
         command = "esba bench accuracy" + (" --quick" if args.quick else "")
         if not args.quick and (max_n, reference_n, fixed_n, args.repeat) != (128, 256, 16, 5):
             command += f" --max-n {max_n} --reference-n {reference_n} --fixed-n {fixed_n} --repeat {args.repeat}"
-        doc, fig = acc.write_page(study, tol, eff, naive, batch, command, doc=doc, fig_path=fig)
+        from esba.accuracy_report import write_page
+
+        doc, fig = write_page(study, tol, eff, naive, batch, command, doc=doc, fig_path=fig)
         data["page"], data["figure"] = str(doc), str(fig)
 
     def table(d: dict) -> str:

@@ -55,7 +55,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     from esba.batch import BatchOptions
     from esba.plots import save_figure
     from esba.scene import Scene
-    from esba.sweep import fig12, sweep, sweep_figure
+    from esba.sweep import sweep
+    from esba.sweep_figures import fig12, sweep_figure
 
     if args.fig12:
         refuse(args, ["pressure", "payload", "payload_angle", "r2", "d", "target_angle", "out", "plot"], "with --fig12 (it draws its own grid: r2 and d at P = 0.2 MPa, no payload)")
@@ -114,7 +115,8 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
     from esba.plots import save_figure
     from esba.scene import SceneError
     from esba.study import StudyError
-    from esba.sweep import SweepError, plan_sweep, sweep_figure
+    from esba.sweep import SweepError, plan_sweep
+    from esba.sweep_figures import sweep_figure
     from esba.sweep_study import sweep_study
 
     if args.fig12:
