@@ -9,7 +9,7 @@ import pytest
 
 from esba.cli import EXIT_FAILED, EXIT_OK, EXIT_USAGE, main
 from esba.cli.scenes import DEFAULT_SOLVE_FIGURE
-from esba.validation import DOC_PATH
+from esba.validation_report import DOC_PATH
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

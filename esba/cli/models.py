@@ -86,18 +86,18 @@ def add_generate(sub) -> None:
 def _cmd_audit(args: argparse.Namespace) -> int:
     page = outputs.default_page("derivations.md") if args.out is None else args.out
     if args.check:
-        from derive import audit  # SymPy: only for this command
+        from derive import audit_page  # SymPy: only for this command
 
-        stale = audit.check_page(page)
+        stale = audit_page.check_page(page)
         print_result(args, {"page": str(page), "stale": stale}, lambda d: f"{d['page']} is {'STALE' if d['stale'] else 'up to date'}")
         if stale:
             print(f"esba: {page} is stale: run `esba audit` and commit it", file=sys.stderr)
             return EXIT_FAILED
         return EXIT_OK
     page = outputs.check_file(page, "--out")
-    from derive import audit  # SymPy: only for this command
+    from derive import audit_page  # SymPy: only for this command
 
-    path, verdicts = audit.write_page(page)
+    path, verdicts = audit_page.write_page(page)
     data = {"page": str(path), "verdicts": {k: v.verdict for k, v in verdicts.items()}}
     print_result(args, data, lambda d: "\n".join([f"wrote {d['page']}"] + [f"  {k:<26} {v}" for k, v in d["verdicts"].items()]))
     return EXIT_OK

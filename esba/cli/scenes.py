@@ -377,19 +377,19 @@ def add_pressure(sub) -> None:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from esba import validation
+    from esba import validation, validation_report
 
     page = outputs.default_page("validation.md") if args.out is None else args.out
     if not args.check:
         page = outputs.check_file(page, "--out")
     rows = validation.table2()
     if args.check:
-        stale = validation.check_page(page, rows)
+        stale = validation_report.check_page(page, rows)
         if stale:
             print(f"esba: {page} is stale: run `esba validate` and commit it", file=sys.stderr)
             return EXIT_FAILED
     else:
-        page = validation.write_page(page, rows)
+        page = validation_report.write_page(page, rows)
     data = {"passed": all(r.passed for r in rows), "rows": [r.to_dict() for r in rows]}
     if not args.check:
         data["page"] = str(page)
