@@ -14,6 +14,9 @@ Examples
 >>> text = page.read_text()
 >>> text.index("three") < text.index("two"), "one" in text
 (True, False)
+>>> _ = page.write_text("# Old page\\n\\nold numbers\\n\\n" + text)
+>>> "old numbers" in write_section(page, "b", "## B\\n\\nfour", "esba b", title="# Page").read_text()
+False
 """
 
 from __future__ import annotations
@@ -44,9 +47,10 @@ def write_section(path: str | Path, key: str, body: str, command: str, title: st
     """
     path = Path(path)
     text = path.read_text(encoding="utf-8") if path.exists() else ""
-    head, sections = read_sections(text)
-    if not head.strip():
-        head = f"{title}\n\nEach section below is written by the command it names; rerun that command to refresh it.\n\n"
+    _, sections = read_sections(text)
+    # the page is made of sections only: its head is always the title (text left before the
+    # first section, e.g. from an older page format, would keep numbers no command refreshes)
+    head = f"{title}\n\nEach section below is written by the command it names; rerun that command to refresh it.\n\n"
     start, end = _markers(key)
     block = f"{start}\n<!-- Written by `{command}`; rerun it to refresh. -->\n\n{body.rstrip()}\n\n{end}\n"
     keys = [k for k, _ in sections]
