@@ -579,6 +579,10 @@ def test_refresh_of_one_segment_count_writes_only_those(capsys, places):
     assert sorted(p.name for p in out.iterdir()) == sorted(data["refreshed"] + ["manifest.json"])
     committed = ROOT / "generated" / data["refreshed"][0]
     assert (out / data["refreshed"][0]).read_bytes() == committed.read_bytes()
+    umask = os.umask(0)
+    os.umask(umask)
+    for p in out.iterdir():  # written through temporary files (0600), then given the user's mode
+        assert p.stat().st_mode & 0o777 == 0o666 & ~umask, p.name
 
 
 def test_small_benchmark_batches_run(capsys, places):
