@@ -392,6 +392,8 @@ def batch_study(size: int = 10_000, segments: int = 3, naive_repeat: int = 5, ip
         out["compiled_first_compile_s"] = first.timings["compile"]
         out["compiled_us"] = best.per_equilibrium_us()
         out["compiled_fast_path_us"] = 1e6 * best.timings["fast"] / size
+        out["compiled_retry_us"] = 1e6 * best.timings.get("retry", 0.0) / size
+        out["compiled_fallback_s"] = best.timings.get("fallback", 0.0)
         out["counts"] = best.counts()
         out["backend"] = best.backend
         result = best

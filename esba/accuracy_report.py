@@ -64,6 +64,28 @@ def _fmt_s(s: float) -> str:
     return f"{s:.1f} s"
 
 
+def _batch_cost(b: dict) -> list[str]:
+    """Where the compiled batch's time per equilibrium goes: the fast path, its retry, and the
+    elements it hands to esba.equilibrium.solve."""
+    if "compiled_us" not in b:
+        return []
+    handed = b["counts"].get("ipopt", 0)
+    line = (
+        f"- Where the {b['compiled_us']:.1f} µs go: the fast path {b['compiled_fast_path_us']:.1f} µs and its denser retry "
+        f"{b.get('compiled_retry_us', 0.0):.1f} µs per equilibrium of the batch"
+    )
+    if handed:
+        line += (
+            f"; the {handed} elements ({100 * handed / b['size']:.2g} %) the fast path refuses take "
+            f"{1e3 * b['compiled_fallback_s'] / handed:.1f} ms each in `esba.equilibrium.solve`, "
+            f"{1e6 * b['compiled_fallback_s'] / b['size']:.1f} µs per equilibrium of the batch. Their load ramp "
+            "loses positive definiteness of the Hessian or stops contracting: in this grid (pressures 0-0.2 MPa, horizontal "
+            "tip payloads 0-2 N) they sit in or at the edge of the bistable range of [paths.md](paths.md), where the ramp "
+            "crosses a fold or passes close to its cusp, and `solve` follows the path through it and reports any jump"
+        )
+    return [line + "."]
+
+
 def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict], naive: list[dict], batch: dict, command: str, figure_rel: str) -> str:
     """The Markdown of ``docs/accuracy-vs-time.md``."""
     lines = [
@@ -248,6 +270,7 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
         "",
         "- Target: 20 µs or less per equilibrium for n = 3 on 10 000: "
         + (f"{'met' if b.get('compiled_us', 1e9) <= 20 else 'NOT met'} ({b.get('compiled_us', float('nan')):.1f} µs compiled, warm)." if "compiled_us" in b else "no C compiler here: interpreted only."),
+        *_batch_cost(b),
         f"- Speed-up: {b['speedup_vs_naive']:.0f}x the naive script, {b['speedup_vs_ipopt']:.0f}x IPOPT one by one.",
         f"- How the elements were answered: {b['counts']}; backend: {b['backend'].split(', cached')[0]}.",
         f"- Largest difference from IPOPT on {50} sampled elements: {b['max_theta_difference_vs_ipopt']:.2g} rad.",
