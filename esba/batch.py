@@ -354,7 +354,7 @@ def solve_arrays(
     if options.progress:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=size, unit="eq", desc=f"esba batch n={model.n}", leave=False)
+        bar = tqdm(total=size, unit="eq", desc=f"esba batch n={model.n}", leave=False, disable=None)  # None: only on a terminal
     try:
         run = _run(model, pv, targets, angle_mode, options, bar)
         success, stability, gnorm, eig, messages, pressure_ok = _verify(model, pv, run, angle_mode, options)

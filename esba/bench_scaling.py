@@ -26,11 +26,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .batch import BatchOptions, decide_backend, prepare
+from .batch import BatchOptions, check_size, decide_backend, prepare
 from .batch_options import TAIL_CHUNK
 from .distributed import WINDOW_PER_WORKER, ModelKey, SerialRunner, open_runner, run_task
 from .scene import Payload, Scene
-from .sweep import SweepPlan, plan_sweep, solve_points, sweep
+from .sweep import SweepError, SweepPlan, check_points, plan_sweep, solve_points, sweep
 from .sweep_study import sweep_study
 
 __all__ = ["scaling_study", "study_plan", "DEFAULTS"]
@@ -108,8 +108,13 @@ def scaling_study(
     round trip of one chunk).
     """
     say = progress or (lambda msg: None)
-    load_before = os.getloadavg()
     plan = study_plan(points, segments)
+    check_points(plan)  # every row is kept to compare the runs
+    check_size(plan.size, segments, f"a study of {plan.size} points at n = {segments}", SweepError)
+    if scheduler is not None:  # an address that answers nothing is refused before the in-process runs
+        with open_runner(scheduler=scheduler, timeout=timeout):
+            pass
+    load_before = os.getloadavg()
     size = plan.size
     model = plan.base.model()
     options, backend = decide_backend(model, BatchOptions(compile="always" if _has_compiler() else "never"), plan.angle_mode, size)

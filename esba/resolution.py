@@ -34,10 +34,15 @@ import numpy as np
 
 from .scene import Scene, SceneError
 
-__all__ = ["ANGLE_RESOLUTION", "ROUNDOFF_FACTOR", "segment_stiffness", "min_modulus", "check_resolvable"]
+__all__ = ["ANGLE_RESOLUTION", "ROUNDOFF_FACTOR", "MIN_DOMAIN_WIDTH", "segment_stiffness", "min_modulus", "min_chamber_radius", "check_domain", "check_resolvable"]
 
 #: The largest angle (rad) the stationarity tolerance may leave undetermined: tol / k.
 ANGLE_RESOLUTION = 1e-3
+#: The narrowest domain of segment angles (rad) the solver can work in: Eq. (10)'s chamber closes
+#: at theta_i = -L r2^2 / (n r1^3), and a solve within 1e-7 rad of that edge is not accepted as an
+#: equilibrium (:func:`esba.model.near_domain_bound`), so a narrower domain leaves no room even
+#: for the straight state.
+MIN_DOMAIN_WIDTH = 1e-5
 #: Round-off allowance: moments up to tol / (ROUNDOFF_FACTOR * machine epsilon) can be balanced
 #: to tol in double precision.
 ROUNDOFF_FACTOR = 100.0
@@ -52,6 +57,32 @@ def segment_stiffness(scene: Scene) -> float:
 def min_modulus(scene: Scene, tol: float) -> float:
     """The smallest Young's modulus (MPa) for which ``tol`` pins the angles of the scene's geometry."""
     return tol / (ANGLE_RESOLUTION * segment_stiffness(scene) / scene.actuator.E)
+
+
+def min_chamber_radius(scene: Scene) -> float:
+    """The smallest chamber radius r2 (mm) whose domain (Eq. 10) is :data:`MIN_DOMAIN_WIDTH` wide."""
+    a = scene.actuator
+    return math.sqrt(MIN_DOMAIN_WIDTH * scene.segments * a.r1**3 / a.L)
+
+
+def check_domain(scene: Scene) -> None:
+    """Refuse a chamber so small that Eq. (10)'s domain of segment angles is narrower than
+    :data:`MIN_DOMAIN_WIDTH` (:class:`SceneError`).
+
+    >>> from esba.scene import MAIN_JOB
+    >>> check_domain(MAIN_JOB.replace(r2=0.001))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    esba.scene.SceneError: actuator.r2=0.001 mm: the chamber closes (Eq. 10) at a segment angle of -8.79e-08 rad, ...
+    """
+    a = scene.actuator
+    width = a.L * a.r2**2 / (scene.segments * a.r1**3)
+    if not width >= MIN_DOMAIN_WIDTH:
+        raise SceneError(
+            f"actuator.r2={a.r2:g} mm: the chamber closes (Eq. 10) at a segment angle of {-width if width else 0.0:.3g} rad, too close to the "
+            f"straight state for the solver to tell an equilibrium from that edge (allowed {MIN_DOMAIN_WIDTH:g} rad); "
+            f"expected r2 >= {min_chamber_radius(scene):.3g} mm for this actuator at n = {scene.segments}"
+        )
 
 
 def check_resolvable(scene: Scene, pressure: float, stationarity_tol: float, reference_tol: float | None = None) -> None:
@@ -69,6 +100,7 @@ def check_resolvable(scene: Scene, pressure: float, stationarity_tol: float, ref
         tolerance loosened on purpose (to study IPOPT alone) never admits a scene the default
         tolerance refuses.
     """
+    check_domain(scene)
     a = scene.actuator
     k = segment_stiffness(scene)
     tol_angle = stationarity_tol if reference_tol is None else min(stationarity_tol, reference_tol)

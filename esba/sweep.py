@@ -100,6 +100,8 @@ def parse_values(text: str) -> list[float]:
     [0.0, 0.05, 0.1, 0.15, 0.2]
     >>> parse_values("2,4,6")
     [2.0, 4.0, 6.0]
+    >>> parse_values("1e-13,2e-13"), parse_values("0:1e-12:3")
+    ([1e-13, 2e-13], [0.0, 5e-13, 1e-12])
     >>> parse_values("1:2")
     Traceback (most recent call last):
     ...
@@ -113,16 +115,17 @@ def parse_values(text: str) -> list[float]:
                 raise SweepError(msg)
             a, b = checks.number("start", parts[0]), checks.number("stop", parts[1])
             k = checks.whole_text("count", parts[2])
-            if not 1 <= k <= MAX_POINTS:
+            if not 1 <= k <= MAX_POINTS or not (math.isfinite(a) and math.isfinite(b)):
                 raise SweepError(msg)
-            values = [a] if k == 1 else [float(v) for v in np.linspace(a, b, k)]
+            # 12 significant digits drop linspace's round-off (0.15000000000000002) and keep small values
+            values = [a] if k == 1 else [float(f"{v:.12g}") for v in np.linspace(a, b, k)]
         else:
             values = [checks.number("value", v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise SweepError(msg) from None
     if not values or not all(math.isfinite(v) for v in values) or len(values) > MAX_POINTS:
         raise SweepError(msg)
-    return [round(v, 12) for v in values]
+    return values
 
 
 # ---------------------------------------------------------------------------------------------
@@ -249,28 +252,52 @@ def check_points(plan: SweepPlan, limit: int = MAX_POINTS) -> None:
 
 
 def check_resolvable(plan: SweepPlan) -> None:
-    """Refuse, before anything is solved, a grid whose strongest point of some design is at a scale
-    the solver cannot resolve (:func:`esba.resolution.check_resolvable`)."""
+    """Refuse, before anything is solved, a grid whose most demanding point is at a scale the
+    solver cannot resolve (:func:`esba.resolution.check_resolvable`).
+
+    The checks are bounded whatever the grid's size: the stiffness test at the least stiff
+    feasible design (the segment stiffness is closed form), the moment test at the strongest
+    payload and pressure of the corner designs of the (r2, d) box, where the pressure that a
+    target angle needs is largest (a thin chamber or a concentric one needs the most).
+    """
+    r2s = np.asarray(plan.axes.get("r2", [plan.fixed["r2"]]), dtype=float)
+    ds = np.asarray(plan.axes.get("d", [plan.fixed["d"]]), dtype=float)
+    a = plan.base.actuator
+    # the stiffness of Eq. (8) at theta = 0 falls with r2 and with d: at each r2 the least stiff
+    # feasible design has the largest d with r2 + d < r1 (Actuator's rule)
+    ds_sorted = np.sort(ds)
+    top = np.searchsorted(ds_sorted, a.r1 - r2s, side="left") - 1  # index of the largest d < r1 - r2
+    ok = top >= 0
+    if not ok.any():
+        return
+    r2_ok, d_top = r2s[ok], ds_sorted[top[ok]]
+    stiffness = 5 * a.r1**4 - 4 * r2_ok**2 * (a.r1 + d_top) ** 2 - r2_ok**4  # up to a positive factor
+    soft = int(np.argmin(stiffness))
+    designs = {(float(r2_ok[soft]), float(d_top[soft]))}
+    for r2_ in (r2s.min(), r2s.max()):
+        column = ds[ds + r2_ < a.r1]  # the feasible d at this r2 (Actuator: r2 + d < r1)
+        if column.size:
+            designs |= {(float(r2_), float(column.min())), (float(r2_), float(column.max()))}
     payloads = plan.axes.get("payload", [plan.fixed["payload"]])
     strongest = max(payloads) if plan.payload_swept else 0.0
     top_pressure = None if plan.angle_mode else max(plan.axes.get("pressure", [plan.fixed["pressure"]]))
-    for r2_ in plan.axes.get("r2", [plan.fixed["r2"]]):
-        for d_ in plan.axes.get("d", [plan.fixed["d"]]):
-            try:
-                extreme = plan.base.replace(r2=r2_, d=d_)
-            except SceneError:  # infeasible: reported as such, not solved
-                continue
-            if plan.payload_swept:
-                extreme = extreme.replace(payloads=(Payload(strongest, plan.fixed["payload_angle"], plan.at),))
-            if top_pressure is not None:
-                extreme = extreme.replace(pressure=top_pressure)
-                resolution.check_resolvable(extreme, top_pressure, DEFAULT_OPTIONS.stationarity_tol)
-                continue
-            try:
-                top = pressure_for_angle(extreme)
-            except EquilibriumError:  # that design's points are reported not ok by the batch
-                continue
-            resolution.check_resolvable(extreme, top, DEFAULT_OPTIONS.stationarity_tol)
+    for r2_, d_ in sorted(designs):
+        try:
+            extreme = plan.base.replace(r2=r2_, d=d_)
+        except SceneError:  # infeasible: reported as such, not solved
+            continue
+        resolution.check_domain(extreme)
+        if plan.payload_swept:
+            extreme = extreme.replace(payloads=(Payload(strongest, plan.fixed["payload_angle"], plan.at),))
+        if top_pressure is not None:
+            extreme = extreme.replace(pressure=top_pressure)
+            resolution.check_resolvable(extreme, top_pressure, DEFAULT_OPTIONS.stationarity_tol)
+            continue
+        try:
+            top = pressure_for_angle(extreme)
+        except EquilibriumError:  # that design's points are reported not ok by the batch
+            continue
+        resolution.check_resolvable(extreme, top, DEFAULT_OPTIONS.stationarity_tol)
 
 
 def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions | None = None) -> dict[str, Any]:

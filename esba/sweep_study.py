@@ -37,9 +37,9 @@ from .batch import BatchOptions, BatchOptionsError, check_size, decide_backend, 
 from .batch_options import DEFAULT_BATCH_OPTIONS
 from .distributed import ModelKey, SerialRunner, code_digest
 from .study import MAX_CHUNK, StudyError, StudyFile, chunk_bounds, run_chunks
-from .sweep import AXES, SweepPlan, SweepResult, check_points, check_resolvable, parse_row, point_rows, row_fields, solve_points
+from .sweep import AXES, SweepError, SweepPlan, SweepResult, check_points, check_resolvable, parse_row, point_rows, row_fields, solve_points
 
-__all__ = ["SweepStudy", "sweep_study", "read_rows", "DEFAULT_CHUNK", "MAX_CHUNK"]
+__all__ = ["SweepStudy", "sweep_study", "check_study", "read_rows", "DEFAULT_CHUNK", "MAX_CHUNK"]
 
 #: Points per chunk unless told: one call of the batch path's mapped Function.
 DEFAULT_CHUNK = DEFAULT_BATCH_OPTIONS.chunk
@@ -149,6 +149,17 @@ def _identity(plan: SweepPlan, options: BatchOptions) -> dict[str, Any]:
     return {"plan": plan.describe(), "batch": batch, "esba": code_digest()}
 
 
+def check_study(plan: SweepPlan, chunk: int, streamed: bool) -> None:
+    """Refuse, before any cluster starts or any point is solved, a study that would not fit: every
+    row gathered in memory (not ``streamed``) is bounded like :func:`esba.sweep.sweep`, a chunk by
+    the batch path's memory, and the grid's scales must be ones the solver resolves."""
+    if not streamed:  # every row is gathered here
+        check_points(plan)
+        check_size(plan.size, plan.base.segments, "the sweep", SweepError)
+    check_size(min(chunk, plan.size), plan.base.segments, "a chunk of the sweep", StudyError)
+    check_resolvable(plan)
+
+
 def sweep_study(
     plan: SweepPlan,
     options: BatchOptions | None = None,
@@ -192,10 +203,7 @@ def sweep_study(
         raise StudyError(f"chunk={chunk!r}: expected a whole number of points from 1 to {MAX_CHUNK}")
     if resume and out is None:
         raise StudyError("resume=True needs the study's file: give out=FILE.csv")
-    if out is None:  # every row is gathered here
-        check_points(plan)
-    check_size(min(chunk, plan.size), plan.base.segments, "a chunk of the sweep", StudyError)
-    check_resolvable(plan)
+    check_study(plan, chunk, streamed=out is not None)
     runner = SerialRunner() if runner is None else runner
     t0 = time.perf_counter()
     model = plan.base.model()

@@ -53,7 +53,7 @@ import numpy as np
 
 from . import checks, jsonsafe
 from .batch import BatchOptions, compiler, prepare, solve_arrays
-from .batch_options import AUTO_COMPILE_MAX_N
+from .batch_options import AUTO_COMPILE_MAX_N, MAX_BATCH_BYTES
 from .equilibrium import Equilibrium
 from .scene import Scene, SceneError
 from .sensitivity import SensitivityError, SensitivityOptions, check_names, parameter_names, scene_parameters, sensitivities, with_parameters
@@ -615,6 +615,27 @@ class MonteCarlo:
         })
 
 
+def sample_bytes(samples: int, n: int, parameters: int = 1) -> int:
+    """Estimated memory (bytes) a Monte Carlo of ``samples`` keeps: each sample's parameters,
+    angles, tip and outcome, twice while the chunks are joined.
+
+    >>> sample_bytes(10_000, 3, 2)
+    2720000
+    """
+    return int(samples) * 2 * 8 * (parameters + n + 12)
+
+
+def check_samples(samples: int, n: int, parameters: int = 1) -> None:
+    """An :class:`UncertaintyError` when the samples would not fit in :data:`esba.batch_options.MAX_BATCH_BYTES`."""
+    need = sample_bytes(samples, n, parameters)
+    if need > MAX_BATCH_BYTES:
+        most = MAX_BATCH_BYTES // sample_bytes(1, n, parameters)
+        raise UncertaintyError(
+            f"samples={samples} at n = {n} would keep about {need / 2**30:.1f} GiB of samples (limit "
+            f"{MAX_BATCH_BYTES / 2**30:g} GiB): at most {most} at this n"
+        )
+
+
 def monte_carlo(
     scene: Scene,
     sigmas: Sequence[Sigma],
@@ -658,6 +679,7 @@ def monte_carlo(
         raise UncertaintyError(f"options={options!r}: expected MonteCarloOptions")
     if not isinstance(scene, Scene):
         raise UncertaintyError(f"scene={scene!r}: expected a Scene")
+    check_samples(options.samples, scene.segments, len(sigmas))
     sigmas = _checked_sigmas(scene, sigmas)
     names = tuple(s.name for s in sigmas)
     values = draw_samples(sigmas, options.samples, options.seed)
@@ -752,6 +774,11 @@ def compare(first: Propagation, mc: MonteCarlo) -> Agreement:
     shift = f"; the Monte Carlo means move by up to {max(shifts):.2g} sigma (a nonlinear effect first order does not see)" if shifts else ""
     if not first.has_numbers:
         verdict = f"no first-order answer ({first.status}): {first.message}"
+    elif counts["ok"] < 2:
+        verdict = (
+            f"no comparison: {counts['ok']} of {counts['samples']} Monte Carlo samples solved ({counts['invalid']} outside the "
+            f"scene's rules, {counts['not_ok']} without a stable equilibrium), too few for a standard deviation"
+        )
     elif agree:
         worst = max(abs(r["std_ratio"] - 1.0) for r in rows if math.isfinite(r["std_ratio"]))
         verdict = (
@@ -770,6 +797,6 @@ def compare(first: Propagation, mc: MonteCarlo) -> Agreement:
                     f"(ratio {r['std_ratio']:.3g})"
                 )
         verdict = "first order is poor here: " + "; ".join(why) + shift
-    if counts["invalid"]:
+    if counts["invalid"] and counts["ok"] >= 2:
         verdict += f" ({counts['invalid']} samples fell outside the scene's rules and were left out)"
     return Agreement(tuple(rows), agree, verdict)

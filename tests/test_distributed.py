@@ -321,9 +321,15 @@ def test_cli_monte_carlo_on_workers(capsys):
         (["solve", "--no-plot", "--workers", "2"], "give --monte-carlo N"),
         (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--resume"], "give --mc-out FILE.csv"),
         (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", "x.json"], "argument --mc-out"),
-        (["bench", "scaling", "--points", "5"], "argument --points: points=5: expected a whole number from 20 to 1000000"),
+        (["bench", "scaling", "--points", "5"], "argument --points: points=5: expected a whole number from 20 to 200000"),
         (["bench", "scaling", "--repeat", "0"], "argument --repeat: repeat=0: expected a whole number from 1 to 50"),
         (["bench", "scaling", "--workers", "1", "--scheduler", "tcp://127.0.0.1:8786"], "give one of the two"),
+        (["bench", "scaling", "--points", "1000000"], "points=1000000: expected a whole number from 20 to 200000"),
+        (["bench", "scaling", "--points", "200000", "-n", "256"], "would take about"),
+        (["bench", "scaling", "--connect-timeout", "1"], "--connect-timeout is the wait for --scheduler ADDRESS"),
+        (["sweep", "--pressure", "0.1", "--workers", "1", "--connect-timeout", "1"], "--connect-timeout is the wait for --scheduler ADDRESS"),
+        # every row gathered in memory: the same bound as in this process, before a cluster starts
+        (["sweep", "-n", "256", "--pressure", "0:0.2:20000", "--workers", "1"], "the sweep of 20000 equilibria at n = 256 would take about 9.9 GiB"),
     ],
 )
 @needs_dask

@@ -167,3 +167,20 @@ def test_full_design_space_sweep():
         ref = solve(Scene(actuator=act, pressure=0.2, payloads=(Payload(1.0, 90.0),)))
         assert ref.ok
         np.testing.assert_allclose(s.theta[i], ref.theta, atol=BATCH_THETA_ATOL)
+
+
+def test_the_scale_check_of_a_large_design_grid_is_bounded(monkeypatch):
+    """check_resolvable looks at a handful of designs (the least stiff and the corners), not at
+    every design of the grid: a 1000 x 1000 design grid is checked before its first chunk."""
+    from esba import sweep as sweep_module
+
+    calls = []
+    real = sweep_module.pressure_for_angle
+    monkeypatch.setattr(sweep_module, "pressure_for_angle", lambda scene: calls.append(scene) or real(scene))
+    plan = sweep_module.plan_sweep(Scene(), r2=list(np.linspace(0.5, 3.5, 1000)), d=list(np.linspace(0.0, 4.0, 1000)))
+    sweep_module.check_resolvable(plan)
+    assert 1 <= len(calls) <= 5
+    designs = {(s.actuator.r2, s.actuator.d) for s in calls}
+    assert (0.5, 0.0) in designs  # the thinnest concentric chamber: the largest pressure for the angle
+    # the least stiff feasible design (largest r2 with the largest d it allows) is among them
+    assert any(r2 == 3.5 and d == pytest.approx(4.0) for r2, d in designs)

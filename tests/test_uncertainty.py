@@ -242,3 +242,16 @@ def test_cli_bad_uncertainty_input_is_one_line_exit_2(capsys, argv, needle):
     assert main(["solve", "--no-plot", *argv]) == EXIT_USAGE
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1 and needle in err and err.startswith("esba: error:")
+
+
+def test_a_monte_carlo_with_no_sample_solved_compares_nothing(capsys, tmp_path, monkeypatch):
+    """Every sample outside the scene's rules: no NaN verdict, a plain 'no comparison' and a warning."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["solve", "--sigma", "r2=±100", "--monte-carlo", "10", "--no-plot", "--json"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    data = json.loads(out)
+    assert data["monte_carlo"]["counts"]["ok"] == 0
+    verdict = data["agreement"]["verdict"]
+    assert verdict.startswith("no comparison: 0 of 10 Monte Carlo samples solved") and "nan" not in verdict
+    assert data["agreement"]["agree"] is False
+    assert f"esba: warning: {verdict}" in err

@@ -196,10 +196,15 @@ def _cmd_bench_scaling(args: argparse.Namespace) -> int:
 
     if args.scheduler is not None and args.workers is not None:
         raise UsageError("--workers N lists local cluster sizes and --scheduler ADDRESS measures an existing cluster: give one of the two")
+    if args.connect_timeout is not None and args.scheduler is None:
+        raise UsageError("--connect-timeout is the wait for --scheduler ADDRESS: it is not used without it")
     try:
         require_dask("esba bench scaling")
     except DistributedError as exc:
         raise UsageError(str(exc)) from None
+    from esba.batch import check_size
+
+    check_size(args.points, args.segments, f"--points {args.points} at n = {args.segments}", UsageError)
 
     def say(msg: str) -> None:
         if not args.json:
@@ -208,7 +213,7 @@ def _cmd_bench_scaling(args: argparse.Namespace) -> int:
     workers = tuple(args.workers) if args.workers else bench_scaling.DEFAULTS["workers"]
     try:
         data = bench_scaling.scaling_study(points=args.points, segments=args.segments, repeat=args.repeat, chunk=args.chunk,
-                                           workers=workers, scheduler=args.scheduler, timeout=args.connect_timeout, progress=say)
+                                           workers=workers, scheduler=args.scheduler, timeout=args.connect_timeout or 10.0, progress=say)
     except DistributedError as exc:
         raise UsageError(str(exc)) from None
     if args.markdown:
@@ -262,13 +267,13 @@ def add_bench(sub) -> None:
     pa.add_argument("--json", action="store_true")
     pa.set_defaults(func=_cmd_bench_path)
     sc = bsub.add_parser("scaling", help="equilibria per second of a sweep in this process and on Dask (1, 2 workers), chunk sizes, overhead per chunk (docs/scaling.md)")
-    sc.add_argument("--points", type=count_arg("points", 20, 1_000_000), default=12_000, help="grid size, 20 to 1000000 (default 12000)")
+    sc.add_argument("--points", type=count_arg("points", 20, 200_000, "the rows are compared in memory"), default=12_000, help="grid size, 20 to 200000 (default 12000)")
     sc.add_argument("--segments", "-n", type=segments_arg, default=16, help="segment count (default 16)")
     sc.add_argument("--repeat", type=count_arg("repeat", 1, 50), default=3, help="runs per timing, median reported (default 3)")
     sc.add_argument("--chunk", type=chunk_arg, default=1000, metavar="K", help="points per chunk of the worker-count rows (default 1000)")
     sc.add_argument("--workers", type=workers_arg, action="append", metavar="N", help="local cluster sizes to measure (repeatable; default 1 and 2)")
     sc.add_argument("--scheduler", type=scheduler_arg, metavar="ADDRESS", help="measure the existing Dask cluster at ADDRESS instead (e.g. one started by dask-jobqueue)")
-    sc.add_argument("--connect-timeout", type=timeout_arg, default=10.0, metavar="S", help="seconds to wait for --scheduler (default 10)")
+    sc.add_argument("--connect-timeout", type=timeout_arg, default=None, metavar="S", help="seconds to wait for --scheduler (default 10)")
     sc.add_argument("--markdown", type=output_file_arg(".md"), metavar="FILE", help="also write the page (docs/scaling.md)")
     sc.add_argument("--json", action="store_true")
     sc.set_defaults(func=_cmd_bench_scaling)

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 from typing import Callable
 
 from .arguments import UsageError
@@ -44,25 +45,31 @@ def timeout_arg(text: str) -> float:
 def chunk_arg(text: str) -> int:
     from esba.study import MAX_CHUNK
 
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
+    value = int(text) if re.fullmatch(r"\s*\d+\s*", text) else 0
     if not 1 <= value <= MAX_CHUNK:
         raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of points per chunk from 1 to {MAX_CHUNK}")
     return value
 
 
+#: Seconds ``--scheduler`` waits for the scheduler and its first worker unless --connect-timeout says.
+CONNECT_TIMEOUT = 10.0
+
+
 def add_cluster_flags(p: argparse.ArgumentParser, what: str) -> None:
     p.add_argument("--workers", type=workers_arg, metavar="N", help=f"solve {what} on a local Dask cluster of N worker processes (the esba[dask] extra)")
     p.add_argument("--scheduler", type=scheduler_arg, metavar="ADDRESS", help=f"solve {what} on the Dask cluster of the scheduler at ADDRESS (tcp://HOST:PORT)")
-    p.add_argument("--connect-timeout", type=timeout_arg, default=10.0, metavar="S", help="seconds to wait for --scheduler and its first worker (default 10)")
+    p.add_argument("--connect-timeout", type=timeout_arg, default=None, metavar="S", help=f"seconds to wait for --scheduler and its first worker (default {CONNECT_TIMEOUT:g})")
 
 
 def on_cluster(args: argparse.Namespace) -> bool:
-    """Whether the study runs on Dask; checks --workers, --scheduler and the extra before any computation."""
+    """Whether the study runs on Dask; checks --workers, --scheduler and the extra before any
+    computation, and sets ``args.connect_timeout`` (refused without --scheduler: it would be ignored)."""
     if args.workers is not None and args.scheduler is not None:
         raise UsageError("--workers N starts a local cluster and --scheduler ADDRESS uses an existing one: give one of the two")
+    if args.connect_timeout is not None and args.scheduler is None:
+        raise UsageError("--connect-timeout is the wait for --scheduler ADDRESS: it is not used without it")
+    if args.connect_timeout is None:
+        args.connect_timeout = CONNECT_TIMEOUT
     if args.workers is None and args.scheduler is None:
         return False
     from esba.distributed import DistributedError, require_dask

@@ -4,6 +4,7 @@ sensitivities and uncertainty, and its Monte Carlo (in this process or on Dask).
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 
@@ -116,13 +117,16 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         raise UsageError("--workers, --scheduler, --mc-out and --resume run the Monte Carlo: give --monte-carlo N (and --sigma)")
     if args.resume and args.mc_out is None:
         raise UsageError("--resume continues the Monte Carlo in its sample file: give --mc-out FILE.csv")
+    if args.monte_carlo is None:
+        refuse(args, ["mc_chunk", "seed"], "without --monte-carlo N (they set its samples)")
     mc_options = None
     if args.monte_carlo is not None:
-        from esba.uncertainty import MonteCarloOptions, UncertaintyError
+        from esba.uncertainty import MonteCarloOptions, UncertaintyError, check_samples
 
         try:
             extra = {} if args.mc_chunk is None else {"chunk": args.mc_chunk}
-            mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=args.seed, **extra)
+            mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=0 if args.seed is None else args.seed, **extra)
+            check_samples(args.monte_carlo, scene.segments, len(sigmas))  # before the nominal solve
         except UncertaintyError as exc:
             raise UsageError(f"--monte-carlo: {exc}") from None
     options = SolverOptions(max_iter=args.max_iter, continuation=not args.no_continuation)
@@ -166,6 +170,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         data["figure"] = str(save_figure(solve_figure(result, unloaded, tip_cov=cov, samples=tips), figure).resolve())
     print_result(args, data, _solve_table)
     warn_findings(result.validity)
+    if mc is not None and mc.counts["ok"] < 2:
+        print(f"esba: warning: {data['agreement']['verdict']}", file=sys.stderr)
     if not result.ok:
         print(f"esba: solve not ok: {result.message or result.status}", file=sys.stderr)
         return EXIT_FAILED
@@ -215,10 +221,7 @@ def _sample_count(text: str) -> int:
 
 
 def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
+    value = int(text) if re.fullmatch(r"\s*\d+\s*", text) else -1
     if value < 0:
         raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number >= 0")
     return value
@@ -234,7 +237,7 @@ def add_solve(sub) -> None:
     p.add_argument("--sensitivities", action="store_true", help="d(angles, tip)/d(parameter) for every scene parameter (exact, implicit function theorem)")
     p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="uncertain parameter: E=0.05 (in its unit), E=10%%, r2=±0.1 (a tolerance); repeatable; propagated to first order")
     p.add_argument("--monte-carlo", type=_sample_count, metavar="N", help="check the first-order uncertainty with N Monte Carlo samples on the batch path (e.g. 10000)")
-    p.add_argument("--seed", type=_seed, default=0, help="seed of the Monte Carlo samples (default 0)")
+    p.add_argument("--seed", type=_seed, default=None, help="seed of the Monte Carlo samples (default 0)")
     add_cluster_flags(p, "the Monte Carlo")
     p.add_argument("--mc-chunk", type=chunk_arg, metavar="K", help="Monte Carlo samples per chunk (default 2500)")
     p.add_argument("--mc-out", type=output_file_arg(".csv"), metavar="FILE.csv", help="stream every Monte Carlo sample to FILE.csv, chunk by chunk")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from derive.effects import VARIANTS
@@ -23,7 +24,11 @@ def _values_arg(text: str) -> list[float]:
 
 
 def _sweep_table(d: dict) -> str:
-    lines = [f"base: {d['base']}", "axes: " + "; ".join(f"{k} {v['values']} {v['unit']}" for k, v in d["axes"].items())]
+    def axis(k: str, v: dict) -> str:  # a long axis as its range (JSON keeps every value)
+        values = v["values"]
+        return f"{k} {values} {v['unit']}" if len(values) <= 8 else f"{k} {len(values)} values from {min(values):g} to {max(values):g} {v['unit']}"
+
+    lines = [f"base: {d['base']}", "axes: " + "; ".join(axis(k, v) for k, v in d["axes"].items())]
     lines.append(f"points: {d['counts']}; {d['backend']}")
     st = d.get("study")
     if st:
@@ -73,6 +78,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     options = BatchOptions(compile="never" if args.no_compile else "auto", progress=not (args.json or args.no_progress))
     if on_cluster(args) or args.resume:
         return _sweep_in_chunks(args, base, options, out, figure)
+    refuse(args, ["chunk"], "without --workers, --scheduler or --resume (a sweep in this process is one batch)")
     if args.fig12:
         fig, sweeps = fig12(base.replace(pressure=0.2, payloads=()), options=options)
         path = save_figure(fig, figure)
@@ -117,7 +123,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
     from esba.study import StudyError
     from esba.sweep import SweepError, plan_sweep
     from esba.sweep_figures import sweep_figure
-    from esba.sweep_study import sweep_study
+    from esba.sweep_study import DEFAULT_CHUNK, check_study, sweep_study
 
     if args.fig12:
         raise UsageError("--fig12 draws its own small grid in this process: give it without --workers, --scheduler or --resume")
@@ -129,15 +135,16 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
         raise UsageError("--plot needs every row in memory, and with --out FILE.csv on --workers, --scheduler or --resume the rows stream to the file: plot in a run without them")
     try:
         plan = plan_sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d)
-    except (SweepError, SceneError) as exc:
+        check_study(plan, args.chunk or DEFAULT_CHUNK, streamed)  # before a cluster starts
+    except (SweepError, SceneError, StudyError) as exc:
         raise UsageError(str(exc)) from None
     try:
         with open_runner(args.workers, args.scheduler, args.connect_timeout) as runner:
-            study = sweep_study(plan, options, runner=runner, chunk=args.chunk, out=out if streamed else None, resume=args.resume, progress=options.progress)
+            study = sweep_study(plan, options, runner=runner, chunk=args.chunk or DEFAULT_CHUNK, out=out if streamed else None, resume=args.resume, progress=options.progress)
     except (DistributedError, StudyError) as exc:
         raise UsageError(str(exc)) from None
     except KeyboardInterrupt:
-        where = f": the rows solved so far are in {out}; rerun with --resume to go on" if streamed else ""
+        where = f": the rows solved so far are in {out}; rerun with --resume to go on" if streamed and os.path.exists(out) else ""
         print(f"esba: interrupted{where}", file=sys.stderr)
         return 130
     # streamed rows stay in the file (a study may not fit in memory); a small grid's table reads them back
@@ -180,6 +187,6 @@ def add_sweep(sub) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print JSON (every row)")
     add_cluster_flags(p, "the grid")
-    p.add_argument("--chunk", type=chunk_arg, default=1000, metavar="K", help="points per chunk with --workers, --scheduler or --resume (default 1000)")
+    p.add_argument("--chunk", type=chunk_arg, default=None, metavar="K", help="points per chunk with --workers, --scheduler or --resume (default 1000)")
     p.add_argument("--resume", action="store_true", help="stream the rows chunk by chunk to --out FILE.csv and continue the study that file holds (a new one if there is none)")
     p.set_defaults(func=_cmd_sweep)
