@@ -36,9 +36,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from . import structured
 from .model import Model
 from .stability import CRITICAL_TOL
-from . import structured
 from .structured import pivots_sx, solve_sx
 
 __all__ = ["RampRun", "run_ramp", "ramp_function", "ramp_expression", "newton_parts", "parts_function", "STEPS", "NEWTON", "FINAL", "CONTRACTION"]
