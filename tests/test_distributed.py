@@ -8,6 +8,7 @@ The Dask tests use a local cluster of 2 worker processes (one thread each), as C
 from __future__ import annotations
 
 import csv
+import errno
 import importlib.util
 import io
 import json
@@ -19,11 +20,11 @@ import numpy as np
 import pytest
 
 from esba.batch import BatchOptions, compiler
-from esba.cli import EXIT_OK, EXIT_USAGE, main
+from esba.cli import EXIT_FAILED, EXIT_OK, EXIT_USAGE, main
 from esba.distributed import DASK_EXTRA, DaskRunner, DistributedError, SerialRunner, open_runner
 from esba.mc_study import monte_carlo_study
 from esba.scene import MAIN_JOB, Payload, Scene
-from esba.study import HEADER, StudyError
+from esba.study import HEADER, StudyError, StudyFile
 from esba.sweep import plan_sweep, sweep
 from esba.sweep_study import read_rows, sweep_study
 from esba.uncertainty import MonteCarloOptions, monte_carlo, parse_sigma, resolve_sigmas
@@ -283,7 +284,9 @@ def test_cli_sweep_on_workers_writes_the_in_process_rows(capsys, tmp_path):
     assert main(["sweep", *grid, "--workers", "2", "--json"]) == EXIT_OK  # rows gathered in memory
     gathered = json.loads(capsys.readouterr().out)
     assert main(["sweep", *grid, "--workers", "2", "--out", str(there), "--json"]) == EXIT_OK  # rows in the file only
-    streamed = json.loads(capsys.readouterr().out)
+    out, err = capsys.readouterr()
+    streamed = json.loads(out)
+    assert f"esba: {there} held 16 rows of this study; starting over (give --resume to continue it)\n" in err
     assert gathered["rows"] == alone["rows"] == read_rows(there) and len(alone["rows"]) == 16 and "rows" not in streamed
     assert gathered["study"]["workers"] == streamed["study"]["workers"] == 2 and streamed["out"] == str(there)
     assert streamed["counts"] == gathered["counts"] == alone["counts"]
@@ -384,6 +387,108 @@ def test_a_chunk_that_always_kills_its_worker_stops_the_study_with_a_message(tmp
         with pytest.raises(DistributedError, match=r"chunk \d+ was started 4 times and each time its worker process died"):
             sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=_AlwaysKillingRunner(runner), chunk=50, out=out)
     assert read_rows(out) == []  # the header is there, and no row: --resume starts from the first chunk
+
+
+# ---------------------------------------------------------------------------------------------
+# the study file: one run at a time, damaged rows, a full disk
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="study files are locked on POSIX systems")
+def test_a_study_file_that_another_run_writes_is_refused_and_left_alone(capsys, tmp_path):
+    import fcntl
+
+    out = tmp_path / "s.csv"
+    argv = ["sweep", "--pressure", "0:0.2:5", "--no-compile", "--no-progress", "--chunk", "2", "--resume", "--out", str(out)]
+    assert main(argv[:-1] + [str(out)]) == EXIT_OK
+    capsys.readouterr()
+    lines = out.read_text().splitlines(keepends=True)
+    out.write_text("".join(lines[:4]))  # an interrupted study: 2 rows of 5
+    before = out.read_bytes()
+    fd = os.open(out, os.O_RDONLY)
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # another esba run is writing it
+    try:
+        pid = f" (pid {os.getpid()})" if os.path.exists("/proc/locks") else ""
+        needle = f"{out} is being written by another esba run{pid}: wait for it to end, or give another file"
+        _one_line_error(capsys, argv, needle)
+        mc = ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", str(out)]
+        _one_line_error(capsys, mc, needle)
+        _one_line_error(capsys, [*mc, "--resume"], needle)
+        with pytest.raises(StudyError, match="is being written by another esba run"):  # starting over does not truncate it either
+            sweep_study(plan_sweep(Scene(), pressure=[0.0, 0.05, 0.1, 0.15, 0.2]), INTERPRETED, out=out)
+        assert out.read_bytes() == before
+    finally:
+        os.close(fd)
+    assert main(argv) == EXIT_OK and len(read_rows(out)) == 5
+    assert "resumed at row 2" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("damage", ['o"k', '"ok'])
+def test_resume_refuses_a_row_with_a_stray_quote_and_leaves_the_file(capsys, tmp_path, damage):
+    """A stray quote inside a cell, or at its start (the CSV reader would then read every row after
+    it as one quoted cell, and resume would have cut them all off as a broken tail)."""
+    out = tmp_path / "s.csv"
+    argv = ["sweep", "--pressure", "0:0.2:10", "--no-compile", "--no-progress", "--chunk", "4", "--resume", "--out", str(out)]
+    assert main(argv) == EXIT_OK
+    capsys.readouterr()
+    lines = out.read_text().splitlines(keepends=True)
+    lines[4] = lines[4].replace(",ok,", f",{damage},", 1)  # row 3
+    out.write_text("".join(lines))
+    before = out.read_bytes()
+    _one_line_error(capsys, argv, f"--resume {out}: row 3 cannot be read back exactly as CSV")
+    assert out.read_bytes() == before
+
+
+def test_study_file_keeps_quoted_cells_and_drops_a_row_cut_inside_one(tmp_path):
+    path = tmp_path / "s.csv"
+    f = StudyFile(path, "demo", {"grid": [1, 2, 3, 4]}, ["x", "message"], rows=4)
+    f.start({"compile": "never"})
+    f.append([{"x": 1, "message": 'a, "b"\nc'}, {"x": 2, "message": "plain"}])
+    f.close()
+    whole = path.read_bytes()
+    path.write_bytes(whole + b'3,"cut, inside\nthe cell')  # the study stopped while writing a chunk
+    g = StudyFile(path, "demo", {"grid": [1, 2, 3, 4]}, ["x", "message"], rows=4)
+    rows: list = []
+    assert g.resume(rows.append) == 2 and rows[0] == {"x": "1", "message": 'a, "b"\nc'}
+    g.close()
+    assert path.read_bytes() == whole
+
+
+class _FillingDisk:
+    """``os`` for esba.study, on a disk that fills during the ``fail_at``-th write: the part that
+    fits is written, then ENOSPC."""
+
+    def __init__(self, fail_at: int) -> None:
+        self.fail_at, self.calls = fail_at, 0
+
+    def __getattr__(self, name):
+        return getattr(os, name)
+
+    def write(self, fd, data):
+        self.calls += 1
+        if self.calls == self.fail_at:
+            os.write(fd, bytes(data[: len(data) // 2]))
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return os.write(fd, data)
+
+
+def test_a_full_disk_stops_a_streamed_study_in_one_line_and_it_resumes(capsys, monkeypatch, tmp_path):
+    grid = ["sweep", "--pressure", "0:0.2:10", "--no-compile", "--no-progress", "--chunk", "4"]
+    here, out = tmp_path / "here.csv", tmp_path / "s.csv"
+    assert main([*grid, "--out", str(here)]) == EXIT_OK
+    capsys.readouterr()
+    monkeypatch.setattr("esba.study.os", _FillingDisk(fail_at=3))  # the header, chunk 0, then half of chunk 1
+    assert main([*grid, "--resume", "--out", str(out)]) == EXIT_FAILED
+    got, err = capsys.readouterr()
+    assert got == "" and err == f"esba: error: {out}: cannot write (No space left on device); the rows solved so far are kept: rerun with --resume to go on\n"
+    assert len(read_rows(out)) == 4 and out.read_bytes().endswith(b"\n")  # chunk 0 whole, nothing of chunk 1
+    monkeypatch.undo()
+    assert main([*grid, "--resume", "--out", str(out)]) == EXIT_OK
+    assert out.read_text().split("\n", 1)[1] == here.read_text()
+    # the Monte Carlo's samples: the same line, with its own flag's words
+    mc = ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "30", "--mc-chunk", "10", "--mc-out", str(tmp_path / "mc.csv")]
+    monkeypatch.setattr("esba.study.os", _FillingDisk(fail_at=2))
+    assert main(mc) == EXIT_FAILED
+    assert capsys.readouterr().err == f"esba: error: {tmp_path / 'mc.csv'}: cannot write (No space left on device); the samples solved so far are kept: rerun with --resume to go on\n"
 
 
 # ---------------------------------------------------------------------------------------------
