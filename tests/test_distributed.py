@@ -13,8 +13,14 @@ import importlib.util
 import io
 import json
 import os
+import signal
 import socket
+import subprocess
 import sys
+import threading
+import time
+from contextlib import contextmanager
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,7 +30,7 @@ from esba.cli import EXIT_FAILED, EXIT_OK, EXIT_USAGE, main
 from esba.distributed import DASK_EXTRA, DaskRunner, DistributedError, SerialRunner, open_runner
 from esba.mc_study import monte_carlo_study
 from esba.scene import MAIN_JOB, Payload, Scene
-from esba.study import HEADER, StudyError, StudyFile
+from esba.study import HEADER, StudyError, StudyFile, StudyStopped
 from esba.sweep import plan_sweep, sweep
 from esba.sweep_study import read_rows, sweep_study
 from esba.uncertainty import MonteCarloOptions, monte_carlo, parse_sigma, resolve_sigmas
@@ -169,15 +175,17 @@ class _KillingRunner(DaskRunner):
 
 
 @needs_dask
-def test_a_killed_workers_chunk_is_solved_again_and_every_row_written_once(reference, tmp_path):
+def test_a_killed_workers_chunk_is_solved_again_and_every_row_written_once(capfd, reference, tmp_path):
     marker = tmp_path / "killed"
     out = tmp_path / "grid.csv"
+    capfd.readouterr()
     with open_runner(workers=2) as runner:
         pids = set(runner.client.run(os.getpid).values())
         study = sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=_KillingRunner(runner, marker), chunk=8, out=out)
     assert marker.exists() and int(marker.read_text()) in pids  # a worker process did die mid-study
     assert study.chunks == 12
     assert read_rows(out) == reference.rows()  # nothing lost, nothing twice, in order
+    assert "distributed." not in capfd.readouterr().err  # Dask's log lines about it ("Couldn't gather keys", ...) are silenced
 
 
 # ---------------------------------------------------------------------------------------------
@@ -380,13 +388,171 @@ class _AlwaysKillingRunner(DaskRunner):
         return super().map_ordered(_always_kill, ((fn, *a) for a in args), done)
 
 
+def _runner_as(make):
+    """A stand-in for esba.distributed.open_runner that yields ``make()``'s runner (for the CLI)."""
+
+    @contextmanager
+    def fake(workers=None, scheduler=None, timeout=10.0):
+        yield make()
+
+    return fake
+
+
 @needs_dask
-def test_a_chunk_that_always_kills_its_worker_stops_the_study_with_a_message(tmp_path):
+def test_a_chunk_that_always_kills_its_worker_stops_the_study_with_a_message(capsys, monkeypatch, tmp_path):
     out = tmp_path / "grid.csv"
+    grid = ["sweep", "--pressure", "0:0.3:40", "--no-compile", "--no-progress", "--chunk", "50", "--workers", "2"]
     with open_runner(workers=2) as runner:
-        with pytest.raises(DistributedError, match=r"chunk \d+ was started 4 times and each time its worker process died"):
+        with pytest.raises(StudyStopped, match=r"chunk \d+ was started 4 times and each time its worker process died") as info:
             sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=_AlwaysKillingRunner(runner), chunk=50, out=out)
-    assert read_rows(out) == []  # the header is there, and no row: --resume starts from the first chunk
+        assert not isinstance(info.value, ValueError)  # a failure at run time, not bad input
+        assert read_rows(out) == []  # the header is there, and no row: --resume starts from the first chunk
+        # the command line: exit 1, and what is kept only when the rows stream to a file
+        monkeypatch.setattr("esba.distributed.open_runner", _runner_as(lambda: _AlwaysKillingRunner(runner)))
+        assert main(grid) == EXIT_FAILED
+        out_text, err = capsys.readouterr()
+        assert out_text == "" and err.count("\n") == 1 and err.startswith("esba: error: chunk 0 was started 4 times"), err
+        assert "kept" not in err and "so far" not in err and "--resume" not in err, err
+        assert main([*grid, "--out", str(out)]) == EXIT_FAILED
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.rstrip().endswith(f"the study stops; the rows solved so far are in {out}: rerun with --resume to go on"), err
+
+
+# ---------------------------------------------------------------------------------------------
+# a --scheduler address where no Dask scheduler answers
+
+
+@contextmanager
+def _service(kind: str):
+    """A TCP service on a free port of 127.0.0.1 that is not Dask: ``silent`` accepts connections
+    and never answers, ``ssh`` speaks first (a banner), ``http`` is Python's HTTP server."""
+    if kind == "http":
+        from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+        class Quiet(BaseHTTPRequestHandler):
+            def log_message(self, *args) -> None:
+                pass
+
+        server = ThreadingHTTPServer(("127.0.0.1", 0), Quiet)
+        thread = threading.Thread(target=server.serve_forever, daemon=True)
+        thread.start()
+        try:
+            yield f"tcp://127.0.0.1:{server.server_address[1]}"
+        finally:
+            server.shutdown()
+            server.server_close()
+        return
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(8)
+    listener.settimeout(0.1)
+    conns, stop = [], threading.Event()
+
+    def serve() -> None:
+        while not stop.is_set():
+            try:
+                conn, _ = listener.accept()
+            except OSError:
+                continue
+            conns.append(conn)
+            if kind == "ssh":
+                conn.sendall(b"SSH-2.0-OpenSSH_9.6p1 Ubuntu-3ubuntu13.5\r\n")
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    try:
+        yield f"tcp://127.0.0.1:{listener.getsockname()[1]}"
+    finally:
+        stop.set()
+        thread.join()
+        for conn in conns:
+            conn.close()
+        listener.close()
+
+
+@needs_dask
+@pytest.mark.parametrize("kind, needle", [
+    ("silent", "no Dask scheduler answered within 1 s"),
+    ("http", "no Dask scheduler answered within 1 s"),  # Dask alone waits for ever
+    ("ssh", "is not a Dask scheduler"),  # Dask alone reads the banner as a frame size: exabytes
+])
+def test_cli_scheduler_address_of_another_service_is_one_line_exit_2(capsys, kind, needle):
+    with _service(kind) as address:
+        t0 = time.monotonic()
+        err = _one_line_error(capsys, ["sweep", "--pressure", "0.1", "--scheduler", address, "--connect-timeout", "1"], needle)
+        assert time.monotonic() - t0 < 30  # it returns: the timeout is kept
+    assert err.startswith(f"esba: error: --scheduler '{address}': ")
+
+
+@needs_dask
+def test_cli_sweep_on_a_scheduler_address_and_a_workers_address_refused(capsys, cluster, tmp_path):
+    grid = ["--pressure", "0:0.2:4", "--payload", "0,2", "--no-compile", "--no-progress"]
+    here, there = tmp_path / "here.csv", tmp_path / "there.csv"
+    assert main(["sweep", *grid, "--out", str(here)]) == EXIT_OK
+    address = cluster.client.scheduler.address
+    assert main(["sweep", *grid, "--scheduler", address, "--chunk", "3", "--out", str(there)]) == EXIT_OK
+    out, err = capsys.readouterr()
+    assert f"on the Dask cluster at {address}" in out and there.read_text().split("\n", 1)[1] == here.read_text()
+    worker = sorted(cluster.client.scheduler_info()["workers"])[0]
+    _one_line_error(capsys, ["sweep", *grid, "--scheduler", worker], f"--scheduler '{worker}': is not a Dask scheduler but a Dask Worker")
+
+
+# ---------------------------------------------------------------------------------------------
+# a scheduler lost mid-study
+
+
+def _kill_scheduler_at(pid: int, i: int, k: int, fn, *args):
+    """On the worker: from chunk ``k`` on, kill the scheduler's process first."""
+    if i >= k:
+        os.kill(pid, signal.SIGKILL)
+        time.sleep(1.0)
+    return fn(*args)
+
+
+@needs_dask
+@pytest.mark.slow
+@pytest.mark.ci
+def test_a_lost_scheduler_stops_the_study_in_one_line_and_it_resumes(capfd, monkeypatch, tmp_path):
+    """A scheduler and a worker started as ``dask scheduler`` and ``dask worker`` do; the third
+    chunk kills the scheduler. The command says so in one line (no Dask traceback), exit 1, and
+    the rows written before resume to the in-process answer."""
+    grid = ["sweep", "--pressure", "0:0.2:4", "--payload", "0,2", "--r2", "3,5", "--no-compile", "--no-progress"]
+    here, out = tmp_path / "here.csv", tmp_path / "grid.csv"
+    assert main([*grid, "--out", str(here)]) == EXIT_OK
+    capfd.readouterr()
+    file = tmp_path / "scheduler.json"
+    quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=Path(__file__).resolve().parent.parent)
+    scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+                                  "--no-dashboard", "--scheduler-file", str(file)], **quiet)
+    worker = None
+    try:
+        for _ in range(300):
+            if file.exists() and file.stat().st_size:
+                break
+            time.sleep(0.1)
+        address = json.loads(file.read_text())["address"]
+        worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1", "--no-dashboard"], **quiet)
+
+        class Killing(DaskRunner):
+            def map_ordered(self, fn, args, done=None):
+                return super().map_ordered(_kill_scheduler_at, ((scheduler.pid, i, 2, fn, *a) for i, a in enumerate(args)), done)
+
+        monkeypatch.setattr("esba.distributed.DaskRunner", Killing)
+        assert main([*grid, "--scheduler", address, "--connect-timeout", "30", "--chunk", "3", "--out", str(out)]) == EXIT_FAILED
+        got, err = capfd.readouterr()
+        assert got == "" and err.count("\n") == 1, err  # no Dask log lines, no traceback
+        assert err.startswith(f"esba: error: the connection to the Dask scheduler at {address} was lost while chunk ")
+        assert err.rstrip().endswith(f"the study stops; the rows solved so far are in {out}: rerun with --resume to go on")
+    finally:
+        for process in (worker, scheduler):
+            if process is not None:
+                process.kill()
+                process.wait()
+    kept = read_rows(out)
+    assert len(kept) in (0, 3, 6)  # whole chunks, before the third
+    monkeypatch.undo()
+    assert main([*grid, "--resume", "--out", str(out)]) == EXIT_OK
+    assert out.read_text().split("\n", 1)[1] == here.read_text()
 
 
 # ---------------------------------------------------------------------------------------------

@@ -7,7 +7,7 @@ what is allowed, and exit code 2, before any long computation; a solve that fail
 unstable equilibrium says so and exits 1; a result outside the range the paper's model describes
 is printed with ``esba: warning: ...`` lines (and a ``validity`` list in JSON). Where each
 command writes is decided by :mod:`esba.outputs`. A failure found while a command runs, not in
-its input (a full disk while a study streams its rows), ends with one line
+its input (a study whose Dask scheduler was lost, a full disk), ends with one line
 ``esba: error: ...`` and exit code 1; Ctrl-C ends with ``esba: interrupted`` and exit code 130.
 
 One module per command group (:mod:`esba.cli.scenes`, :mod:`esba.cli.sweep`, ...), each adding its
