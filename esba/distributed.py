@@ -63,6 +63,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
+from .interrupts import interrupts_raised
 from .study import StudyStopped
 
 __all__ = [
@@ -244,7 +245,8 @@ class SerialRunner:
     def map_ordered(self, fn: Callable[..., Any], args: Iterable[tuple], done: Callable[[int], None] | None = None) -> Iterator[Any]:
         """``fn(*a)`` for each ``a`` of ``args``, in order; ``done(i)`` after chunk i is solved."""
         for i, a in enumerate(args):
-            result = fn(*a)
+            with interrupts_raised():  # Ctrl-C inside CasADi may surface as a SystemError
+                result = fn(*a)
             if done is not None:
                 done(i)
             yield result

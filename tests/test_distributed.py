@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 from esba.batch import BatchOptions, compiler
-from esba.cli import EXIT_FAILED, EXIT_OK, EXIT_USAGE, main
+from esba.cli import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, main
 from esba.distributed import DASK_EXTRA, DaskRunner, DistributedError, SerialRunner, open_runner
 from esba.mc_study import monte_carlo_study
 from esba.scene import MAIN_JOB, Payload, Scene
@@ -553,6 +553,41 @@ def test_a_lost_scheduler_stops_the_study_in_one_line_and_it_resumes(capfd, monk
     monkeypatch.undo()
     assert main([*grid, "--resume", "--out", str(out)]) == EXIT_OK
     assert out.read_text().split("\n", 1)[1] == here.read_text()
+
+
+# ---------------------------------------------------------------------------------------------
+# Ctrl-C
+
+
+class _DM:
+    """Stands for a CasADi DM whose conversion to NumPy is hit by Ctrl-C: CasADi's wrapper reports
+    the KeyboardInterrupt as a SystemError."""
+
+    def __array__(self, *args, **kwargs):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("<function DM.__array__ at 0x7f0> returned a result with an exception set") from exc
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress"], "esba: interrupted\n"),
+    (["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress", "--resume", "--out", "{out}"],
+     "esba: interrupted: the rows solved so far are in {out}; rerun with --resume to go on\n"),
+    (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20"], "esba: interrupted\n"),
+    (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", "{out}"],
+     "esba: interrupted: the samples solved so far are in {out}; rerun with --resume to go on\n"),
+])
+def test_ctrl_c_inside_casadis_conversion_to_numpy_is_an_interrupt(capsys, monkeypatch, tmp_path, argv, message):
+    out = str(tmp_path / "s.csv")
+
+    def interrupted(*args, **kwargs):
+        f = lambda block, target: [_DM()] * 7  # noqa: E731
+        return (f, f), "interpreted", 0.0, 0.0
+
+    monkeypatch.setattr("esba.batch.mapped_functions", interrupted)
+    assert main([a.format(out=out) for a in argv]) == EXIT_INTERRUPTED
+    assert capsys.readouterr().err == message.format(out=out)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -23,6 +23,7 @@ import sys
 from typing import Callable, Sequence
 
 from esba import __version__, console
+from esba.interrupts import caused_by_interrupt
 
 from .arguments import Parser, UsageError
 from .bench import add_bench
@@ -85,6 +86,8 @@ def _run(argv: Sequence[str] | None) -> int:
             return EXIT_USAGE
         if isinstance(exc, (BrokenPipeError, MemoryError)) or os.environ.get("ESBA_DEBUG"):
             raise
+        if caused_by_interrupt(exc):  # Ctrl-C that surfaced inside CasADi as a SystemError
+            raise KeyboardInterrupt from None
         if _run_failure(exc):
             print(f"esba: error: {_first_line(exc)}", file=sys.stderr)
             return EXIT_FAILED
