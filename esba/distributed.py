@@ -20,7 +20,8 @@ Before Dask's client is handed a scheduler address, a probe with a hard deadline
 answers there who it is: Dask alone waits for ever on a service that accepts the connection but
 does not answer (a web server), and reads the banner of one that speaks first (SSH) as the size of
 a message, exabytes. While a cluster runs, the ``distributed`` loggers of this process are
-silenced (esba says in one line what happened).
+silenced (esba says in one line what happened), and Ctrl-C while a local cluster starts or closes
+is held until that step is over, then raised.
 
 Every chunk runs through :func:`run_task` with a :class:`ModelKey`: the worker loads the model
 itself with :func:`esba.model.load_model` (once per process, by segment count, effects and
@@ -355,7 +356,9 @@ def open_runner(workers: int | None = None, scheduler: str | None = None, timeou
     processes, or the cluster of the scheduler at ``scheduler``; closed on leaving the block.
 
     While a Dask runner is open, the ``distributed`` loggers of this process are silenced (esba
-    reports what matters itself; ``ESBA_DEBUG=1`` keeps them).
+    reports what matters itself; ``ESBA_DEBUG=1`` keeps them). A Ctrl-C while the cluster starts
+    or closes is held until that step is over, then raised as :class:`KeyboardInterrupt`; after
+    an interrupt the local cluster's worker processes are stopped at once, not waited for.
 
     Raises
     ------
@@ -372,10 +375,14 @@ def open_runner(workers: int | None = None, scheduler: str | None = None, timeou
     require_dask("--workers" if workers is not None else "--scheduler")
     with _quiet_dask_logs():
         client, cluster, description = _connect(workers, scheduler, timeout)
+        interrupted = False
         try:
             yield DaskRunner(client, description)
+        except KeyboardInterrupt:
+            interrupted = True
+            raise
         finally:
-            _close(client, cluster)
+            _close(client, cluster, hurry=interrupted)
 
 
 def _connect(workers: int | None, scheduler: str | None, timeout: float):
@@ -392,21 +399,23 @@ def _connect(workers: int | None, scheduler: str | None, timeout: float):
         _probe_scheduler(scheduler, timeout)  # before Dask's client, which waits for ever on a service that is not Dask
     try:
         if workers is not None:
-            with _workers_ignore_sigint():
+            with _sigint_held():  # a cluster half started could not be closed
                 cluster = LocalCluster(
                     n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", silence_logs=logging.CRITICAL,
                     dashboard_address=None, scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},  # no dashboard, no fixed port
                 )
-            client = Client(cluster)
+                client = Client(cluster)
+                _check_cluster(client)
         else:
-            client = _scheduler_client(scheduler, timeout)
+            with _sigint_held():  # nor a client half connected
+                client = _scheduler_client(scheduler, timeout)
             try:
-                client.wait_for_workers(1, timeout=timeout)
+                client.wait_for_workers(1, timeout=timeout)  # as long as the user asked: Ctrl-C is not held here
             except (OSError, TimeoutError):
                 raise DistributedError(f"--scheduler {scheduler!r}: the scheduler has no worker after {timeout:g} s: start some (dask worker {scheduler})") from None
-        _check_cluster(client)
-    except BaseException:
-        _close(client, cluster)
+            _check_cluster(client)
+    except BaseException as exc:
+        _close(client, cluster, hurry=isinstance(exc, KeyboardInterrupt))
         raise
     return client, cluster, description
 
@@ -468,15 +477,39 @@ def _probe_scheduler(address: str, timeout: float) -> None:
         raise DistributedError(f"{flag}: is not a Dask scheduler" + (f" but a Dask {kind}" if isinstance(kind, str) and kind.isidentifier() else ""))
 
 
-def _close(client, cluster) -> None:
-    """Close the client and the local cluster (a client whose scheduler is gone closes with errors: they are over)."""
-    if client is not None:
-        try:
-            client.close()
-        except Exception:  # noqa: BLE001 - the scheduler is gone
-            pass
-    if cluster is not None:
-        cluster.close()
+def _close(client, cluster, hurry: bool = False) -> None:
+    """Close the client and the local cluster. With ``hurry`` (after an interrupt) each waits a
+    few seconds at most, and the local cluster's worker processes still alive then are killed.
+    A Ctrl-C while closing is held until the cluster is closed, then raised."""
+    with _sigint_held():
+        processes = _worker_processes(cluster) if hurry and cluster is not None else []
+        if client is not None:
+            try:
+                client.close(timeout=2 if hurry else None)
+            except Exception:  # noqa: BLE001 - a client whose scheduler is gone closes with errors
+                pass
+        if cluster is not None:
+            try:
+                cluster.close(timeout=3 if hurry else None)
+            except Exception:  # noqa: BLE001 - workers that do not answer are killed below
+                pass
+        for process in processes:
+            try:
+                if process.is_alive():
+                    process.kill()
+            except (OSError, ValueError, AssertionError):  # pragma: no cover - gone meanwhile
+                pass
+
+
+def _worker_processes(cluster) -> list:
+    """The ``multiprocessing.Process`` of each worker of a local cluster that has one (Dask's
+    nanny -> worker process -> process; an empty list where Dask keeps them otherwise)."""
+    out = []
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        process = getattr(getattr(getattr(nanny, "process", None), "process", None), "_process", None)
+        if process is not None and hasattr(process, "kill") and hasattr(process, "is_alive"):
+            out.append(process)
+    return out
 
 
 @contextmanager
@@ -502,18 +535,39 @@ def _quiet_dask_logs() -> Iterator[None]:
 
 
 @contextmanager
-def _workers_ignore_sigint() -> Iterator[None]:
-    """Worker processes started inside the block ignore SIGINT (an ignored signal stays ignored in
-    a spawned process): Ctrl-C stops the study in this process, which closes the cluster, instead
-    of every worker printing its own KeyboardInterrupt."""
+def _sigint_held() -> Iterator[None]:
+    """Hold Ctrl-C (SIGINT) inside the block and raise it as :class:`KeyboardInterrupt` at its end.
+
+    A cluster half started or half closed cannot be cleaned up, so an interrupt waits for the
+    step to finish. SIGINT is also blocked in this thread inside the block: the threads started
+    in it, and the worker processes they start, inherit the blocked signal, so the terminal's
+    Ctrl-C reaches only this process, which stops the study and closes the cluster, instead of
+    every worker printing its own KeyboardInterrupt.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        from multiprocessing import resource_tracker
+
+        resource_tracker.ensure_running()  # started later, it would unblock SIGINT in this thread (bpo-33613)
+    caught: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    mask = getattr(signal, "pthread_sigmask", None)
+    blocked = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask is not None else None
     try:
         yield
     finally:
+        if mask is not None:
+            mask(signal.SIG_SETMASK, blocked)  # a SIGINT that waited is delivered now ...
+        _handle_signals()  # ... and its handler, the one above, runs here
         signal.signal(signal.SIGINT, previous)
+        if caught:
+            raise KeyboardInterrupt
+
+
+def _handle_signals() -> None:
+    """A Python-level call: the interpreter runs pending signal handlers before it returns."""
 
 
 def _check_cluster(client) -> None:

@@ -559,6 +559,57 @@ def test_a_lost_scheduler_stops_the_study_in_one_line_and_it_resumes(capfd, monk
 # Ctrl-C
 
 
+@needs_dask
+def test_ctrl_c_while_a_local_cluster_starts_is_raised_and_the_cluster_stopped():
+    """The interrupt lands while the cluster starts (or, on a fast machine, just after): it is not
+    lost, it comes promptly, and no worker process is left."""
+    import multiprocessing
+
+    before = set(multiprocessing.active_children())
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    t0 = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        timer.start()
+        with open_runner(workers=2):
+            time.sleep(60)  # the interrupt is raised here at the latest
+    assert time.monotonic() - t0 < 30
+    assert set(multiprocessing.active_children()) <= before
+
+
+@needs_dask
+@pytest.mark.slow
+@pytest.mark.ci
+def test_cli_ctrl_c_while_the_cluster_starts_exits_130_promptly(tmp_path):
+    """``esba sweep --workers 2`` interrupted as by the terminal's Ctrl-C (SIGINT to its process
+    group, workers included) once its first worker process exists: the message, exit 130, no
+    table, within seconds, and not a word from the workers."""
+    argv = [sys.executable, "-m", "esba", "sweep", "--pressure", "0:0.2:100", "--payload", "0:2:40", "-n", "8", "--workers", "2", "--no-progress"]
+    process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, start_new_session=True)
+    tasks = Path(f"/proc/{process.pid}/task")
+
+    def children() -> list[str]:  # of every thread: Dask starts its workers from threads of its own
+        found = []
+        for task in list(tasks.glob("*")):
+            try:
+                found += (task / "children").read_text().split()
+            except OSError:
+                pass
+        return found
+
+    for _ in range(1500):
+        if not tasks.exists() or children() or process.poll() is not None:
+            break
+        time.sleep(0.02)
+    if not tasks.exists():
+        time.sleep(1.0)  # no /proc: about when the cluster starts
+    assert process.poll() is None, "the study ended before it could be interrupted"
+    os.killpg(process.pid, signal.SIGINT)
+    t0 = time.monotonic()
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == EXIT_INTERRUPTED and out == "" and err == "esba: interrupted\n", (process.returncode, out, err)
+    assert time.monotonic() - t0 < 15
+
+
 class _DM:
     """Stands for a CasADi DM whose conversion to NumPy is hit by Ctrl-C: CasADi's wrapper reports
     the KeyboardInterrupt as a SystemError."""

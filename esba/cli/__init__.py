@@ -104,13 +104,22 @@ def _run(argv: Sequence[str] | None) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit code."""
+    """Run the command line; return the exit code.
+
+    Called without ``argv`` (as the ``esba`` program), a Ctrl-C after the command returned, while
+    Python still runs (threads joined, exit handlers), ends at once with ``esba: interrupted`` and
+    exit code 130; in the interpreter's last teardown, where Python would die by the signal with
+    no word, it is ignored: the output is complete and the command's exit code stands.
+    """
     console.show_library_messages()
     try:
-        return console.run(lambda: _run(argv))
+        code = console.run(lambda: _run(argv))
     except KeyboardInterrupt:
         print("esba: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        code = EXIT_INTERRUPTED
     except MemoryError:
         print("esba: out of memory: ask for a smaller run", file=sys.stderr)
-        return EXIT_FAILED
+        code = EXIT_FAILED
+    if argv is None:
+        console.exit_on_late_interrupt(EXIT_INTERRUPTED, announce=code != EXIT_INTERRUPTED)
+    return code
