@@ -48,6 +48,7 @@ import numpy as np
 from .batch_compile import compile_library, compiler, decide_backend, mapped_functions, parameter_indices, prepare
 from .batch_options import DEFAULT_BATCH_OPTIONS, TAIL_CHUNK, BatchOptions, BatchOptionsError, batch_bytes, check_size
 from .equilibrium import EquilibriumError, solve, stability_verdicts
+from .interrupts import interrupts_raised
 from .model import Model, domain_lower_bound, near_domain_bound
 from .ramp import CONTRACTION
 from .scene import Scene, SceneError
@@ -221,9 +222,10 @@ def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, op
             pad = chunk - (stop - start)
             block = np.hstack([block, np.repeat(block[:, -1:], pad, axis=1)])
             tgt = np.concatenate([tgt, np.repeat(tgt[-1:], pad)])
-        res = fun(block, tgt.reshape(1, -1))
-        for k, v in zip(outs, res):
-            outs[k].append(np.asarray(v)[:, : stop - start])
+        with interrupts_raised():  # a Ctrl-C inside CasADi's conversion to NumPy surfaces as a SystemError
+            res = fun(block, tgt.reshape(1, -1))
+            for k, v in zip(outs, res):
+                outs[k].append(np.asarray(v)[:, : stop - start])
         if bar is not None:
             bar.update(stop - start)
     data = {k: np.hstack(v) for k, v in outs.items()}

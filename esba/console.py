@@ -4,6 +4,10 @@
   to stdout raises :class:`BrokenPipeError`, and Python would print a traceback (or "Exception
   ignored ...") at exit. :func:`run` ends such a command quietly with :data:`EXIT_PIPE` (128 +
   SIGPIPE, what a shell reports for a command killed by a closed pipe).
+* A Ctrl-C after the command is done, while the interpreter shuts down, would kill the process
+  by the signal with no word (Python gives SIGINT back to the system for its last teardown):
+  :func:`exit_on_late_interrupt` makes it end as any interrupt does while Python still runs,
+  and ignored in that last teardown.
 * Library code never prints; it logs to the ``esba`` logger (a model generated on demand, a
   damaged cache file replaced). :func:`show_library_messages` sends those lines to stderr as
   ``esba: ...``.
@@ -11,12 +15,14 @@
 
 from __future__ import annotations
 
+import atexit
 import logging
 import os
+import signal
 import sys
 from typing import Callable
 
-__all__ = ["EXIT_PIPE", "run", "show_library_messages", "LOGGER"]
+__all__ = ["EXIT_PIPE", "run", "show_library_messages", "exit_on_late_interrupt", "LOGGER"]
 
 #: Exit code after the reader closed stdout (128 + SIGPIPE).
 EXIT_PIPE = 141
@@ -65,3 +71,35 @@ def show_library_messages(level: int = logging.INFO) -> None:
         logger.addHandler(_Handler())
     logger.setLevel(level)
     logger.propagate = False
+
+
+def exit_on_late_interrupt(code: int, announce: bool = True) -> None:
+    """For the program's last moments, after its command returned: SIGINT ends the process at once
+    with ``code`` (after ``esba: interrupted`` on stderr when ``announce``) while Python code still
+    runs (threads joined, exit handlers); in the interpreter's last teardown, where Python no
+    longer runs signal handlers and would die by the signal with no word, it is ignored."""
+
+    def handler(signum, frame) -> None:
+        if announce:
+            os.write(2, b"esba: interrupted\n")
+        os._exit(code)
+
+    global _LATE
+    try:
+        signal.signal(signal.SIGINT, handler)
+    except ValueError:  # pragma: no cover - not the main thread
+        return
+    _LATE = True
+
+
+_LATE = False
+
+
+def _ignore_interrupts_at_teardown() -> None:
+    """The last exit handler (registered when this module is imported, before Dask's): after it
+    only the interpreter's C teardown is left."""
+    if _LATE:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+atexit.register(_ignore_interrupts_at_teardown)

@@ -12,7 +12,16 @@ results back **in chunk order**, whatever order they finish in:
   dask-jobqueue on SLURM/PBS, ...). At most ``window`` chunks are in flight or waiting to be
   handed back, so neither the scheduler nor this process holds more than that. When a worker
   dies, the scheduler runs its chunks again on another worker (a chunk's result is taken once:
-  no row is lost or repeated); a chunk that raises an error stops the study with that error.
+  no row is lost or repeated); a chunk that raises an error stops the study with that error, and
+  a chunk whose worker died at each try, or a lost connection to the scheduler, stops it with
+  :class:`esba.study.StudyStopped` (a failure at run time, not bad input).
+
+Before Dask's client is handed a scheduler address, a probe with a hard deadline asks what
+answers there who it is: Dask alone waits for ever on a service that accepts the connection but
+does not answer (a web server), and reads the banner of one that speaks first (SSH) as the size of
+a message, exabytes. While a cluster runs, the ``distributed`` loggers of this process are
+silenced (esba says in one line what happened), and Ctrl-C while a local cluster starts or closes
+is held until that step is over, then raised.
 
 Every chunk runs through :func:`run_task` with a :class:`ModelKey`: the worker loads the model
 itself with :func:`esba.model.load_model` (once per process, by segment count, effects and
@@ -48,11 +57,15 @@ import signal
 import socket
 import threading
 import uuid
+from concurrent.futures import CancelledError
 from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
+
+from .interrupts import interrupts_raised
+from .study import StudyStopped
 
 __all__ = [
     "DistributedError",
@@ -233,7 +246,8 @@ class SerialRunner:
     def map_ordered(self, fn: Callable[..., Any], args: Iterable[tuple], done: Callable[[int], None] | None = None) -> Iterator[Any]:
         """``fn(*a)`` for each ``a`` of ``args``, in order; ``done(i)`` after chunk i is solved."""
         for i, a in enumerate(args):
-            result = fn(*a)
+            with interrupts_raised():  # Ctrl-C inside CasADi may surface as a SystemError
+                result = fn(*a)
             if done is not None:
                 done(i)
             yield result
@@ -265,8 +279,14 @@ class DaskRunner:
         """``fn(*a)`` for each ``a`` of ``args`` on the cluster, yielded in order; ``done(i)`` as chunk i finishes.
 
         A chunk whose worker dies is run again by the scheduler (up to Dask's
-        ``distributed.scheduler.allowed-failures``, then ``KilledWorker`` is raised); each chunk's
-        result is taken once. Leaving the generator early cancels the chunks still queued.
+        ``distributed.scheduler.allowed-failures``); each chunk's result is taken once. Leaving
+        the generator early cancels the chunks still queued.
+
+        Raises
+        ------
+        StudyStopped
+            when a chunk's worker died every time it was started, or the connection to the
+            scheduler was lost (the chunks handed back before stay handed back).
         """
         import dask
         from distributed import KilledWorker, as_completed
@@ -305,16 +325,29 @@ class DaskRunner:
                     ready[i] = fut.result()
                 except KilledWorker:
                     tries = dask.config.get("distributed.scheduler.allowed-failures") + 1
-                    raise DistributedError(
-                        f"chunk {i} was started {tries} times and each time its worker process died "
-                        "(out of memory?): the study stops; the chunks before it are kept"
-                    ) from None
+                    raise StudyStopped(f"chunk {i} was started {tries} times and each time its worker process died (out of memory?): the study stops") from None
+                except CancelledError as exc:
+                    raise StudyStopped(self._lost(i, str(getattr(exc, "reason", "") or ""))) from None
+                except OSError:
+                    if fut.status == "error":
+                        raise  # the chunk itself raised it on its worker
+                    raise StudyStopped(self._lost(i, "connection-lost")) from None  # its result could not be fetched
                 fut.release()
                 if done is not None:
                     done(i)
         finally:
-            if pending:
-                self.client.cancel([f for _, f in pending.values()])
+            if pending and self.client.status == "running":
+                try:
+                    self.client.cancel([f for _, f in pending.values()])
+                except Exception:  # noqa: BLE001 - the cluster is going away; nothing left to cancel there
+                    pass
+
+    def _lost(self, i: int, reason: str) -> str:
+        """Why chunk i did not come back: the connection to the scheduler was lost, or it was cancelled."""
+        address = getattr(getattr(self.client, "scheduler", None), "address", None) or "?"
+        if "connection-lost" in reason or self.client.status != "running":
+            return f"the connection to the Dask scheduler at {address} was lost while chunk {i} was being solved (the scheduler stopped?): the study stops"
+        return f"chunk {i} was cancelled on the Dask cluster at {address} ({reason or 'by another client?'}): the study stops"
 
 
 @contextmanager
@@ -322,11 +355,17 @@ def open_runner(workers: int | None = None, scheduler: str | None = None, timeou
     """The runner of a study: in this process (neither given), a local cluster of ``workers``
     processes, or the cluster of the scheduler at ``scheduler``; closed on leaving the block.
 
+    While a Dask runner is open, the ``distributed`` loggers of this process are silenced (esba
+    reports what matters itself; ``ESBA_DEBUG=1`` keeps them). A Ctrl-C while the cluster starts
+    or closes is held until that step is over, then raised as :class:`KeyboardInterrupt`; after
+    an interrupt the local cluster's worker processes are stopped at once, not waited for.
+
     Raises
     ------
     DistributedError
-        for both given, Dask missing, a scheduler that does not answer within ``timeout`` s or has
-        no worker by then, or workers with another esba (:func:`code_digest`) or CasADi.
+        for both given, Dask missing, an address where no Dask scheduler answers within
+        ``timeout`` s (nothing, or another service), a scheduler with no worker by then, or
+        workers with another esba (:func:`code_digest`) or CasADi.
     """
     if workers is None and scheduler is None:
         yield SerialRunner()
@@ -334,53 +373,201 @@ def open_runner(workers: int | None = None, scheduler: str | None = None, timeou
     if workers is not None and scheduler is not None:
         raise DistributedError("--workers N starts a local cluster and --scheduler ADDRESS uses an existing one: give one of the two")
     require_dask("--workers" if workers is not None else "--scheduler")
+    with _quiet_dask_logs():
+        client, cluster, description = _connect(workers, scheduler, timeout)
+        interrupted = False
+        try:
+            yield DaskRunner(client, description)
+        except KeyboardInterrupt:
+            interrupted = True
+            raise
+        finally:
+            _close(client, cluster, hurry=interrupted)
+
+
+def _connect(workers: int | None, scheduler: str | None, timeout: float):
+    """The client (and the local cluster) of :func:`open_runner`, checked; closed again on any failure."""
     from distributed import Client, LocalCluster
 
-    cluster = None
+    cluster = client = None
     if workers is not None:
         workers = check_workers(workers)
-        with _workers_ignore_sigint():
-            cluster = LocalCluster(
-                n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", silence_logs=logging.ERROR,
-                dashboard_address=None, scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},  # no dashboard, no fixed port
-            )
-        client = Client(cluster)
         description = f"on a local Dask cluster of {workers} worker process{'es' if workers > 1 else ''} (1 thread each)"
     else:
         scheduler = check_address(scheduler)
-        try:
-            client = Client(scheduler, timeout=timeout)
-        except (OSError, TimeoutError) as exc:
-            raise DistributedError(f"--scheduler {scheduler!r}: no Dask scheduler answered within {timeout:g} s ({type(exc).__name__})") from None
-        try:
-            client.wait_for_workers(1, timeout=timeout)
-        except (OSError, TimeoutError):
-            client.close()
-            raise DistributedError(f"--scheduler {scheduler!r}: the scheduler has no worker after {timeout:g} s: start some (dask worker {scheduler})") from None
         description = f"on the Dask cluster at {scheduler}"
+        _probe_scheduler(scheduler, timeout)  # before Dask's client, which waits for ever on a service that is not Dask
     try:
-        _check_cluster(client)
-        runner = DaskRunner(client, description)
-        yield runner
-    finally:
-        client.close()
+        if workers is not None:
+            with _sigint_held():  # a cluster half started could not be closed
+                cluster = LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", silence_logs=logging.CRITICAL,
+                    dashboard_address=None, scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},  # no dashboard, no fixed port
+                )
+                client = Client(cluster)
+                _check_cluster(client)
+        else:
+            with _sigint_held():  # nor a client half connected
+                client = _scheduler_client(scheduler, timeout)
+            try:
+                client.wait_for_workers(1, timeout=timeout)  # as long as the user asked: Ctrl-C is not held here
+            except (OSError, TimeoutError):
+                raise DistributedError(f"--scheduler {scheduler!r}: the scheduler has no worker after {timeout:g} s: start some (dask worker {scheduler})") from None
+            _check_cluster(client)
+    except BaseException as exc:
+        _close(client, cluster, hurry=isinstance(exc, KeyboardInterrupt))
+        raise
+    return client, cluster, description
+
+
+def _scheduler_client(scheduler: str, timeout: float):
+    """A client of the scheduler at ``scheduler`` (that answered :func:`_probe_scheduler` a moment ago)."""
+    from distributed import Client
+
+    try:
+        return Client(scheduler, timeout=timeout)
+    except (OSError, TimeoutError, MemoryError, ValueError):
+        raise DistributedError(f"--scheduler {scheduler!r}: no Dask scheduler answered within {timeout:g} s") from None
+
+
+def _probe_scheduler(address: str, timeout: float) -> None:
+    """Ask what answers at ``address`` who it is (Dask's ``identity``), within ``timeout`` seconds.
+
+    Dask's own client waits without limit for a service that accepts the connection but does not
+    answer as Dask does, and allocates whatever size a service that speaks first (an SSH banner)
+    seems to announce; this probe runs in a thread of its own with a hard deadline and turns every
+    such answer into one :class:`DistributedError`.
+    """
+    import asyncio
+
+    from distributed.comm import connect
+    from distributed.comm.core import CommClosedError
+    from distributed.security import Security
+
+    async def identity():
+        comm = await connect(address, timeout=timeout, **Security().get_connection_args("client"))
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            reply = await comm.read()
+            await comm.write({"op": "close", "reply": False})
+            return reply
+        finally:
+            comm.abort()
+
+    outcome: dict[str, Any] = {}
+
+    def probe() -> None:
+        try:
+            outcome["reply"] = asyncio.run(asyncio.wait_for(identity(), timeout))
+        except BaseException as exc:  # noqa: BLE001 - every way of failing is reported below
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=probe, name="esba scheduler probe", daemon=True)
+    thread.start()
+    thread.join(timeout + 5.0)  # the probe keeps its own deadline; this one is for a stuck name lookup
+    flag = f"--scheduler {address!r}"
+    if "reply" not in outcome:
+        exc = outcome.get("error")
+        if exc is None or isinstance(exc, (asyncio.TimeoutError, TimeoutError)) or (isinstance(exc, OSError) and not isinstance(exc, CommClosedError)):
+            raise DistributedError(f"{flag}: no Dask scheduler answered within {timeout:g} s")
+        raise DistributedError(f"{flag}: is not a Dask scheduler (the service there does not speak Dask's protocol)")
+    reply = outcome["reply"]
+    kind = reply.get("type") if isinstance(reply, dict) else None
+    if kind != "Scheduler":
+        raise DistributedError(f"{flag}: is not a Dask scheduler" + (f" but a Dask {kind}" if isinstance(kind, str) and kind.isidentifier() else ""))
+
+
+def _close(client, cluster, hurry: bool = False) -> None:
+    """Close the client and the local cluster. With ``hurry`` (after an interrupt) each waits a
+    few seconds at most, and the local cluster's worker processes still alive then are killed.
+    A Ctrl-C while closing is held until the cluster is closed, then raised."""
+    with _sigint_held():
+        processes = _worker_processes(cluster) if hurry and cluster is not None else []
+        if client is not None:
+            try:
+                client.close(timeout=2 if hurry else None)
+            except Exception:  # noqa: BLE001 - a client whose scheduler is gone closes with errors
+                pass
         if cluster is not None:
-            cluster.close()
+            try:
+                cluster.close(timeout=3 if hurry else None)
+            except Exception:  # noqa: BLE001 - workers that do not answer are killed below
+                pass
+        for process in processes:
+            try:
+                if process.is_alive():
+                    process.kill()
+            except (OSError, ValueError, AssertionError):  # pragma: no cover - gone meanwhile
+                pass
+
+
+def _worker_processes(cluster) -> list:
+    """The ``multiprocessing.Process`` of each worker of a local cluster that has one (Dask's
+    nanny -> worker process -> process; an empty list where Dask keeps them otherwise)."""
+    out = []
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        process = getattr(getattr(getattr(nanny, "process", None), "process", None), "_process", None)
+        if process is not None and hasattr(process, "kill") and hasattr(process, "is_alive"):
+            out.append(process)
+    return out
 
 
 @contextmanager
-def _workers_ignore_sigint() -> Iterator[None]:
-    """Worker processes started inside the block ignore SIGINT (an ignored signal stays ignored in
-    a spawned process): Ctrl-C stops the study in this process, which closes the cluster, instead
-    of every worker printing its own KeyboardInterrupt."""
-    if threading.current_thread() is not threading.main_thread():
+def _quiet_dask_logs() -> Iterator[None]:
+    """Silence the ``distributed`` loggers of this process inside the block (not with ``ESBA_DEBUG``).
+
+    A scheduler lost, a worker killed and its chunk run again, a cluster closed after Ctrl-C: Dask
+    logs each as ERROR lines with tracebacks, and esba says what happened in one line itself.
+    """
+    if os.environ.get("ESBA_DEBUG"):
         yield
         return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    names = ["distributed", *sorted(n for n in list(logging.root.manager.loggerDict) if n.startswith("distributed."))]
+    saved = [(logging.getLogger(n), logging.getLogger(n).level) for n in names]
+    for logger, level in saved:
+        if level != logging.NOTSET or logger.name == "distributed":
+            logger.setLevel(logging.CRITICAL + 1)
     try:
         yield
     finally:
+        for logger, level in saved:
+            logger.setLevel(level)
+
+
+@contextmanager
+def _sigint_held() -> Iterator[None]:
+    """Hold Ctrl-C (SIGINT) inside the block and raise it as :class:`KeyboardInterrupt` at its end.
+
+    A cluster half started or half closed cannot be cleaned up, so an interrupt waits for the
+    step to finish. SIGINT is also blocked in this thread inside the block: the threads started
+    in it, and the worker processes they start, inherit the blocked signal, so the terminal's
+    Ctrl-C reaches only this process, which stops the study and closes the cluster, instead of
+    every worker printing its own KeyboardInterrupt.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    if hasattr(signal, "pthread_sigmask"):
+        from multiprocessing import resource_tracker
+
+        resource_tracker.ensure_running()  # started later, it would unblock SIGINT in this thread (bpo-33613)
+    caught: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    mask = getattr(signal, "pthread_sigmask", None)
+    blocked = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask is not None else None
+    try:
+        yield
+    finally:
+        if mask is not None:
+            mask(signal.SIG_SETMASK, blocked)  # a SIGINT that waited is delivered now ...
+        _handle_signals()  # ... and its handler, the one above, runs here
         signal.signal(signal.SIGINT, previous)
+        if caught:
+            raise KeyboardInterrupt
+
+
+def _handle_signals() -> None:
+    """A Python-level call: the interpreter runs pending signal handlers before it returns."""
 
 
 def _check_cluster(client) -> None:

@@ -18,6 +18,8 @@ An output path is checked up front (:func:`check_file`, :func:`check_folder`,
 temporary file, which also catches read-only file systems and works for root), nothing of the
 wrong kind may be in the way, and a figure's suffix must be a format matplotlib writes. A bad
 path raises :class:`OutputError` with one line naming the flag, the path and what is allowed.
+A write that fails while the command runs, after the checks (a full disk, a quota), raises
+:class:`WriteFailed` naming the file (:func:`write_text`).
 
 Examples
 --------
@@ -46,6 +48,8 @@ from pathlib import Path
 
 __all__ = [
     "OutputError",
+    "WriteFailed",
+    "write_text",
     "PACKAGE_ROOT",
     "checkout_root",
     "docs_dir",
@@ -67,6 +71,39 @@ DEFAULT_FIGURE_SUFFIX = ".png"
 
 class OutputError(ValueError):
     """An output path that cannot be written: the message names the flag, the path and why."""
+
+
+class WriteFailed(RuntimeError):
+    """An output that could not be written while the command ran (a full disk, a quota, an I/O
+    error): not bad input; the message names the file."""
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path``; a write that fails leaves no half-written file.
+
+    Raises
+    ------
+    WriteFailed
+        naming the file and the system's reason.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> write_text(pathlib.Path(tempfile.mkdtemp()) / "a.json", "{}").read_text()
+    '{}'
+    """
+    path = Path(path)
+    try:
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(text)
+    except OSError as exc:
+        try:
+            if path.is_file():
+                path.unlink()
+        except OSError:  # pragma: no cover - the folder went away meanwhile
+            pass
+        raise WriteFailed(f"{path}: cannot write ({exc.strerror or exc})") from None
+    return path
 
 
 def is_checkout(root: Path = PACKAGE_ROOT) -> bool:

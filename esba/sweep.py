@@ -44,7 +44,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from . import checks, jsonsafe, resolution
+from . import checks, jsonsafe, outputs, resolution
 from .batch import BatchOptions, check_size, decide_backend, solve_arrays
 from .equilibrium import DEFAULT_OPTIONS, EquilibriumError, pressure_for_angle, solve
 from .loading import follow
@@ -598,8 +598,7 @@ class SweepResult:
             text = jsonsafe.dumps(self.to_dict(), indent=1)
         else:
             raise SweepError(f"output {str(path)!r}: expected a .csv or .json file")
-        path.write_text(text, encoding="utf-8")
-        return path
+        return outputs.write_text(path, text)  # WriteFailed (one line naming the file) when the disk is full
 
 
 def sweep(

@@ -8,22 +8,29 @@ The Dask tests use a local cluster of 2 worker processes (one thread each), as C
 from __future__ import annotations
 
 import csv
+import errno
 import importlib.util
 import io
 import json
 import os
+import signal
 import socket
+import subprocess
 import sys
+import threading
+import time
+from contextlib import contextmanager
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from esba.batch import BatchOptions, compiler
-from esba.cli import EXIT_OK, EXIT_USAGE, main
+from esba.cli import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, main
 from esba.distributed import DASK_EXTRA, DaskRunner, DistributedError, SerialRunner, open_runner
 from esba.mc_study import monte_carlo_study
 from esba.scene import MAIN_JOB, Payload, Scene
-from esba.study import HEADER, StudyError
+from esba.study import HEADER, StudyError, StudyFile, StudyStopped
 from esba.sweep import plan_sweep, sweep
 from esba.sweep_study import read_rows, sweep_study
 from esba.uncertainty import MonteCarloOptions, monte_carlo, parse_sigma, resolve_sigmas
@@ -168,15 +175,17 @@ class _KillingRunner(DaskRunner):
 
 
 @needs_dask
-def test_a_killed_workers_chunk_is_solved_again_and_every_row_written_once(reference, tmp_path):
+def test_a_killed_workers_chunk_is_solved_again_and_every_row_written_once(capfd, reference, tmp_path):
     marker = tmp_path / "killed"
     out = tmp_path / "grid.csv"
+    capfd.readouterr()
     with open_runner(workers=2) as runner:
         pids = set(runner.client.run(os.getpid).values())
         study = sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=_KillingRunner(runner, marker), chunk=8, out=out)
     assert marker.exists() and int(marker.read_text()) in pids  # a worker process did die mid-study
     assert study.chunks == 12
     assert read_rows(out) == reference.rows()  # nothing lost, nothing twice, in order
+    assert "distributed." not in capfd.readouterr().err  # Dask's log lines about it ("Couldn't gather keys", ...) are silenced
 
 
 # ---------------------------------------------------------------------------------------------
@@ -283,7 +292,9 @@ def test_cli_sweep_on_workers_writes_the_in_process_rows(capsys, tmp_path):
     assert main(["sweep", *grid, "--workers", "2", "--json"]) == EXIT_OK  # rows gathered in memory
     gathered = json.loads(capsys.readouterr().out)
     assert main(["sweep", *grid, "--workers", "2", "--out", str(there), "--json"]) == EXIT_OK  # rows in the file only
-    streamed = json.loads(capsys.readouterr().out)
+    out, err = capsys.readouterr()
+    streamed = json.loads(out)
+    assert f"esba: {there} held 16 rows of this study; starting over (give --resume to continue it)\n" in err
     assert gathered["rows"] == alone["rows"] == read_rows(there) and len(alone["rows"]) == 16 and "rows" not in streamed
     assert gathered["study"]["workers"] == streamed["study"]["workers"] == 2 and streamed["out"] == str(there)
     assert streamed["counts"] == gathered["counts"] == alone["counts"]
@@ -383,13 +394,362 @@ class _AlwaysKillingRunner(DaskRunner):
         return super().map_ordered(_always_kill, ((fn, *a) for a in args), done)
 
 
+def _runner_as(make):
+    """A stand-in for esba.distributed.open_runner that yields ``make()``'s runner (for the CLI)."""
+
+    @contextmanager
+    def fake(workers=None, scheduler=None, timeout=10.0):
+        yield make()
+
+    return fake
+
+
 @needs_dask
-def test_a_chunk_that_always_kills_its_worker_stops_the_study_with_a_message(tmp_path):
+def test_a_chunk_that_always_kills_its_worker_stops_the_study_with_a_message(capsys, monkeypatch, tmp_path):
     out = tmp_path / "grid.csv"
+    grid = ["sweep", "--pressure", "0:0.3:40", "--no-compile", "--no-progress", "--chunk", "50", "--workers", "2"]
     with open_runner(workers=2) as runner:
-        with pytest.raises(DistributedError, match=r"chunk \d+ was started 4 times and each time its worker process died"):
+        with pytest.raises(StudyStopped, match=r"chunk \d+ was started 4 times and each time its worker process died") as info:
             sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=_AlwaysKillingRunner(runner), chunk=50, out=out)
-    assert read_rows(out) == []  # the header is there, and no row: --resume starts from the first chunk
+        assert not isinstance(info.value, ValueError)  # a failure at run time, not bad input
+        assert read_rows(out) == []  # the header is there, and no row: --resume starts from the first chunk
+        # the command line: exit 1, and what is kept only when the rows stream to a file
+        monkeypatch.setattr("esba.distributed.open_runner", _runner_as(lambda: _AlwaysKillingRunner(runner)))
+        assert main(grid) == EXIT_FAILED
+        out_text, err = capsys.readouterr()
+        assert out_text == "" and err.count("\n") == 1 and err.startswith("esba: error: chunk 0 was started 4 times"), err
+        assert "kept" not in err and "so far" not in err and "--resume" not in err, err
+        assert main([*grid, "--out", str(out)]) == EXIT_FAILED
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.rstrip().endswith(f"the study stops; the rows solved so far are in {out}: rerun with --resume to go on"), err
+
+
+# ---------------------------------------------------------------------------------------------
+# a --scheduler address where no Dask scheduler answers
+
+
+@contextmanager
+def _service(kind: str):
+    """A TCP service on a free port of 127.0.0.1 that is not Dask: ``silent`` accepts connections
+    and never answers, ``ssh`` speaks first (a banner), ``http`` is Python's HTTP server."""
+    if kind == "http":
+        from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+        class Quiet(BaseHTTPRequestHandler):
+            def log_message(self, *args) -> None:
+                pass
+
+        server = ThreadingHTTPServer(("127.0.0.1", 0), Quiet)
+        thread = threading.Thread(target=server.serve_forever, daemon=True)
+        thread.start()
+        try:
+            yield f"tcp://127.0.0.1:{server.server_address[1]}"
+        finally:
+            server.shutdown()
+            server.server_close()
+        return
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(8)
+    listener.settimeout(0.1)
+    conns, stop = [], threading.Event()
+
+    def serve() -> None:
+        while not stop.is_set():
+            try:
+                conn, _ = listener.accept()
+            except OSError:
+                continue
+            conns.append(conn)
+            if kind == "ssh":
+                conn.sendall(b"SSH-2.0-OpenSSH_9.6p1 Ubuntu-3ubuntu13.5\r\n")
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    try:
+        yield f"tcp://127.0.0.1:{listener.getsockname()[1]}"
+    finally:
+        stop.set()
+        thread.join()
+        for conn in conns:
+            conn.close()
+        listener.close()
+
+
+@needs_dask
+@pytest.mark.parametrize("kind, needle", [
+    ("silent", "no Dask scheduler answered within 1 s"),
+    ("http", "no Dask scheduler answered within 1 s"),  # Dask alone waits for ever
+    ("ssh", "is not a Dask scheduler"),  # Dask alone reads the banner as a frame size: exabytes
+])
+def test_cli_scheduler_address_of_another_service_is_one_line_exit_2(capsys, kind, needle):
+    with _service(kind) as address:
+        t0 = time.monotonic()
+        err = _one_line_error(capsys, ["sweep", "--pressure", "0.1", "--scheduler", address, "--connect-timeout", "1"], needle)
+        assert time.monotonic() - t0 < 30  # it returns: the timeout is kept
+    assert err.startswith(f"esba: error: --scheduler '{address}': ")
+
+
+@needs_dask
+def test_cli_sweep_on_a_scheduler_address_and_a_workers_address_refused(capsys, cluster, tmp_path):
+    grid = ["--pressure", "0:0.2:4", "--payload", "0,2", "--no-compile", "--no-progress"]
+    here, there = tmp_path / "here.csv", tmp_path / "there.csv"
+    assert main(["sweep", *grid, "--out", str(here)]) == EXIT_OK
+    address = cluster.client.scheduler.address
+    assert main(["sweep", *grid, "--scheduler", address, "--chunk", "3", "--out", str(there)]) == EXIT_OK
+    out, err = capsys.readouterr()
+    assert f"on the Dask cluster at {address}" in out and there.read_text().split("\n", 1)[1] == here.read_text()
+    assert "error" not in err and "distributed." not in err
+    worker = min(cluster.client.scheduler_info()["workers"])
+    _one_line_error(capsys, ["sweep", *grid, "--scheduler", worker], f"--scheduler '{worker}': is not a Dask scheduler but a Dask Worker")
+
+
+# ---------------------------------------------------------------------------------------------
+# a scheduler lost mid-study
+
+
+def _kill_scheduler_at(pid: int, i: int, k: int, fn, *args):
+    """On the worker: from chunk ``k`` on, kill the scheduler's process first."""
+    if i >= k:
+        os.kill(pid, signal.SIGKILL)
+        time.sleep(1.0)
+    return fn(*args)
+
+
+@needs_dask
+@pytest.mark.slow
+@pytest.mark.ci
+def test_a_lost_scheduler_stops_the_study_in_one_line_and_it_resumes(capfd, monkeypatch, tmp_path):
+    """A scheduler and a worker started as ``dask scheduler`` and ``dask worker`` do; the third
+    chunk kills the scheduler. The command says so in one line (no Dask traceback), exit 1, and
+    the rows written before resume to the in-process answer."""
+    grid = ["sweep", "--pressure", "0:0.2:4", "--payload", "0,2", "--r2", "3,5", "--no-compile", "--no-progress"]
+    here, out = tmp_path / "here.csv", tmp_path / "grid.csv"
+    assert main([*grid, "--out", str(here)]) == EXIT_OK
+    capfd.readouterr()
+    file = tmp_path / "scheduler.json"
+    quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=Path(__file__).resolve().parent.parent)
+    scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+                                  "--no-dashboard", "--scheduler-file", str(file)], **quiet)
+    worker = None
+    try:
+        for _ in range(300):
+            if file.exists() and file.stat().st_size:
+                break
+            time.sleep(0.1)
+        address = json.loads(file.read_text())["address"]
+        worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1", "--no-dashboard"], **quiet)
+
+        class Killing(DaskRunner):
+            def map_ordered(self, fn, args, done=None):
+                return super().map_ordered(_kill_scheduler_at, ((scheduler.pid, i, 2, fn, *a) for i, a in enumerate(args)), done)
+
+        monkeypatch.setattr("esba.distributed.DaskRunner", Killing)
+        assert main([*grid, "--scheduler", address, "--connect-timeout", "30", "--chunk", "3", "--out", str(out)]) == EXIT_FAILED
+        got, err = capfd.readouterr()
+        assert got == "" and err.count("\n") == 1, err  # no Dask log lines, no traceback
+        assert err.startswith(f"esba: error: the connection to the Dask scheduler at {address} was lost while chunk ")
+        assert err.rstrip().endswith(f"the study stops; the rows solved so far are in {out}: rerun with --resume to go on")
+    finally:
+        for process in (worker, scheduler):
+            if process is not None:
+                process.kill()
+                process.wait()
+    kept = read_rows(out)
+    assert len(kept) in (0, 3, 6)  # whole chunks, before the third
+    monkeypatch.undo()
+    assert main([*grid, "--resume", "--out", str(out)]) == EXIT_OK
+    assert out.read_text().split("\n", 1)[1] == here.read_text()
+
+
+# ---------------------------------------------------------------------------------------------
+# Ctrl-C
+
+
+@needs_dask
+def test_ctrl_c_while_a_local_cluster_starts_is_raised_and_the_cluster_stopped():
+    """The interrupt lands while the cluster starts (or, on a fast machine, just after): it is not
+    lost, it comes promptly, and no worker process is left."""
+    import multiprocessing
+
+    before = set(multiprocessing.active_children())
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    t0 = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        timer.start()
+        with open_runner(workers=2):
+            time.sleep(60)  # the interrupt is raised here at the latest
+    assert time.monotonic() - t0 < 30
+    assert set(multiprocessing.active_children()) <= before
+
+
+@needs_dask
+@pytest.mark.slow
+@pytest.mark.ci
+def test_cli_ctrl_c_while_the_cluster_starts_exits_130_promptly(tmp_path):
+    """``esba sweep --workers 2`` interrupted as by the terminal's Ctrl-C (SIGINT to its process
+    group, workers included) once its first worker process exists: the message, exit 130, no
+    table, within seconds, and not a word from the workers."""
+    argv = [sys.executable, "-m", "esba", "sweep", "--pressure", "0:0.2:100", "--payload", "0:2:40", "-n", "8", "--workers", "2", "--no-progress"]
+    process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, start_new_session=True)
+    tasks = Path(f"/proc/{process.pid}/task")
+
+    def children() -> list[str]:  # of every thread: Dask starts its workers from threads of its own
+        found = []
+        for task in list(tasks.glob("*")):
+            try:
+                found += (task / "children").read_text().split()
+            except OSError:
+                pass
+        return found
+
+    for _ in range(1500):
+        if not tasks.exists() or children() or process.poll() is not None:
+            break
+        time.sleep(0.02)
+    if not tasks.exists():
+        time.sleep(1.0)  # no /proc: about when the cluster starts
+    assert process.poll() is None, "the study ended before it could be interrupted"
+    os.killpg(process.pid, signal.SIGINT)
+    t0 = time.monotonic()
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == EXIT_INTERRUPTED and out == "" and err == "esba: interrupted\n", (process.returncode, out, err)
+    assert time.monotonic() - t0 < 15
+
+
+class _DM:
+    """Stands for a CasADi DM whose conversion to NumPy is hit by Ctrl-C: CasADi's wrapper reports
+    the KeyboardInterrupt as a SystemError."""
+
+    def __array__(self, *args, **kwargs):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("<function DM.__array__ at 0x7f0> returned a result with an exception set") from exc
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress"], "esba: interrupted\n"),
+    (["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress", "--resume", "--out", "{out}"],
+     "esba: interrupted: the rows solved so far are in {out}; rerun with --resume to go on\n"),
+    (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20"], "esba: interrupted\n"),
+    (["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", "{out}"],
+     "esba: interrupted: the samples solved so far are in {out}; rerun with --resume to go on\n"),
+])
+def test_ctrl_c_inside_casadis_conversion_to_numpy_is_an_interrupt(capsys, monkeypatch, tmp_path, argv, message):
+    out = str(tmp_path / "s.csv")
+
+    def block(values, target):  # the mapped function's seven outputs, each hit by Ctrl-C when converted
+        return [_DM()] * 7
+
+    def interrupted(*args, **kwargs):
+        return (block, block), "interpreted", 0.0, 0.0
+
+    monkeypatch.setattr("esba.batch.mapped_functions", interrupted)
+    assert main([a.format(out=out) for a in argv]) == EXIT_INTERRUPTED
+    assert capsys.readouterr().err == message.format(out=out)
+
+
+# ---------------------------------------------------------------------------------------------
+# the study file: one run at a time, damaged rows, a full disk
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="study files are locked on POSIX systems")
+def test_a_study_file_that_another_run_writes_is_refused_and_left_alone(capsys, tmp_path):
+    import fcntl
+
+    out = tmp_path / "s.csv"
+    argv = ["sweep", "--pressure", "0:0.2:5", "--no-compile", "--no-progress", "--chunk", "2", "--resume", "--out", str(out)]
+    assert main(argv[:-1] + [str(out)]) == EXIT_OK
+    capsys.readouterr()
+    lines = out.read_text().splitlines(keepends=True)
+    out.write_text("".join(lines[:4]))  # an interrupted study: 2 rows of 5
+    before = out.read_bytes()
+    fd = os.open(out, os.O_RDONLY)
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # another esba run is writing it
+    try:
+        pid = f" (pid {os.getpid()})" if os.path.exists("/proc/locks") else ""
+        needle = f"{out} is being written by another esba run{pid}: wait for it to end, or give another file"
+        _one_line_error(capsys, argv, needle)
+        mc = ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", str(out)]
+        _one_line_error(capsys, mc, needle)
+        _one_line_error(capsys, [*mc, "--resume"], needle)
+        with pytest.raises(StudyError, match="is being written by another esba run"):  # starting over does not truncate it either
+            sweep_study(plan_sweep(Scene(), pressure=[0.0, 0.05, 0.1, 0.15, 0.2]), INTERPRETED, out=out)
+        assert out.read_bytes() == before
+    finally:
+        os.close(fd)
+    assert main(argv) == EXIT_OK and len(read_rows(out)) == 5
+    assert "resumed at row 2" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("damage", ['o"k', '"ok'])
+def test_resume_refuses_a_row_with_a_stray_quote_and_leaves_the_file(capsys, tmp_path, damage):
+    """A stray quote inside a cell, or at its start (the CSV reader would then read every row after
+    it as one quoted cell, and resume would have cut them all off as a broken tail)."""
+    out = tmp_path / "s.csv"
+    argv = ["sweep", "--pressure", "0:0.2:10", "--no-compile", "--no-progress", "--chunk", "4", "--resume", "--out", str(out)]
+    assert main(argv) == EXIT_OK
+    capsys.readouterr()
+    lines = out.read_text().splitlines(keepends=True)
+    lines[4] = lines[4].replace(",ok,", f",{damage},", 1)  # row 3
+    out.write_text("".join(lines))
+    before = out.read_bytes()
+    _one_line_error(capsys, argv, f"--resume {out}: row 3 cannot be read back exactly as CSV")
+    assert out.read_bytes() == before
+
+
+def test_study_file_keeps_quoted_cells_and_drops_a_row_cut_inside_one(tmp_path):
+    path = tmp_path / "s.csv"
+    f = StudyFile(path, "demo", {"grid": [1, 2, 3, 4]}, ["x", "message"], rows=4)
+    f.start({"compile": "never"})
+    f.append([{"x": 1, "message": 'a, "b"\nc'}, {"x": 2, "message": "plain"}])
+    f.close()
+    whole = path.read_bytes()
+    path.write_bytes(whole + b'3,"cut, inside\nthe cell')  # the study stopped while writing a chunk
+    g = StudyFile(path, "demo", {"grid": [1, 2, 3, 4]}, ["x", "message"], rows=4)
+    rows: list = []
+    assert g.resume(rows.append) == 2 and rows[0] == {"x": "1", "message": 'a, "b"\nc'}
+    g.close()
+    assert path.read_bytes() == whole
+
+
+class _FillingDisk:
+    """``os`` for esba.study, on a disk that fills during the ``fail_at``-th write: the part that
+    fits is written, then ENOSPC."""
+
+    def __init__(self, fail_at: int) -> None:
+        self.fail_at, self.calls = fail_at, 0
+
+    def __getattr__(self, name):
+        return getattr(os, name)
+
+    def write(self, fd, data):
+        self.calls += 1
+        if self.calls == self.fail_at:
+            os.write(fd, bytes(data[: len(data) // 2]))
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return os.write(fd, data)
+
+
+def test_a_full_disk_stops_a_streamed_study_in_one_line_and_it_resumes(capsys, monkeypatch, tmp_path):
+    grid = ["sweep", "--pressure", "0:0.2:10", "--no-compile", "--no-progress", "--chunk", "4"]
+    here, out = tmp_path / "here.csv", tmp_path / "s.csv"
+    assert main([*grid[:-2], "--out", str(here)]) == EXIT_OK  # in this process: one batch, no --chunk
+    capsys.readouterr()
+    monkeypatch.setattr("esba.study.os", _FillingDisk(fail_at=3))  # the header, chunk 0, then half of chunk 1
+    assert main([*grid, "--resume", "--out", str(out)]) == EXIT_FAILED
+    got, err = capsys.readouterr()
+    assert got == "" and err == f"esba: error: {out}: cannot write (No space left on device); the rows solved so far are kept: rerun with --resume to go on\n"
+    assert len(read_rows(out)) == 4 and out.read_bytes().endswith(b"\n")  # chunk 0 whole, nothing of chunk 1
+    monkeypatch.undo()
+    assert main([*grid, "--resume", "--out", str(out)]) == EXIT_OK
+    assert out.read_text().split("\n", 1)[1] == here.read_text()
+    # the Monte Carlo's samples: the same line, with its own flag's words
+    mc = ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "30", "--mc-chunk", "10", "--mc-out", str(tmp_path / "mc.csv")]
+    monkeypatch.setattr("esba.study.os", _FillingDisk(fail_at=2))
+    assert main(mc) == EXIT_FAILED
+    assert capsys.readouterr().err == f"esba: error: {tmp_path / 'mc.csv'}: cannot write (No space left on device); the samples solved so far are kept: rerun with --resume to go on\n"
 
 
 # ---------------------------------------------------------------------------------------------

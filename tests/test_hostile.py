@@ -249,6 +249,15 @@ def test_sweep_out_needs_csv_or_json(capsys, places):
     assert "--out 'grid.txt': '.txt'; expected a file ending in .csv, .json" in line
 
 
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device whose writes fail: disk full)")
+@pytest.mark.parametrize("name", ["grid.json", "grid.csv"])
+def test_a_full_disk_is_one_line_naming_the_file_exit_1(capsys, places, name):
+    """The folder is fine (the checks up front pass) but the disk fills while the file is written."""
+    (Path(places["tmp"]) / name).symlink_to("/dev/full")
+    line = one_line_error(capsys, ["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress", "--out", name], places, code=EXIT_FAILED)
+    assert line == f"esba: error: {name}: cannot write (No space left on device)"
+
+
 def test_figure_folder_and_suffixless_name_say_what_was_written(capsys, places):
     tmp = Path(places["tmp"])
     (tmp / "figs").mkdir()

@@ -6,7 +6,9 @@ written, an unusable model cache) ends with one line ``esba: error: ...`` naming
 what is allowed, and exit code 2, before any long computation; a solve that fails or lands on an
 unstable equilibrium says so and exits 1; a result outside the range the paper's model describes
 is printed with ``esba: warning: ...`` lines (and a ``validity`` list in JSON). Where each
-command writes is decided by :mod:`esba.outputs`.
+command writes is decided by :mod:`esba.outputs`. A failure found while a command runs, not in
+its input (a study whose Dask scheduler was lost, a full disk), ends with one line
+``esba: error: ...`` and exit code 1; Ctrl-C ends with ``esba: interrupted`` and exit code 130.
 
 One module per command group (:mod:`esba.cli.scenes`, :mod:`esba.cli.sweep`, ...), each adding its
 subcommands to the parser; :mod:`esba.cli.arguments` and :mod:`esba.cli.results` hold what they
@@ -21,6 +23,7 @@ import sys
 from typing import Callable, Sequence
 
 from esba import __version__, console
+from esba.interrupts import caused_by_interrupt
 
 from .arguments import Parser, UsageError
 from .bench import add_bench
@@ -54,6 +57,12 @@ def _input_error(exc: BaseException) -> bool:
     return isinstance(exc, ValueError) and (module.startswith("esba.") or module.startswith("derive."))
 
 
+def _run_failure(exc: BaseException) -> bool:
+    """An error class of esba's own for a failure found while the command ran, not in its input
+    (StudyStopped: a lost scheduler, a full disk; WriteFailed)."""
+    return isinstance(exc, RuntimeError) and type(exc).__module__.startswith("esba.")
+
+
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return text[0] if text else type(exc).__name__
@@ -77,6 +86,15 @@ def _run(argv: Sequence[str] | None) -> int:
             return EXIT_USAGE
         if isinstance(exc, (BrokenPipeError, MemoryError)) or os.environ.get("ESBA_DEBUG"):
             raise
+        if caused_by_interrupt(exc):  # Ctrl-C that surfaced inside CasADi as a SystemError
+            raise KeyboardInterrupt from None
+        if _run_failure(exc):
+            print(f"esba: error: {_first_line(exc)}", file=sys.stderr)
+            return EXIT_FAILED
+        if isinstance(exc, OSError) and exc.errno is not None:  # an output that could not be written (a full disk, ...)
+            where = f"{exc.filename}: " if exc.filename else ""
+            print(f"esba: error: {where}{exc.strerror or exc}", file=sys.stderr)
+            return EXIT_FAILED
         print(
             f"esba: internal error: {type(exc).__name__}: {_first_line(exc)} (a bug: please report the command; "
             "ESBA_DEBUG=1 shows the traceback)",
@@ -86,13 +104,22 @@ def _run(argv: Sequence[str] | None) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit code."""
+    """Run the command line; return the exit code.
+
+    Called without ``argv`` (as the ``esba`` program), a Ctrl-C after the command returned, while
+    Python still runs (threads joined, exit handlers), ends at once with ``esba: interrupted`` and
+    exit code 130; in the interpreter's last teardown, where Python would die by the signal with
+    no word, it is ignored: the output is complete and the command's exit code stands.
+    """
     console.show_library_messages()
     try:
-        return console.run(lambda: _run(argv))
+        code = console.run(lambda: _run(argv))
     except KeyboardInterrupt:
         print("esba: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        code = EXIT_INTERRUPTED
     except MemoryError:
         print("esba: out of memory: ask for a smaller run", file=sys.stderr)
-        return EXIT_FAILED
+        code = EXIT_FAILED
+    if argv is None:
+        console.exit_on_late_interrupt(EXIT_INTERRUPTED, announce=code != EXIT_INTERRUPTED)
+    return code

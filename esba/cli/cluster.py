@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
+from pathlib import Path
 from typing import Callable
 
 from .arguments import UsageError
+from .results import EXIT_FAILED
 
 
 def _checked(check: Callable) -> Callable[[str], object]:
@@ -79,3 +82,16 @@ def on_cluster(args: argparse.Namespace) -> bool:
     except DistributedError as exc:
         raise UsageError(str(exc)) from None
     return True
+
+
+def study_stopped(exc: Exception, out: str | None, what: str = "rows") -> int:
+    """One line for a study that stopped while it ran (:class:`esba.study.StudyStopped`: a lost
+    scheduler, a chunk whose workers kept dying, a full disk) and exit code 1. With ``out`` (the
+    file the study streamed to) the line says that what was solved is kept there and how to go on."""
+    message = str(exc)
+    if out is not None:
+        file = getattr(exc, "file", None)
+        kept = "kept" if file is not None and Path(file) == Path(out) else f"in {out}"
+        message += f"; the {what} solved so far are {kept}: rerun with --resume to go on"
+    print(f"esba: error: {message}", file=sys.stderr)
+    return EXIT_FAILED

@@ -11,7 +11,7 @@ import time
 from esba import outputs
 
 from .arguments import UsageError, add_scene_flags, count_arg, float_arg, output_file_arg, refuse, scene_from_args
-from .cluster import add_cluster_flags, chunk_arg, on_cluster
+from .cluster import add_cluster_flags, chunk_arg, on_cluster, study_stopped
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
 
 #: Where ``esba solve`` writes its figure when no scene file is given and no --plot.
@@ -149,12 +149,16 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         data["uncertainty"] = propagation.to_dict()
         if mc_options is not None:
             if chunked:
+                from esba.study import StudyStopped
+
                 try:
                     mc, info = _monte_carlo_in_chunks(args, scene, sigmas, mc_options)
                 except KeyboardInterrupt:
                     where = f": the samples solved so far are in {args.mc_out}; rerun with --resume to go on" if args.mc_out else ""
                     print(f"esba: interrupted{where}", file=sys.stderr)
                     return 130
+                except StudyStopped as exc:  # the scheduler lost, a chunk's workers dying, a full disk: exit 1
+                    return study_stopped(exc, args.mc_out, "samples")
             else:
                 mc, info = monte_carlo(scene, sigmas, mc_options), None
             data["monte_carlo"] = mc.to_dict()

@@ -10,7 +10,7 @@ from derive.effects import VARIANTS
 from esba import outputs
 
 from .arguments import UsageError, float_arg, load_scene_file, refuse, scene_changes, segments_arg
-from .cluster import add_cluster_flags, chunk_arg, on_cluster
+from .cluster import add_cluster_flags, chunk_arg, on_cluster, study_stopped
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 
@@ -120,7 +120,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
     from esba.distributed import DistributedError, open_runner
     from esba.plots import save_figure
     from esba.scene import SceneError
-    from esba.study import StudyError
+    from esba.study import StudyError, StudyStopped
     from esba.sweep import SweepError, plan_sweep
     from esba.sweep_figures import sweep_figure
     from esba.sweep_study import DEFAULT_CHUNK, check_study, sweep_study
@@ -147,6 +147,8 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
         where = f": the rows solved so far are in {out}; rerun with --resume to go on" if streamed and os.path.exists(out) else ""
         print(f"esba: interrupted{where}", file=sys.stderr)
         return 130
+    except StudyStopped as exc:  # the scheduler lost, a chunk's workers dying, a full disk: exit 1
+        return study_stopped(exc, out if streamed else None)
     # streamed rows stay in the file (a study may not fit in memory); a small grid's table reads them back
     data = study.to_dict(rows=not streamed or (plan.size <= 60 and not args.json))
     if streamed:
