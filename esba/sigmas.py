@@ -10,7 +10,7 @@ Examples
 --------
 >>> from esba.scene import MAIN_JOB
 >>> [(s.name, round(s.sigma, 4), s.distribution) for s in resolve_sigmas(MAIN_JOB, [parse_sigma("E=10%"), parse_sigma("r2=±0.1")])]
-[('E', 0.054, 'normal'), ('r2', 0.0577, 'uniform')]
+[('r2', 0.0577, 'uniform'), ('E', 0.054, 'normal')]
 """
 
 from __future__ import annotations
