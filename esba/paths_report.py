@@ -134,6 +134,12 @@ def paths_data(progress=None) -> PathsData:
     return PathsData(p_study, d_study, c_study, by_payload, cusp, history_p, by_segments, buckling)
 
 
+def _fold_row(label: str, folds: list[float]) -> str:
+    """A table row: the label, the fold pressures (MPa) and the width between two folds (kPa)."""
+    width = f"{1000 * abs(folds[0] - folds[1]):.2f}" if len(folds) == 2 else "-"
+    return f"| {label} | {_fmt_folds(folds)} | {width} |"
+
+
 def _fmt_folds(folds: list[float], digits: int = 5) -> str:
     return ", ".join(f"{f:.{digits}f}" for f in folds) if folds else "none"
 
@@ -207,10 +213,7 @@ def write_page(path: str | Path, data: PathsData, command: str, figures: str | P
         "| payload (N) | folds (MPa) | bistable range (kPa) |",
         "|---|---|---|",
     ]
-    for row in data.by_payload:
-        f = row["folds_mpa"]
-        width = f"{1000 * abs(f[0] - f[1]):.2f}" if len(f) == 2 else "-"
-        lines.append(f"| {row['payload_n']:g} | {_fmt_folds(f)} | {width} |")
+    lines += [_fold_row(f"{row['payload_n']:g}", row["folds_mpa"]) for row in data.by_payload]
     lines += [
         "",
         "Below the smallest payload with two folds the pressure path is monotonic: no snap-through, one",
@@ -224,10 +227,7 @@ def write_page(path: str | Path, data: PathsData, command: str, figures: str | P
         "| n | folds (MPa) | hysteresis (kPa) |",
         "|---|---|---|",
     ]
-    for row in data.by_segments:
-        f = row["folds_mpa"]
-        width = f"{1000 * abs(f[0] - f[1]):.2f}" if len(f) == 2 else "-"
-        lines.append(f"| {row['n']} | {_fmt_folds(f)} | {width} |")
+    lines += [_fold_row(str(row["n"]), row["folds_mpa"]) for row in data.by_segments]
     lines += [
         "",
         "## Payload direction at the 90 degree pressure",
