@@ -48,7 +48,7 @@ def figure(study: AccuracyStudy):
     ax_n.set_xlabel("segments n")
     ax_n.set_title("(a) error against n")
     ax_n.legend(fontsize=7)
-    ax_t.set_xlabel("solve time per equilibrium (ms, IPOPT with load continuation)")
+    ax_t.set_xlabel("solve time per equilibrium (ms, esba.equilibrium.solve)")
     ax_t.set_title("(b) error against solve time (labels: n)")
     ax_t.legend(fontsize=7)
     ref = study.reference[next(iter(study.reference))]
@@ -124,7 +124,7 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
         "the model (cold, SymPy, done once per n and then cached; the n = 1 row also pays for importing",
         "SymPy once); load = build its CasADi Functions from the freshly written file (warm; later loads",
         "read CasADi's serialised Functions from the model cache, see performance.md); solve = one equilibrium",
-        "with IPOPT along the load path (median);",
+        "with `esba.equilibrium.solve` (the load path followed, the end state certified by IPOPT; median);",
         "Hessian condition = largest / smallest eigenvalue of the Hessian at the equilibrium.",
         "",
     ]
