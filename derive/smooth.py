@@ -25,8 +25,16 @@ def sinc_series(u: sp.Expr) -> sp.Expr:
 
 
 def sinc(u: sp.Expr) -> sp.Expr:
-    """``sin(u)/u`` as a Piecewise that is exact at u = 0 (value 1, u'' = -1/3)."""
-    return sp.Piecewise((sinc_series(u), sp.Abs(u) < SINC_SWITCH), (sp.sin(u) / u, True))
+    """``sin(u)/u`` as a Piecewise that is exact at u = 0 (value 1, u'' = -1/3).
+
+    The generated code evaluates both branches (a CasADi ``if_else`` on SX does), and automatic
+    differentiation in reverse mode multiplies the unused branch's partial derivatives by a zero
+    seed: NaN where they are NaN, as those of ``sin(u)/u`` are at u = 0. So the quotient's argument
+    is u + 1 inside the series branch and u itself wherever the quotient is used; its guard is
+    spelled ``u**2 < SINC_SWITCH**2`` so that SymPy does not fold it into the outer condition.
+    """
+    w = u + sp.Piecewise((1, u**2 < SINC_SWITCH**2), (0, True))
+    return sp.Piecewise((sinc_series(u), sp.Abs(u) < SINC_SWITCH), (sp.sin(w) / w, True))
 
 
 def versinc(u: sp.Expr) -> sp.Expr:

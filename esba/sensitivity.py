@@ -25,11 +25,9 @@ smallest eigenvalue reaches zero (:attr:`Sensitivities.fold_distance`): a first-
 inside that distance.
 
 **The payload point s.** The point enters the generated model through min/max clamps, sigma_j =
-min(max(n s - (j - 1), 0), 1) (how much of segment j lies before the point), and the chord of a
-fraction sigma of a segment is written with 1/sigma inside its smooth branches; CasADi's AD of the
-generated gradient with respect to s is therefore NaN wherever a segment lies wholly beyond the
-point (0 times infinity), and half the one-sided value at the tip (the clamp's tie). The column
-of s is instead the derivative of the payload's gradient term -f . dp(s)/dtheta_j, with dp/ds =
+min(max(n s - (j - 1), 0), 1) (how much of segment j lies before the point); CasADi's AD of the
+generated gradient with respect to s takes half the one-sided value at the clamps' ties (at a
+segment end, and at the tip). The column of s is instead the derivative of the payload's gradient term -f . dp(s)/dtheta_j, with dp/ds =
 L (cos h, sin h) the tangent of the inextensible layer at the point (h = sum_j sigma_j theta_j its
 heading, from the generated ``centreline`` function):
 
@@ -318,7 +316,7 @@ def _functions(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...
             columns.append(G_p[:, j])
             curv_columns.append(curv_p[j])
             continue
-        # the payload point: the closed form of the module docstring (AD of the clamps is NaN here)
+        # the payload point: the closed form of the module docstring (AD halves it at the clamps' ties)
         s = p[j]
         sigma = ca.vertcat(*[ca.fmin(ca.fmax(n * s - i, 0.0), 1.0) for i in range(n)])
         h = model["centreline"](th, L, s)[2]

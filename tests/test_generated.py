@@ -142,6 +142,24 @@ def test_straight_actuator_has_zero_energy_and_pose(n):
     np.testing.assert_allclose(pts[0], np.linspace(0, values["L"], n + 1), atol=1e-12)
 
 
+@pytest.mark.parametrize("n", [1, 3, 8])
+def test_reverse_mode_ad_is_finite_at_straight_segments(n):
+    """CasADi's reverse mode through the generated kinematics and gradient, at theta = 0 exactly
+    and with a payload point on a segment end (sigma = 0 beyond it): finite. The SX ``if_else``
+    evaluates both branches of the smooth sinc forms, and a NaN partial of the unused quotient
+    times a zero seed is NaN (the fit of a straight row died on it)."""
+    model = load_model(n, ALL)
+    values = parameter_values(model.effects, np.random.default_rng(n))
+    values["s2"] = 1.0 / n  # payload 2 at the end of the first segment
+    th = ca.SX.sym("th", n)
+    tip = model["kinematics"](th, values["L"])[0]
+    G = model["gradient"](th, *model.param_vector(values))
+    f = ca.Function("f", [th], [ca.gradient(ca.sumsqr(tip), th), ca.gradient(ca.sumsqr(G), th), ca.hessian(ca.sumsqr(tip) + ca.sumsqr(G), th)[0]])
+    for theta in (np.zeros(n), np.r_[0.3, np.zeros(n - 1)]):
+        for out in f(theta):
+            assert np.all(np.isfinite(np.asarray(out))), (n, theta)
+
+
 @pytest.mark.parametrize("n", [1, 2, 4])
 def test_centreline_matches_segment_points_and_tip(n):
     model = load_model(n)
