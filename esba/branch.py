@@ -218,8 +218,10 @@ class Branch:
                     "theta_deg": np.degrees(self.theta).tolist(),
                     "total_angle_deg": self.total_angle_deg.tolist(),
                     "tip_mm": self.tip[:, :2].tolist(),
+                    "tip_angle_deg": np.degrees(self.tip[:, 2]).tolist(),
                     "arclength": self.arclength.tolist(),
                     "min_eigenvalue": self.eigenvalues[:, 0].tolist(),
+                    "eigenvalues": self.eigenvalues.tolist(),
                     "morse_index": self.morse.astype(int).tolist(),
                     "stable": self.stable.tolist(),
                     "kind": self.kind.tolist(),
@@ -248,6 +250,8 @@ class Branch:
             }
             for j, t in enumerate(self.theta[i], start=1):
                 row[f"theta{j}_deg"] = math.degrees(float(t))
+            for j, e in enumerate(self.eigenvalues[i], start=1):
+                row[f"eigenvalue{j}"] = float(e)
             rows.append(row)
         return rows
 

@@ -225,13 +225,16 @@ def _interval(problem: PathProblem, lam0: float, to: float | None, bounds) -> tu
             raise PathError(f"to={to:g}: outside the range of {problem.name}, {dom_lo:g} to {dom_hi:g}{unit}")
         if abs(to - lam0) > limit:
             raise PathError(f"to={to:g}: more than {limit:g}{unit} from the start ({MAX_SPAN:g} typical sizes of {problem.name})")
-        return min(lam0, to), max(lam0, to)
+        if bounds is None:
+            return min(lam0, to), max(lam0, to)
     if bounds is not None:
         if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
             raise PathError(f"bounds={bounds!r}: expected (low, high)")
         lo, hi = (checks.finite("bounds", v, PathError) for v in bounds)
         if not lo <= lam0 <= hi:
             raise PathError(f"bounds=({lo:g}, {hi:g}): the start {lam0:g} must lie inside")
+        if to is not None and to not in (lo, hi):
+            raise PathError(f"bounds=({lo:g}, {hi:g}) with to={to:g}: to must be one end of the bounds")
         lo, hi = max(lo, dom_lo, lam0 - limit), min(hi, dom_hi, lam0 + limit)
         return lo, hi
     return max(dom_lo, lam0 - limit), min(dom_hi, lam0 + limit)
@@ -274,9 +277,11 @@ def trace(
         Lambda at the start, in the parameter's unit.
     to : float, optional
         Trace towards this value and stop exactly on it; the branch may turn back at folds on the
-        way, and then stops exactly at the other end of [lam0, to] if it returns there.
+        way, and then stops exactly at the other end of the interval (``bounds``, default
+        [lam0, to]) if it gets there.
     bounds : (low, high), optional
-        The interval of lambda to stay in (instead of [lam0, to]); always cut to the parameter's range.
+        The interval of lambda to stay in (instead of [lam0, to]; with ``to``, one of its ends);
+        always cut to the parameter's range.
     options : PathOptions, optional
     direction : float, optional
         +1 or -1: the sign of d lambda of the first step (default: towards ``to``, else +1).
@@ -404,7 +409,7 @@ def trace(
                 specials.append((len(points) - 1, sp))
             if kind == "end":
                 if to is not None and pt.lam != to:
-                    why = f"turned back and returned to {problem.describe(pt.lam)} without reaching {to:g}{problem.unit_short}"
+                    why = f"turned back and reached {problem.describe(pt.lam)} without reaching {to:g}{problem.unit_short}"
                 else:
                     why = f"reached {problem.describe(pt.lam)}"
                 stop_here = ("bound", why)
@@ -498,6 +503,16 @@ def _events_on_segment(corr: Corrector, a: Point, b: Point, s_b: float, lo: floa
         kind = "fold" if turned else "branch point"
         pt, status, method = locate_crossing(corr, a, b, s_b, turned, idx, opts.locate)
         found.append((corr.arclength_of(a, pt), kind, pt, special_from(corr, kind, pt, idx, a, b, status, method)))
+        ended = any(k == "end" for _, k, _, _ in found)
+        for bound in (lo, hi):
+            if turned and not ended and math.isfinite(bound) and (a.lam - bound) * (pt.lam - bound) < 0:
+                # the step went past the bound to a fold beyond it and came back: the branch ends at the
+                # bound, before the fold (both ends of the step lie inside the interval)
+                end = locate_value(corr, a, pt, corr.arclength_of(a, pt), lambda p, v=bound: p.lam - v)
+                if end is not None:
+                    end = corr.at_lambda(end.theta, bound) or end
+                    sp = special_from(corr, "user", end, None, a, b, "converged", value) if bound in marks else None
+                    found.append((corr.arclength_of(a, end), "end", end, sp))
     for f_ev, name in events:
         if f_ev is None:
             continue

@@ -117,12 +117,16 @@ class PathStudy:
 
     @property
     def hysteresis(self) -> dict[str, Any] | None:
-        """When loading up and down jump at different values: where, and the width of the loop."""
+        """When the ramp from the start to the target ("up", whichever way lambda goes) and back
+        ("down") jump at different values: where, and the loops they make. The k-th jump out is
+        closed by the k-th jump back counted from the end (nested loops pair up like brackets);
+        ``width`` is the first loop's."""
         if len(self.loading) < 2 or not self.loading[0].jumps or not self.loading[1].jumps:
             return None
         up = [j.lam for j in self.loading[0].jumps]
         down = [j.lam for j in self.loading[1].jumps]
-        return {"up": up, "down": down, "width": abs(up[0] - down[-1])}
+        loops = [{"up": a, "down": b, "width": abs(a - b)} for a, b in zip(up, reversed(down))]
+        return {"up": up, "down": down, "width": loops[0]["width"], "loops": loops}
 
     def to_dict(self, points: bool = True) -> dict[str, Any]:
         """JSON-ready form (degrees, mm; no NaN)."""
@@ -148,6 +152,19 @@ class PathStudy:
             "hysteresis": self.hysteresis,
             "validity": self.validity(),
         }
+
+
+def trace_window(problem: PathProblem, lam_from: float, to: float) -> tuple[float, float]:
+    """The interval the branches of a study stay in: from ``to`` back past the start by as much
+    again (cut to the parameter's range). A start inside a bistable range lies between two folds,
+    so the branch through it runs back past the start along its unstable middle before it turns
+    to the far stable branch and reaches ``to``; a branch crossing at a branch point may likewise
+    leave on the start's side."""
+    lo, hi = problem.domain
+    span = abs(to - lam_from)
+    if to >= lam_from:
+        return max(lo, lam_from - span), to
+    return to, min(hi, lam_from + span)
 
 
 def study(
@@ -182,10 +199,11 @@ def study(
     first = solve(start_scene, pressure=None if problem.name == "pressure" else problem.pressure)
     if not first.ok:
         raise EquilibriumError(f"no stable equilibrium at the start ({problem.describe(lam_from)}) to trace from: {first.message}")
-    main = trace(problem, first.theta, lam_from, to=to, options=options, label="main")
+    window = trace_window(problem, lam_from, to)
+    main = trace(problem, first.theta, lam_from, to=to, bounds=window, options=options, label="main")
     crossing: list[Branch] = []
     if switch:
         for k, bp in enumerate(main.branch_points, start=1):
-            crossing += bifurcating_branches(problem, bp, bounds=(min(lam_from, to), max(lam_from, to)), options=options, label=f"BP{k} ")
+            crossing += bifurcating_branches(problem, bp, bounds=window, options=options, label=f"BP{k} ")
     ramps = tuple(history(problem, first.theta, lam_from, [to, lam_from], options)) if loading and to != lam_from else ()
     return PathStudy(scene, problem, first, main, tuple(crossing), ramps, lam_from, to)

@@ -108,11 +108,26 @@ def test_load_factor_from_zero_ends_at_the_scenes_own_state(capsys, tmp_path):
     assert d["branches"][0]["total_angle_deg"][-1] == pytest.approx(solve(MAIN_JOB).total_angle_deg, abs=1e-8)
 
 
+def test_a_start_inside_the_bistable_range_reaches_to_through_both_folds(capsys):
+    """From the lower stable state at 0.168 MPa the branch turns back at the upper fold, runs down
+    its unstable middle past the start to the lower fold and then up the far stable branch to --to."""
+    code, out, err = run(capsys, "path", "--param", "pressure", "--from", "0.168", "--to", "0.3", "--payload", "2", "--no-out", "--no-plot",
+                         "--json")
+    assert code == EXIT_OK, err
+    main = json.loads(out)["branches"][0]
+    assert main["stopped"] == "bound" and main["stop_reason"] == "reached pressure = 0.3 MPa"
+    folds = sorted(p["lambda"] for p in main["special_points"] if p["kind"] == "fold")
+    assert folds == pytest.approx([0.16360178, 0.17353550], abs=1e-7)
+
+
 def test_a_branch_that_turns_back_before_to_says_so_and_exits_1(capsys):
-    code, out, err = run(capsys, "path", "--param", "pressure", "--from", "0.168", "--to", "0.3", "--payload", "2", "--no-out", "--no-plot")
+    """A slightly inflated actuator pushed along its axis from 2.85 N: the branch folds at 2.904 N and
+    runs back down, past its start, out of the window (2.7 to 3 N) before its next fold (2.629 N)."""
+    code, out, err = run(capsys, "path", "--param", "payload", "--pressure", "0.001", "--payload", "2.85", "--payload-angle", "180",
+                         "--to", "3", "--no-out", "--no-plot", "--no-loading")
     assert code == 1
-    assert "turned back and returned to pressure = 0.168 MPa without reaching 0.3 MPa" in out
-    assert err.startswith("esba: the branch did not reach --to 0.3")
+    assert "turned back and reached payload1 = 2.7 N without reaching 3 N" in out
+    assert err.startswith("esba: the branch did not reach --to 3")
 
 
 def test_a_branch_leaving_the_models_range_warns(capsys):

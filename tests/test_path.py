@@ -103,6 +103,7 @@ def test_column_buckles_at_the_closed_form_load(n):
             assert fold.status == "converged" and abs(fold.morse_after - fold.morse_before) == 1
             g, _, _ = problem.ghl(fold.theta, fold.lam)
             assert np.max(np.abs(g)) <= EQUILIBRIUM_GRAD_ATOL
+    assert any(side.folds for side in sides)  # the side bending towards the chamber folds back (transcritical)
     assert signs[0] == -signs[1]  # one branch to each side of the straight state
     # the eccentric chamber makes U not even in theta: the two sides differ
     assert not np.allclose(sides[0].lam[:5], sides[1].lam[:5])
@@ -233,6 +234,22 @@ def test_solve_returns_the_state_its_load_history_reaches(pressure_path):
     np.testing.assert_allclose(r.theta, load.theta, atol=1e-8)
     assert abs(r.total_angle_deg - math.degrees(np.sum(under_load.theta))) > 100.0
     assert evaluate(scene, under_load.theta).ok  # the other state is stable too
+
+
+@pytest.mark.parametrize("below", [True, False])
+def test_solve_just_short_of_a_fold_does_not_jump(below):
+    """A slightly inflated actuator pushed along its axis folds at 2.90414 N. A ramp whose last step
+    goes round the fold and back (its ends both below the target) must still stop at the target on
+    the stable side: 0.02 % short of the fold no jump, 0.01 % past it the snap."""
+    fold = 2.904143590
+    force = fold * (1 - 2e-4) if below else fold * (1 + 1e-4)
+    r = solve(Scene(pressure=1e-3, payloads=(Payload(force, 180.0),)))
+    assert r.ok
+    if below:
+        assert not r.jumps and r.total_angle_deg < 9.0
+    else:
+        (jump,) = r.jumps
+        assert jump.lam * force == pytest.approx(fold, rel=1e-8) and r.total_angle_deg > 90.0
 
 
 # ---------------------------------------------------------------------------------------------

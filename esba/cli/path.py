@@ -51,7 +51,10 @@ def _path_table(d: dict) -> str:
             )
     if d.get("hysteresis"):
         h = d["hysteresis"]
-        lines.append(f"hysteresis: up jumps at {h['up'][0]:.9g}, down at {h['down'][-1]:.9g}{unit}; width {h['width']:.6g}{unit}")
+        for k, loop in enumerate(h["loops"], start=1):
+            name = "hysteresis" if len(h["loops"]) == 1 else f"hysteresis loop {k}"
+            lines.append(f"{name}: towards --to it jumps at {loop['up']:.9g}, back at {loop['down']:.9g}{unit}; "
+                         f"width {loop['width']:.6g}{unit}")
     for k in ("out", "figure"):
         if d.get(k):
             lines.append(f"wrote {d[k]}")
@@ -143,5 +146,5 @@ def add_path(sub) -> None:
     p.add_argument("--plot", metavar="FILE", help=f"the figure (default {DEFAULT_PATH_FIGURE})")
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--points", action="store_true", help="with --json: print every point, not only the special ones")
-    p.add_argument("--write-doc", metavar="FILE", help="run the studies of docs/paths.md (Table 1: bistable ranges, buckling for n = 1..8) and write the page and its figures (about a minute)")
+    p.add_argument("--write-doc", metavar="FILE", help="run the studies of docs/paths.md (Table 1: bistable ranges, buckling for n = 1..8) and write the page and its figures (several seconds)")
     p.set_defaults(func=_cmd_path)
