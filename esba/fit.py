@@ -66,6 +66,7 @@ from .equilibrium import EquilibriumError, SolverOptions, solve, stability_verdi
 from .measurements import QUANTITIES, Measurement, MeasurementError, MeasurementSet
 from .scene import Payload, Scene, SceneError
 from .sensitivity import UNITS, model_values, parameter_names, scene_parameters, with_parameters
+from .validity import assess_angles
 
 __all__ = ["FitError", "FitOptions", "FitResult", "fit", "predict", "Prediction", "identifiability", "Identifiability", "FITTABLE", "DEFAULT_FREE", "DEFAULT_SD"]
 
@@ -103,6 +104,10 @@ class FitOptions:
     identifiability_tol : float
         The Fisher matrix of relative parameter changes is *nearly singular* below this ratio of
         its smallest to its largest eigenvalue.
+    identifiability_floor : float
+        A parameter (or a combination) is also undetermined when a 100 % change of it moves the
+        residuals, each weighted by its standard deviation, by less than sqrt(floor) on average:
+        the predictions do not depend on it, whatever the ratio says (one free parameter has ratio 1).
     load_path_tol : float
         Largest difference, rad, between a fitted state and the load-path solve at the fitted
         parameters.
@@ -118,10 +123,11 @@ class FitOptions:
     linear_solver: str = "mumps"
     level: float = 0.95
     identifiability_tol: float = 1e-6
+    identifiability_floor: float = 1e-12
     load_path_tol: float = 1e-6
 
     def __post_init__(self) -> None:
-        for name in ("tol", "level", "identifiability_tol"):
+        for name in ("tol", "level", "identifiability_tol", "identifiability_floor"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v < 1.0:
                 hint = " (0.95 for 95 %)" if name == "level" else ""
@@ -218,7 +224,7 @@ def _states(m: Measurement, scene: Scene, options: SolverOptions) -> tuple[np.nd
     """Load-path solves of a row: loaded angles, unloaded angles (stiffness rows), and why not ok."""
     try:
         r = solve(scene, options)
-    except EquilibriumError as exc:  # a target angle that needs a negative pressure
+    except (EquilibriumError, SceneError) as exc:  # a target angle that needs a negative pressure, scales the solver cannot resolve
         return np.full(scene.segments, np.nan), None, str(exc)
     if not r.ok:
         return r.theta, None, r.message or r.status
@@ -338,7 +344,8 @@ class FitResult:
         Per measured value: ``row``, ``quantity``, ``unit``, ``measured``, ``predicted``, ``sd``
         (and ``sd_given``), ``residual`` (predicted - measured), ``normalised`` (residual / sd).
     rows : tuple of dict
-        Per row: ``row``, ``stable``, ``min_eigenvalue``, ``on_load_path``, ``message``.
+        Per row: ``row``, ``stable``, ``min_eigenvalue``, ``on_load_path``, ``message``, ``validity``
+        (the :mod:`esba.validity` findings of its fitted states, also among ``warnings``).
     identifiable : bool
     fisher_ratio : float
         Smallest over largest eigenvalue of the Fisher matrix of relative parameter changes.
@@ -417,44 +424,55 @@ class FitResult:
         })
 
 
-def _identifiability(F: np.ndarray, free: tuple[str, ...], scale: np.ndarray, estimate: np.ndarray, at_bound: Sequence[str],
-                     tol: float) -> tuple[bool, float, np.ndarray, list[str], dict]:
+def _identifiability(F: np.ndarray, count: int, free: tuple[str, ...], scale: np.ndarray, estimate: np.ndarray, at_bound: Sequence[str],
+                     tol: float, floor: float) -> tuple[bool, float, np.ndarray, list[str], dict]:
     """(identifiable, eigenvalue ratio, parameters in an undetermined direction, warnings, the first
-    undetermined direction as relative changes {name: dp/p}) of a Fisher matrix.
+    undetermined direction as relative changes {name: dp/p}) of a Fisher matrix of ``count``
+    weighted residuals.
 
     Judged on the Fisher matrix of *relative* parameter changes, S F S with S = diag(scale) (each
-    parameter's start value, or 1 where that is 0): it is nearly singular when two parameters
-    trade off (a collinearity) and when the predictions hardly depend on a parameter at all (a
-    vanishing diagonal), in comparable units either way.
+    parameter's start value, or 1 where that is 0), in two steps:
+
+    - a parameter the predictions do not depend on: a 100 % change of it moves the weighted
+      residuals by less than ``sqrt(floor)`` each (its diagonal entry below ``floor`` times the
+      number of measured values), whatever the other parameters do;
+    - a trade-off among the others: the smallest eigenvalue of their block below ``tol`` times the
+      largest, or below that same absolute floor.
     """
     k = len(free)
     warnings = []
     Frel = scale[:, None] * F * scale[None, :]
-    w, V = np.linalg.eigh(Frel)
-    ratio = float(max(w[0], 0.0) / w[-1]) if w[-1] > 0 else 0.0
-    identifiable = bool(ratio >= tol)
-    unknown = np.zeros(k, dtype=bool)
+    w_all = np.linalg.eigvalsh(Frel)
+    ratio = float(max(w_all[0], 0.0) / w_all[-1]) if w_all[-1] > 0 else 0.0
+    absolute = floor * max(count, 1)
+    unknown = np.diag(Frel) < absolute
     direction: dict = {}
-    if not identifiable:
-        null = V[:, w < tol * max(w[-1], 1e-300)]
+    for j in np.flatnonzero(unknown):
+        where = " (on its bound)" if free[j] in at_bound else ""
+        warnings.append(f"not identifiable: the predictions do not depend on {free[j]} at {estimate[j]:.4g} {UNITS[free[j]]}{where} "
+                        f"(a 100 % change of it moves the residuals by less than {math.sqrt(floor):.0e} of their standard deviations), "
+                        "so these data do not determine it")
+        if not direction:
+            direction = {free[i]: float(i == j) for i in range(k)}
+    rest = np.flatnonzero(~unknown)
+    if len(rest) > 1:
+        w, V = np.linalg.eigh(Frel[np.ix_(rest, rest)])
+        sub_ratio = float(max(w[0], 0.0) / w[-1])
+        null = V[:, w < max(tol * w[-1], absolute)]
         for c in range(null.shape[1]):
             rel = null[:, c] / null[np.argmax(np.abs(null[:, c])), c]
-            if c == 0:
-                direction = {free[j]: float(rel[j]) for j in range(k)}
-            involved = np.abs(rel) > 1e-2
+            full = np.zeros(k)
+            full[rest] = rel
+            if not direction:
+                direction = {free[j]: float(full[j]) for j in range(k)}
+            involved = np.abs(full) > 1e-2
             unknown |= involved
             names = [free[j] for j in range(k) if involved[j]]
-            head = (f"not identifiable: the Fisher matrix is nearly singular (smallest / largest eigenvalue {ratio:.2g} < {tol:g}, "
-                    "relative parameter changes): ")
-            if len(names) == 1:
-                j = free.index(names[0])
-                where = " (on its bound)" if names[0] in at_bound else ""
-                warnings.append(head + f"the predictions hardly depend on {names[0]} at {estimate[j]:.4g} {UNITS[names[0]]}{where}, "
-                                "so these data do not determine it")
-            else:
-                combo = ", ".join(f"d{free[j]}/{free[j]} = {rel[j]:+.3g}" for j in range(k) if involved[j])
-                warnings.append(head + f"the data do not separate {' and '.join(names)}; changing them together as {combo} "
-                                "leaves every prediction unchanged to first order")
+            combo = ", ".join(f"d{free[j]}/{free[j]} = {full[j]:+.3g}" for j in range(k) if involved[j])
+            warnings.append(f"not identifiable: the Fisher matrix is nearly singular (smallest / largest eigenvalue {sub_ratio:.2g} < {tol:g}, "
+                            f"relative parameter changes): the data do not separate {' and '.join(names)}; changing them together as {combo} "
+                            "leaves every prediction unchanged to first order")
+    identifiable = not bool(np.any(unknown))
     for name in at_bound:
         warnings.append(f"{name} ended on its bound ({estimate[free.index(name)]:.4g} {UNITS[name]}): the fit would take it further; "
                         "its interval is not meaningful")
@@ -467,7 +485,8 @@ def _statistics(J: np.ndarray, r: np.ndarray, free: tuple[str, ...], scale: np.n
     m, k = J.shape
     F = J.T @ J
     dof = m - k
-    identifiable, ratio, unknown, warnings, _ = _identifiability(F, free, scale, estimate, at_bound, options.identifiability_tol)
+    identifiable, ratio, unknown, warnings, _ = _identifiability(F, m, free, scale, estimate, at_bound, options.identifiability_tol,
+                                                                 options.identifiability_floor)
     rss = float(r @ r)
     s2 = rss / dof if dof > 0 else math.nan
     cov = np.full((k, k), np.nan)
@@ -478,10 +497,10 @@ def _statistics(J: np.ndarray, r: np.ndarray, free: tuple[str, ...], scale: np.n
     elif all_sd_given:
         quantile = float(stats.norm.ppf(0.5 + options.level / 2))
         scale2 = 1.0
-        warnings.append("no degrees of freedom left (as many parameters as measurements): the intervals use the stated standard deviations unscaled")
+        warnings.append(f"no degrees of freedom left ({m} measured values for {k} parameters): the intervals use the stated standard deviations unscaled")
     else:
         scale2 = math.nan
-        warnings.append("no degrees of freedom left (as many parameters as measurements) and no stated standard deviations: no intervals")
+        warnings.append(f"no degrees of freedom left ({m} measured values for {k} parameters) and no stated standard deviations: no intervals")
     known = ~unknown
     if np.any(known) and math.isfinite(scale2):
         # the determined parameters, with the undetermined ones held where they are
@@ -575,6 +594,12 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
     at_bound = [n for n, zz, lo, hi in zip(free, z, lbz, ubz)
                 if (math.isfinite(lo) and zz <= lo + 1e-5 * max(1.0, abs(lo))) or (math.isfinite(hi) and zz >= hi - 1e-5 * max(1.0, abs(hi)))]
     st = _statistics(np.array(J_rows), np.array(r_rows), free, scale, estimate, at_bound, all(d["sd_given"] for d in residuals), options)
+    for r in row_reports:
+        st["warnings"] += [f"row {r['row']!r} is outside the model's range at the fitted parameters: {v}" for v in r["validity"]]
+    if messages:  # not a minimum of the fit, or not a state the data describe: its curvature means nothing
+        for key in ("se", "interval", "cov"):
+            st[key] = np.full_like(st[key], np.nan)
+        st["warnings"].append("no standard errors or intervals: the fit failed (see its message)")
     return FitResult(
         data=data, free=free, units=tuple(UNITS[n] for n in free), level=options.level, start=start, estimate=estimate,
         std_error=st["se"], interval=st["interval"], covariance=st["cov"], correlation=st["corr"], fisher=st["fisher"],
@@ -587,7 +612,7 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
 def _check_row(m: Measurement, row: _Row, free: tuple[str, ...], p: np.ndarray, theta_l: np.ndarray, theta_u: np.ndarray | None,
                solver_options: SolverOptions, options: FitOptions) -> dict:
     """Is the fitted state a stable minimum, and the one the load path reaches?"""
-    out = {"row": m.label, "stable": False, "min_eigenvalue": math.nan, "on_load_path": False, "message": ""}
+    out = {"row": m.label, "stable": False, "min_eigenvalue": math.nan, "on_load_path": False, "message": "", "validity": []}
     try:
         scene = _fitted_scene(m, free, p)
     except SceneError as exc:
@@ -603,10 +628,14 @@ def _check_row(m: Measurement, row: _Row, free: tuple[str, ...], p: np.ndarray, 
     if theta_u is not None:
         states.append((theta_u, row.unloaded_scene(scene)))
     eig_min, stable = math.inf, True
+    findings: dict[str, str] = {}
     for theta, sc in states:
         ev = np.linalg.eigvalsh(model.hessian(theta, model.param_vector(sc.parameters(pressure))))
         eig_min = min(eig_min, float(ev[0]))
         stable &= stability_verdict(ev, solver_options.critical_tol) == "stable"
+        for f in assess_angles(sc, theta, pressure):
+            findings.setdefault(f.check, f.message)
+    out["validity"] = list(findings.values())
     out["stable"], out["min_eigenvalue"] = bool(stable), eig_min
     theta_path, theta_u_path, why = _states(m, scene, solver_options)
     if why:
@@ -772,5 +801,5 @@ def identifiability(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, pa
         for j, q in enumerate(quantities):
             rows.append(dy[j] / m.sds.get(q, DEFAULT_SD[q]))
     F = np.array(rows).T @ np.array(rows)
-    ok, ratio, _, warnings, direction = _identifiability(F, free, scale, p, [], options.identifiability_tol)
+    ok, ratio, _, warnings, direction = _identifiability(F, len(rows), free, scale, p, [], options.identifiability_tol, options.identifiability_floor)
     return Identifiability(free, dict(zip(free, map(float, p))), F, ratio, ok, tuple(warnings), direction)

@@ -18,7 +18,8 @@ and point s (fraction of L).
 
 **Near a fold** H is nearly singular and dtheta/dp grows without bound: the first-order answer
 holds only for vanishing changes. When the smallest eigenvalue of H is below ``fold_tol`` times
-the largest, the result says so (``status="near_fold"``) and gives no numbers. For every
+the largest, or reaches zero (to first order) within ``fold_distance_tol`` of a parameter's value,
+the result says so (``status="near_fold"``) and gives no numbers. For every
 parameter the result also estimates, to first order, how far the parameter may move before the
 smallest eigenvalue reaches zero (:attr:`Sensitivities.fold_distance`): a first-order answer
 (and a first-order uncertainty, :mod:`esba.uncertainty`) is trustworthy only for changes well
@@ -269,6 +270,11 @@ class SensitivityOptions:
         The equilibrium is *near a fold* when the smallest Hessian eigenvalue is below
         ``fold_tol`` times the largest (0 < fold_tol < 1). Away from folds the ratio is about 0.4
         for the Table 1 actuator at any n; 1e-3 means 400 times softer than that.
+    fold_distance_tol : float
+        ... or when, to first order, the smallest eigenvalue reaches 0 within this fraction of some
+        nonzero parameter's value (:attr:`Sensitivities.fold_distance`; near a fold the linear
+        estimate is about twice the true distance). The eigenvalue falls like the square root of
+        the distance, so the ratio alone lets states 0.01 % short of a fold through.
 
     >>> SensitivityOptions(fold_tol=2.0)
     Traceback (most recent call last):
@@ -277,11 +283,13 @@ class SensitivityOptions:
     """
 
     fold_tol: float = 1e-3
+    fold_distance_tol: float = 1e-3
 
     def __post_init__(self) -> None:
-        v = self.fold_tol
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v < 1.0:
-            raise SensitivityError(f"fold_tol={v!r}: expected a number with 0 < fold_tol < 1")
+        for name in ("fold_tol", "fold_distance_tol"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v < 1.0:
+                raise SensitivityError(f"{name}={v!r}: expected a number with 0 < {name} < 1")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -455,23 +463,28 @@ def sensitivities(result: Equilibrium, parameters: Sequence[str] | None = None, 
     tip_th, tip_p = np.asarray(out[4], dtype=float).reshape(2, n), np.asarray(out[5], dtype=float).reshape(2, m)
     curv_th, curv_p = np.asarray(out[6], dtype=float).ravel(), np.asarray(out[7], dtype=float).ravel()
     ratio = float(eig[0] / max(abs(eig[-1]), 1e-300))
-    status, message = "ok", ""
-    if not result.ok:
-        status = "not_stable"
-        message = f"no sensitivities: the state is not a converged stable equilibrium ({result.message or result.status})"
-    elif ratio < options.fold_tol:
-        status = "near_fold"
-        message = (
-            f"no sensitivities: the Hessian is nearly singular (smallest eigenvalue {eig[0]:.3g} N mm/rad^2 = "
-            f"{ratio:.2g} x the largest < fold_tol = {options.fold_tol:g}): the equilibrium is at or next to a fold "
-            "(a snap-through), where dtheta/dp grows without bound and a first-order answer holds for no finite change"
-        )
     dtheta = -np.linalg.solve(H, G_p)
     dtip = tip_th @ dtheta + tip_p
     # d(lambda_min)/dp = v' (dH/dp + dH/dtheta dtheta/dp) v, then the linear distance to lambda_min = 0
     dlam = curv_p + curv_th @ dtheta
     with np.errstate(divide="ignore", invalid="ignore"):
         dist = np.where(dlam * eig[0] < 0, -eig[0] / dlam, np.inf)
+        relative = np.where(p != 0.0, np.abs(dist) / np.abs(p), np.inf)
+    closest = int(np.argmin(relative))
+    status, message = "ok", ""
+    if not result.ok:
+        status = "not_stable"
+        message = f"no sensitivities: the state is not a converged stable equilibrium ({result.message or result.status})"
+    elif ratio < options.fold_tol or relative[closest] < options.fold_distance_tol:
+        status = "near_fold"
+        why = (f"{ratio:.2g} x the largest < fold_tol = {options.fold_tol:g}" if ratio < options.fold_tol else
+               f"it reaches 0 when {names[closest]} changes by {dist[closest]:+.3g} {params[closest].unit}, "
+               f"{relative[closest]:.2g} of its value < fold_distance_tol = {options.fold_distance_tol:g}")
+        message = (
+            f"no sensitivities: the Hessian is nearly singular (smallest eigenvalue {eig[0]:.3g} N mm/rad^2; {why}): the equilibrium "
+            "is at or next to a fold (a snap-through), where dtheta/dp grows without bound and a first-order answer holds for no "
+            "finite change"
+        )
     cols = [names.index(c) for c in chosen]
     return Sensitivities(
         parameters=tuple(params[j] for j in cols),

@@ -161,8 +161,49 @@ def test_identifiability_warning_fires_on_pressure_only_data_and_not_on_the_full
 def test_rho_drops_out_of_loaded_rows_at_a_target_angle(clean):
     loaded = _dataset(clean, LAYOUT[3:6])
     ident = identifiability(loaded)
-    assert not ident.identifiable and "hardly depend on rho" in ident.warnings[0]
+    assert not ident.identifiable and "do not depend on rho" in ident.warnings[0]
     assert fit(loaded, ["E"]).identifiable
+    # alone, rho has a Fisher matrix of ratio 1: the absolute floor still finds it undetermined
+    alone = fit(loaded, ["rho"])
+    assert not alone.identifiable and not np.isfinite(alone.std_error[0])
+    assert any("do not depend on rho" in w for w in alone.warnings)
+
+
+def test_a_parameter_without_effect_is_named_even_beside_another(clean):
+    """Unloaded rows at P = 0: neither E nor rho changes a prediction; both are named."""
+    rows = [("straight", {"pressure_mpa": 0.0, "total_angle_deg": 0.5}), ("again", {"pressure_mpa": 0.0, "total_angle_deg": -0.5})]
+    r = fit(measurements_from_rows("zero pressure", rows), ["E", "rho"])
+    assert not r.identifiable
+    assert any("do not depend on E" in w for w in r.warnings) and any("do not depend on rho" in w for w in r.warnings)
+
+
+def test_a_straight_row_with_tip_coordinates_fits():
+    """theta = 0 exactly in a row (P = 0, no payload): CasADi's reverse-mode derivatives of the tip
+    through the smooth sinc forms stay finite there, so IPOPT starts (it stopped on
+    Invalid_Number_Detected)."""
+    truth = {"E": 0.6}
+    template = measurements_from_rows("tips", [
+        ("straight", {"pressure_mpa": 0.0, "tip_x_mm": 135.0, "tip_y_mm": 0.0}),
+        ("bent", {"pressure_mpa": 0.15, "tip_x_mm": 1.0, "tip_y_mm": 1.0}),
+    ])
+    values = {(p.row, p.quantity): p.predicted for p in predict(template, truth)}
+    data = measurements_from_rows("tips", [
+        ("straight", {"pressure_mpa": 0.0, "tip_x_mm": values[("straight", "tip_x")], "tip_y_mm": values[("straight", "tip_y")]}),
+        ("bent", {"pressure_mpa": 0.15, "tip_x_mm": values[("bent", "tip_x")], "tip_y_mm": values[("bent", "tip_y")]}),
+    ])
+    r = fit(data, ["E"])
+    assert r.ok and r.value("E") == pytest.approx(0.6, rel=FIT_EXACT_REL)
+
+
+def test_a_fitted_state_outside_the_models_range_is_a_warning():
+    """A bend of 500 degrees is fitted (the model can), but it passes a full turn and an outer-fibre
+    strain of 1: the fit says so, as solve would."""
+    r = fit(measurements_from_rows("far", [("far", {"pressure_mpa": 0.3, "total_angle_deg": 500.0}),
+                                           ("near", {"pressure_mpa": 0.1, "total_angle_deg": 60.0})]), ["E"])
+    far = next(row for row in r.rows if row["row"] == "far")
+    assert any("full turn" in v for v in far["validity"])
+    assert any(w.startswith("row 'far' is outside the model's range") and "full turn" in w for w in r.warnings)
+    assert not next(row for row in r.rows if row["row"] == "near")["validity"]
 
 
 def test_a_geometric_parameter_can_be_fitted(clean):

@@ -128,6 +128,16 @@ def test_near_a_fold_says_so_instead_of_numbers():
     assert all(v["dtheta_deg_per_unit"] is None and v["dtotal_angle_deg_per_unit"] is None for v in d["parameters"].values())
 
 
+def test_just_short_of_a_fold_the_default_options_say_so():
+    """0.02 % below the fold at 2.90414 N the eigenvalue ratio is still 0.006 (it falls like a square
+    root), but the fold is a first-order 3e-3 deg of payload direction away: near_fold, no numbers."""
+    r = solve(Scene(pressure=1e-3, payloads=(Payload(2.904143590 * (1 - 2e-4), 180.0),)))
+    assert r.ok and not r.jumps
+    s = sensitivities(r)
+    assert s.eigenvalue_ratio > SensitivityOptions().fold_tol  # the ratio alone would let it through
+    assert s.status == "near_fold" and "fold_distance_tol" in s.message
+
+
 def test_fold_distance_estimates_the_buckling_load():
     """The linear estimate of where the smallest eigenvalue reaches 0 is about twice the true
     distance (the eigenvalue falls like a square root): compare half of it with the load at

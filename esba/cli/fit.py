@@ -30,6 +30,22 @@ def _level_arg(text: str) -> float:
     return value
 
 
+def _has_scene_table(path: str) -> bool:
+    """Does the TOML measurement file ``path`` carry a [scene] table? (False for CSV and unreadable files:
+    those get their own message from load_measurements.)"""
+    if not path.lower().endswith(".toml"):
+        return False
+    try:
+        import tomllib
+    except ImportError:  # pragma: no cover - Python 3.10
+        import tomli as tomllib
+    try:
+        with open(path, "rb") as fh:
+            return "scene" in tomllib.load(fh)
+    except (OSError, ValueError):
+        return False
+
+
 def _fit_table(d: dict) -> str:
     def num(v, fmt=".5g"):
         return "-" if v is None else format(v, fmt)
@@ -50,13 +66,16 @@ def _fit_table(d: dict) -> str:
     if len(names) > 1:
         pairs = [f"{a}-{b} {num(d['correlation'][i][j], '+.3f')}" for i, a in enumerate(names) for j, b in enumerate(names) if j > i]
         lines.append("correlation: " + ", ".join(pairs))
-    lines.append(f"residual variance s^2 = {num(d['residual_variance'], '.4g')} ({d['dof']} degrees of freedom; "
-                 "standard errors scaled by it)")
-    lines.append(f"{'row':<22} {'quantity':<12} {'measured':>10} {'predicted':>10} {'residual':>10} {'sd':>7} {'r / sd':>7}")
+    if d["dof"] > 0:
+        lines.append(f"residual variance s^2 = {num(d['residual_variance'], '.4g')} ({d['dof']} degrees of freedom; "
+                     "standard errors scaled by it)")
+    else:
+        lines.append(f"no residual variance: {d['measurements']} measured values for {len(d['parameters'])} parameters leave no degrees of freedom")
+    lines.append(f"{'row':<22} {'quantity':<12} {'unit':<5} {'measured':>10} {'predicted':>10} {'residual':>10} {'sd':>7} {'r / sd':>7}")
     for r in d["residuals"]:
         sd = f"{r['sd']:.3g}" + ("" if r["sd_given"] else "*")
-        lines.append(f"{r['row'][:22]:<22} {r['quantity']:<12} {r['measured']:>10.4g} {r['predicted']:>10.4g} {r['residual']:>+10.3g} "
-                     f"{sd:>7} {r['normalised']:>+7.2f}")
+        lines.append(f"{r['row'][:22]:<22} {r['quantity']:<12} {r['unit']:<5} {r['measured']:>10.4g} {r['predicted']:>10.4g} "
+                     f"{r['residual']:>+10.3g} {sd:>7} {r['normalised']:>+7.2f}")
     if any(not r["sd_given"] for r in d["residuals"]):
         lines.append("* no standard deviation given: 1 deg, 1 mm or 1 N/m assumed (only their ratios matter once scaled by s^2)")
     for s in d["states"]:
@@ -76,6 +95,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
     try:
         base = load_scene(args.scene) if args.scene else None
+        if base is not None and _has_scene_table(args.measurements):
+            raise UsageError(f"--scene {args.scene}: {args.measurements} has a [scene] table of its own; give the actuator in one place")
         data = load_measurements(args.measurements, base)
         changes = {k: v for k, v in (("segments", args.segments), ("variant", args.variant)) if v is not None}
         if changes:  # the flags override the scene (the file's [scene], --scene or Table 1)
@@ -111,7 +132,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
 def add_fit(sub) -> None:
     p = sub.add_parser("fit", help="fit actuator parameters (E, rho, ...) to a measurement file; intervals, correlations, residuals")
-    p.add_argument("measurements", metavar="MEASUREMENTS", help="measurement file, .csv or .toml (see esba/measurements.py for the columns)")
+    p.add_argument("measurements", metavar="MEASUREMENTS", help="measurement file, .csv or .toml: one row a scene (pressure_mpa, _kpa or _bar, or target_angle_deg; payload_n, "
+                   "payload_angle_deg, payload_at; the row's own L_mm, r1_mm, r2_mm, d_mm, rho_deg, E_mpa, M_kg) and what was measured "
+                   "(total_angle_deg, tip_x_mm, tip_y_mm, stiffness_n_per_m, each with an optional <name>_sd_<unit>, e.g. "
+                   "total_angle_sd_deg); TOML: one [[measurement]] table a row, and an optional [scene]")
     p.add_argument("--scene", metavar="SCENE.toml", help="the actuator and model of the rows (default: the file's [scene], else Table 1, n = 3)")
     p.add_argument("--free", type=_free_arg, default=["E", "rho"], metavar="NAMES", help="parameters to fit, comma-separated (default E,rho; any of L,r1,r2,d,rho,E,M)")
     p.add_argument("--segments", "-n", type=segments_arg, help="segment count n >= 1 (overrides the scene's)")
