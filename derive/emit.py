@@ -200,11 +200,16 @@ def header(prog: Program, counts: dict[str, dict[str, int]], lines: int) -> str:
     return "\n".join(out)
 
 
-def generate_source(n: int, effects: EffectSet, variant: str) -> tuple[str, dict]:
-    """Derive and render one model; return its source and its manifest entry."""
+def generate_source(n: int, effects: EffectSet, variant: str, progress=None) -> tuple[str, dict]:
+    """Derive and render one model; return its source and its manifest entry.
+
+    ``progress(message)``, when given, is called as each stage ends (derivation, CasADi code).
+    """
     t0 = time.perf_counter()
     prog = build(n, effects, variant)
     t1 = time.perf_counter()
+    if progress:
+        progress(f"derived {len(prog.assignments)} assignments in {t1 - t0:.1f} s; writing the CasADi code")
     body = render(prog)
     counts = _counts(body)
     text = header(prog, counts, body.count("\n") + 1) + body
@@ -219,6 +224,8 @@ def generate_source(n: int, effects: EffectSet, variant: str) -> tuple[str, dict
         "instructions": {k: v["instructions"] for k, v in counts.items()},
     }
     entry["_timing"] = {"derive_s": t1 - t0, "emit_s": time.perf_counter() - t1}
+    if progress:
+        progress(f"CasADi code written in {entry['_timing']['emit_s']:.1f} s")
     entry["_assignments"] = len(prog.assignments)
     return text, entry
 

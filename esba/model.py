@@ -332,7 +332,8 @@ def generate_into_cache(n: int, effects: EffectSet, variant: str, announce: bool
         )
     from derive.emit import generate_source  # SymPy is imported only here
 
-    text, entry = generate_source(n, effects, variant)
+    progress = (lambda msg: _log.info("  n = %d: %s", n, msg)) if announce else None
+    text, entry = generate_source(n, effects, variant, progress)
     cache.write_text(path, text)
     return path, entry
 
