@@ -289,3 +289,14 @@ def test_cli_fit_refuses_a_bad_figure_path_before_fitting(tmp_path, capsys, plot
     (tmp_path / "dir.png").mkdir()
     assert main(["fit", str(path), "--free", "E", "--plot", str(tmp_path / "dir.png")]) == EXIT_USAGE
     assert "is a folder" in capsys.readouterr().err
+
+
+def test_cli_fit_refuses_a_scene_given_twice(tmp_path, capsys):
+    """A TOML file with its own [scene] and --scene: the actuator would silently be --scene's."""
+    data = tmp_path / "m.toml"
+    data.write_text("[scene]\nsegments = 4\n\n[[measurement]]\npressure_mpa = 0.1\ntotal_angle_deg = 40\n", encoding="utf-8")
+    scene = tmp_path / "s.toml"
+    scene.write_text("segments = 3\n", encoding="utf-8")
+    assert main(["fit", str(data), "--free", "E", "--scene", str(scene)]) == EXIT_USAGE
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "has a [scene] table of its own" in err
