@@ -468,9 +468,16 @@ def _identifiability(F: np.ndarray, count: int, free: tuple[str, ...], scale: np
             involved = np.abs(full) > 1e-2
             unknown |= involved
             names = [free[j] for j in range(k) if involved[j]]
+            head = (f"not identifiable: the Fisher matrix is nearly singular (smallest / largest eigenvalue {sub_ratio:.2g} < {tol:g}, "
+                    "relative parameter changes): ")
+            if len(names) == 1:
+                j = free.index(names[0])
+                where = " (on its bound)" if names[0] in at_bound else ""
+                warnings.append(head + f"the predictions hardly depend on {names[0]} at {estimate[j]:.4g} {UNITS[names[0]]}{where}, "
+                                "so these data do not determine it")
+                continue
             combo = ", ".join(f"d{free[j]}/{free[j]} = {full[j]:+.3g}" for j in range(k) if involved[j])
-            warnings.append(f"not identifiable: the Fisher matrix is nearly singular (smallest / largest eigenvalue {sub_ratio:.2g} < {tol:g}, "
-                            f"relative parameter changes): the data do not separate {' and '.join(names)}; changing them together as {combo} "
+            warnings.append(head + f"the data do not separate {' and '.join(names)}; changing them together as {combo} "
                             "leaves every prediction unchanged to first order")
     identifiable = not bool(np.any(unknown))
     for name in at_bound:
