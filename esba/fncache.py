@@ -58,13 +58,13 @@ def _path(tag: str, parts: Sequence[str]) -> Path:
 
 
 def _read(path: Path) -> dict[str, ca.Function] | None:
-    why = cache.damage(path)
+    data, why = cache.read_verified(path)
     if why is not None:
         _log.warning("cached functions %s are damaged (%s): building them again", path, why)
         cache.discard(path)
         return None
     try:
-        reader = ca.StringDeserializer(path.read_text(encoding="ascii"))
+        reader = ca.StringDeserializer(data.decode("ascii"))
         count = int(reader.unpack())
         names = [str(reader.unpack()) for _ in range(count)]
         return {name: reader.unpack() for name in names}

@@ -98,48 +98,55 @@ def _manifest_entry(filename: str) -> dict | None:
         return None
 
 
-def _committed(filename: str) -> tuple[Path | None, bool]:
-    """The committed model file when it is there, of this derivation and intact; and whether a
-    damaged one was reported."""
+def _committed(filename: str) -> tuple[Path | None, bool, str | None]:
+    """The committed model file when it is there, of this derivation and intact; whether a damaged
+    one was reported; and its SHA-256."""
     path = GENERATED_DIR / filename
     if not path.exists():
-        return None, False
+        return None, False, None
     entry = _manifest_entry(filename)
     if entry is None:
-        return None, False
+        return None, False, None
     # a committed model of an older derivation is not served: regenerate it into the cache
     if entry.get("source_sha256") != source_hash():
-        return None, False
-    if not path.is_file() or hashlib.sha256(path.read_bytes()).hexdigest() != entry.get("sha256"):
+        return None, False, None
+    sha = hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else None
+    if sha is None or sha != entry.get("sha256"):
         _log.warning(
             "committed model %s does not match the sha256 in generated/manifest.json (a damaged installation): "
             "using a copy in the cache (generated if missing, seconds to minutes)", path,
         )
-        return None, True
-    return path, False
+        return None, True, None
+    return path, False, sha
 
 
-def model_file_problem(path: Path, n: int, effects: EffectSet, variant: str) -> str | None:
-    """What is wrong with the model file at ``path`` for (n, effects, variant), read before it is executed.
+def model_file_problem(path: Path, n: int, effects: EffectSet, variant: str, data: bytes | None = None) -> str | None:
+    """What is wrong with the model file at ``path`` (its content ``data`` when already read) for
+    (n, effects, variant), read before it is executed.
 
-    Checks the header line, ``FORMAT``, ``N``, ``EFFECTS`` and ``VARIANT``; None when all agree.
+    Checks the header line, ``FORMAT``, ``N``, ``EFFECTS`` and ``VARIANT`` (in the file's head) and
+    that the file ends with the end of ``build()``; None when all agree.
     """
     try:
-        text = path.read_text(encoding="utf-8")
+        text = (path.read_bytes() if data is None else data).decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         return f"unreadable ({exc.__class__.__name__})"
     if not text.startswith(MODEL_HEADER):
         return "not an esba model file (its first line is not the generator's header)"
-    found = dict(re.findall(r"^(FORMAT|N|EFFECTS|VARIANT) = (.+)$", text, flags=re.MULTILINE))
+    found = dict(re.findall(r"^(FORMAT|N|EFFECTS|VARIANT) = (.+)$", text[:_HEAD_CHARS], flags=re.MULTILINE))
     if found.get("FORMAT") != str(MODEL_FORMAT):
         return f"format {found.get('FORMAT', 'unknown')}, this esba reads format {MODEL_FORMAT}"
     want = {"N": str(n), "EFFECTS": repr(effects.spec()), "VARIANT": repr(variant)}
     for key, value in want.items():
         if found.get(key) != value:
             return f"it holds {key} = {found.get(key, 'nothing')}, not {value}"
-    if not re.search(r"^    return out$", text, flags=re.MULTILINE):
+    if not text.rstrip("\n").endswith("\n    return out"):
         return "incomplete (no end of build())"
     return None
+
+
+#: The constants model_file_problem checks stand in the first lines of a model file.
+_HEAD_CHARS = 4096
 
 
 def _exec_model(path: Path) -> dict[str, ca.Function]:
@@ -338,40 +345,44 @@ def generate_into_cache(n: int, effects: EffectSet, variant: str, announce: bool
     return path, entry
 
 
-def _usable_cached(path: Path, n: int, effects: EffectSet, variant: str) -> bool:
-    """True when the cached file is intact; a damaged one is reported (one line naming it) and removed."""
+def _usable_cached(path: Path, n: int, effects: EffectSet, variant: str) -> str | None:
+    """The SHA-256 of the cached file when it is intact; a damaged one is reported (one line naming
+    it) and removed (None)."""
     if not path.exists():
-        return False
-    why = cache.damage(path) or model_file_problem(path, n, effects, variant)
+        return None
+    data, why = cache.read_verified(path)
+    why = why or model_file_problem(path, n, effects, variant, data)
     if why is None:
-        return True
+        return hashlib.sha256(data).hexdigest()
     _log.warning("cached model %s is damaged (%s): generating it again (seconds to minutes)", path, why)
     cache.discard(path)
-    return False
+    return None
 
 
-def _locate_or_generate(n: int, effects: EffectSet, variant: str) -> Path:
+def _locate_or_generate(n: int, effects: EffectSet, variant: str) -> tuple[Path, str]:
+    """The model file to load and its SHA-256 (checked on the way)."""
     filename = model_filename(n, effects, variant)
-    path, reported = _committed(filename)
+    path, reported, sha = _committed(filename)
     if path is not None:
-        return path
+        return path, sha
     cached = cache_dir() / filename
     damaged = reported or cached.exists()  # a cached file is reported below unless it is intact
-    if _usable_cached(cached, n, effects, variant):
-        return cached
+    sha = _usable_cached(cached, n, effects, variant)
+    if sha is not None:
+        return cached, sha
     with _lock:
-        if _usable_cached(cached, n, effects, variant):
-            return cached
-        path, _ = generate_into_cache(n, effects, variant, announce=not damaged)
-    return path
+        sha = _usable_cached(cached, n, effects, variant)
+        if sha is not None:
+            return cached, sha
+        path, entry = generate_into_cache(n, effects, variant, announce=not damaged)
+    return path, entry["sha256"]
 
 
 @lru_cache(maxsize=64)
 def _load(n: int, effects: EffectSet, variant: str) -> Model:
-    path = _locate_or_generate(n, effects, variant)
+    path, key = _locate_or_generate(n, effects, variant)
     # executing the file builds its SX graphs in Python (about 2 s at n = 100); its Functions are kept
     # in CasADi's own serialisation, keyed by the file's SHA-256, and read back in tens of milliseconds
-    key = hashlib.sha256(path.read_bytes()).hexdigest()
     functions = fncache.cached(path.stem, ["model", key], lambda: _exec_model(path))
     return Model(n, effects, variant, path, functions, key)
 
