@@ -570,7 +570,8 @@ def solve(
     full = scene.parameters(pressure)
     lbx = model.lower_bounds(full)
     pv_full = model.param_vector(full)
-    loaded = bool(scene.payloads) or scene.gravity
+    pv_unloaded = model.param_vector(scene.parameters(pressure, load_factor=0.0))
+    loaded = bool(np.any(pv_full != pv_unloaded))  # payloads of 0 N and no weight leave nothing to ramp
 
     message = ""
     ramps: list[tuple[str, Ramp]] = []
@@ -580,7 +581,6 @@ def solve(
     elif not options.continuation:
         theta = known_unloaded if known_unloaded is not None else np.zeros(n)
     else:
-        pv_unloaded = model.param_vector(scene.parameters(pressure, load_factor=0.0))
         if known_unloaded is not None:
             theta = known_unloaded
         else:
