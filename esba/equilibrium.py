@@ -37,6 +37,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any, Sequence
 
 import numpy as np
@@ -365,7 +366,13 @@ def pressure_for_angle(scene: Scene, angle_deg: float | None = None) -> float:
     if angle_deg is None:
         raise EquilibriumError("pressure_for_angle needs angle_deg (the scene gives a pressure, not a target angle)")
     checks.finite("target_angle_deg", angle_deg, SceneError)
-    angle = math.radians(float(angle_deg))
+    return _pressure_for_angle(scene, float(angle_deg))
+
+
+@lru_cache(maxsize=1024)
+def _pressure_for_angle(scene: Scene, angle_deg: float) -> float:
+    """:func:`pressure_for_angle`, kept per scene and angle (a stiffness study asks several times)."""
+    angle = math.radians(angle_deg)
     model = scene.model()
     theta = np.full(scene.segments, angle / scene.segments)
     g0 = model.gradient(theta, model.param_vector(scene.parameters(0.0, load_factor=0.0)))

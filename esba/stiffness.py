@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Sequence
 
 import casadi as ca
@@ -179,7 +180,11 @@ class SecantStiffness:
     stiffness_n_per_m: tuple[float, ...]
     initial: Equilibrium = field(repr=False)
     loaded: tuple[Equilibrium, ...] = field(repr=False)
-    tangent: TangentStiffness = field(repr=False)
+
+    @cached_property
+    def tangent(self) -> TangentStiffness:
+        """The tangent stiffness of the unloaded state (computed when first asked for)."""
+        return tangent_stiffness(self.initial) if self.initial.ok else TangentStiffness(np.full((2, 2), np.nan), None)
 
     @property
     def ok(self) -> bool:
@@ -274,7 +279,6 @@ def secant_stiffness(
         loaded.append(r)
         disp.append(delta)
         stiff.append(1000.0 * f / delta if delta != 0 else math.inf)
-    tangent = tangent_stiffness(initial) if initial.ok else TangentStiffness(np.full((2, 2), np.nan), None)
     return SecantStiffness(
         pressure=float(pressure),
         angle_deg=float(angle_deg),
@@ -283,7 +287,6 @@ def secant_stiffness(
         stiffness_n_per_m=tuple(stiff),
         initial=initial,
         loaded=tuple(loaded),
-        tangent=tangent,
     )
 
 
