@@ -222,16 +222,28 @@ def _scale(data: MeasurementSet, free: tuple[str, ...]) -> tuple[np.ndarray, np.
 
 def _states(m: Measurement, scene: Scene, options: SolverOptions) -> tuple[np.ndarray, np.ndarray | None, str]:
     """Load-path solves of a row: loaded angles, unloaded angles (stiffness rows), and why not ok."""
+    theta_l, theta_u, why, _ = _states_and_snaps(m, scene, options)
+    return theta_l, theta_u, why
+
+
+def _snap_notes(r) -> list[str]:
+    """The sentences in which ``solve`` reported the snap-throughs of its load path."""
+    return [note for note in r.notes if note.startswith("the quasi-static path jumps")]
+
+
+def _states_and_snaps(m: Measurement, scene: Scene, options: SolverOptions) -> tuple[np.ndarray, np.ndarray | None, str, list[str]]:
+    """:func:`_states` and the snap-throughs on the row's load path (one sentence each)."""
     try:
         r = solve(scene, options)
     except (EquilibriumError, SceneError) as exc:  # a target angle that needs a negative pressure, scales the solver cannot resolve
-        return np.full(scene.segments, np.nan), None, str(exc)
+        return np.full(scene.segments, np.nan), None, str(exc), []
+    snaps = _snap_notes(r)
     if not r.ok:
-        return r.theta, None, r.message or r.status
+        return r.theta, None, r.message or r.status, snaps
     if "stiffness" not in m.values:
-        return r.theta, None, ""
+        return r.theta, None, "", snaps
     u = solve(scene.replace(payloads=(Payload(0.0, scene.payloads[0].angle_deg, scene.payloads[0].at),)), options, pressure=r.pressure)
-    return r.theta, u.theta, "" if u.ok else (u.message or u.status)
+    return r.theta, u.theta, "" if u.ok else (u.message or u.status), snaps + _snap_notes(u)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -345,7 +357,8 @@ class FitResult:
         (and ``sd_given``), ``residual`` (predicted - measured), ``normalised`` (residual / sd).
     rows : tuple of dict
         Per row: ``row``, ``stable``, ``min_eigenvalue``, ``on_load_path``, ``message``, ``validity``
-        (the :mod:`esba.validity` findings of its fitted states, also among ``warnings``).
+        (the :mod:`esba.validity` findings of its fitted states) and ``snaps`` (the snap-throughs on
+        its load path at the fitted parameters), both also among ``warnings``.
     identifiable : bool
     fisher_ratio : float
         Smallest over largest eigenvalue of the Fisher matrix of relative parameter changes.
@@ -603,6 +616,8 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
     st = _statistics(np.array(J_rows), np.array(r_rows), free, scale, estimate, at_bound, all(d["sd_given"] for d in residuals), options)
     for r in row_reports:
         st["warnings"] += [f"row {r['row']!r} is outside the model's range at the fitted parameters: {v}" for v in r["validity"]]
+        st["warnings"] += [f"row {r['row']!r}: at the fitted parameters {v}; the row is compared with the state after the jump"
+                           for v in r["snaps"]]
     if messages:  # not a minimum of the fit, or not a state the data describe: its curvature means nothing
         for key in ("se", "interval", "cov"):
             st[key] = np.full_like(st[key], np.nan)
@@ -619,7 +634,8 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
 def _check_row(m: Measurement, row: _Row, free: tuple[str, ...], p: np.ndarray, theta_l: np.ndarray, theta_u: np.ndarray | None,
                solver_options: SolverOptions, options: FitOptions) -> dict:
     """Is the fitted state a stable minimum, and the one the load path reaches?"""
-    out = {"row": m.label, "stable": False, "min_eigenvalue": math.nan, "on_load_path": False, "message": "", "validity": []}
+    out = {"row": m.label, "stable": False, "min_eigenvalue": math.nan, "on_load_path": False, "message": "", "validity": [],
+           "snaps": []}
     try:
         scene = _fitted_scene(m, free, p)
     except SceneError as exc:
@@ -644,7 +660,8 @@ def _check_row(m: Measurement, row: _Row, free: tuple[str, ...], p: np.ndarray, 
             findings.setdefault(f.check, f.message)
     out["validity"] = list(findings.values())
     out["stable"], out["min_eigenvalue"] = bool(stable), eig_min
-    theta_path, theta_u_path, why = _states(m, scene, solver_options)
+    theta_path, theta_u_path, why, snaps = _states_and_snaps(m, scene, solver_options)
+    out["snaps"] = snaps
     if why:
         out["message"] = f"the load-path solve at the fitted parameters is not ok: {why}"
         return out

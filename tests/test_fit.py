@@ -300,3 +300,15 @@ def test_cli_fit_refuses_a_scene_given_twice(tmp_path, capsys):
     assert main(["fit", str(data), "--free", "E", "--scene", str(scene)]) == EXIT_USAGE
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1 and "has a [scene] table of its own" in err
+
+
+def test_a_row_whose_load_path_snaps_says_so():
+    """An axial push past the fold of a slightly inflated actuator: the row's state is the one after
+    the snap, and the fit says that it compared the row with it."""
+    rows = [("snap", {"pressure_mpa": 0.001, "payload_n": 3.0, "payload_angle_deg": 180.0, "total_angle_deg": 95.0}),
+            ("no snap", {"pressure_mpa": 0.1, "payload_n": 1.0, "payload_angle_deg": 90.0, "total_angle_deg": 40.0})]
+    r = fit(measurements_from_rows("snaps", rows), ["E"])
+    snap = next(row for row in r.rows if row["row"] == "snap")
+    assert len(snap["snaps"]) == 1 and "snap-through" in snap["snaps"][0]
+    assert not next(row for row in r.rows if row["row"] == "no snap")["snaps"]
+    assert any(w.startswith("row 'snap': at the fitted parameters the quasi-static path jumps") for w in r.warnings)
