@@ -231,12 +231,16 @@ def generate_source(n: int, effects: EffectSet, variant: str, progress=None) -> 
 
 
 def atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` so that readers never see a partial file (rename is atomic)."""
+    """Write ``text`` to ``path`` so that readers never see a partial file (rename is atomic), with
+    the mode a new file of the user's gets (0666 less the umask; mkstemp's own is 0600)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    umask = os.umask(0)
+    os.umask(umask)
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
             fh.write(text)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -59,7 +59,6 @@ __all__ = [
     "check_folder",
     "figure_file",
     "figure_suffixes",
-    "as_user_file",
 ]
 
 #: The folder that holds the ``esba`` package: a checkout of the repository, or site-packages.
@@ -249,22 +248,3 @@ def figure_file(path: str | Path, flag: str, default_name: str) -> Path:
             f"{flag} {_show(path)}: unsupported figure format '{file.suffix}'; allowed are {', '.join(figure_suffixes())}"
         )
     return check_file(file, flag)
-
-
-def as_user_file(*paths: Path) -> None:
-    """Give files written through a temporary file (mode 0600) the mode a new file of the user's
-    would have (0666 less the umask), so that a shared folder's files are readable by others.
-
-    >>> import os, tempfile
-    >>> fd, name = tempfile.mkstemp()
-    >>> os.close(fd)
-    >>> old = os.umask(0o022)
-    >>> as_user_file(Path(name))
-    >>> _ = os.umask(old)
-    >>> oct(os.stat(name).st_mode & 0o777)
-    '0o644'
-    """
-    umask = os.umask(0)
-    os.umask(umask)
-    for path in paths:
-        os.chmod(path, 0o666 & ~umask)

@@ -137,3 +137,15 @@ def test_generation_sources_cover_what_emission_imports():
     from derive.provenance import GENERATION_SOURCES
 
     assert set(out) <= set(GENERATION_SOURCES)
+
+
+def test_written_files_are_readable_by_others(tmp_path):
+    """A model file and its manifest get the mode of a new file of the user's (0644 under umask
+    022), not mkstemp's 0600: a shared generated/ or --out folder is readable by the group."""
+    old = os.umask(0o022)
+    try:
+        path, _ = emit.write_model(1, EffectSet.parse("air,axial"), "paper", tmp_path)
+    finally:
+        os.umask(old)
+    for written in (path, tmp_path / emit.MANIFEST):
+        assert written.stat().st_mode & 0o777 == 0o644, written

@@ -41,7 +41,6 @@ def _cmd_generate(args: argparse.Namespace) -> int:
         for n, eff, var in chosen:
             print(f"esba: generating n = {n} ({var}) into {out}", file=sys.stderr)
             path, _ = emit.write_model(n, eff, var, out)
-            outputs.as_user_file(path, out / emit.MANIFEST)
             rows.append(path.name)
         print_result(args, {"refreshed": rows, "folder": str(out)}, lambda d: "\n".join(f"wrote {d['folder']}/{r}" for r in d["refreshed"]))
         return EXIT_OK
@@ -59,7 +58,6 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
         print(f"esba: generating n = {args.segments} ({effects.spec()}, {variant}) into {out}", file=sys.stderr)
         path, entry = emit.write_model(args.segments, effects, variant, out)
-        outputs.as_user_file(path, out / emit.MANIFEST)
         where = "the checkout's generated/" if args.out is None else "--out"
     data = {
         "file": str(path),
