@@ -184,3 +184,15 @@ def test_the_scale_check_of_a_large_design_grid_is_bounded(monkeypatch):
     assert (0.5, 0.0) in designs  # the thinnest concentric chamber: the largest pressure for the angle
     # the least stiff feasible design (largest r2 with the largest d it allows) is among them
     assert any(r2 == 3.5 and d == pytest.approx(4.0) for r2, d in designs)
+
+
+def test_the_console_table_marks_points_that_snapped(capsys):
+    """Pushed along its axis past the fold (2.904 N), the slightly inflated actuator snaps: the
+    table says so on that row and counts it; the notes say where."""
+    args = ["sweep", "--pressure", "0.001", "--payload", "2.8:3.0:3", "--payload-angle", "180", "--no-progress", "--no-compile"]
+    assert main(args) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.strip().startswith("0.00100")]
+    assert [line.endswith(", snapped") for line in rows] == [False, False, True]
+    assert main([*args, "--json"]) == 0
+    notes = [r["notes"] for r in json.loads(capsys.readouterr().out)["rows"]]
+    assert "snap-through" in notes[2] and not notes[0]

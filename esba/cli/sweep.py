@@ -42,11 +42,17 @@ def _sweep_table(d: dict) -> str:
     if rows is not None and len(rows) <= 60:
         head = f"{'P MPa':>9} {'F N':>6} {'Om deg':>7} {'r2':>6} {'d':>6} {'angle deg':>10} {'tip x, y mm':>18}  status"
         lines.append(head)
+        snapped = 0
         for r in rows:
             ang = "" if r["total_angle_deg"] is None else f"{r['total_angle_deg']:10.3f}"
             tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
+            snap = "snap-through" in (r.get("notes") or "")
+            snapped += snap
             lines.append(f"{num(r['pressure_mpa'], '9.5f'):>9} {num(r['payload_n'], '6.3g'):>6} {num(r['payload_angle_deg'], '7.3g'):>7} "
-                         f"{num(r['r2_mm'], '6.3g'):>6} {num(r['d_mm'], '6.3g'):>6} {ang:>10} {tip:>18}  {r['status']}")
+                         f"{num(r['r2_mm'], '6.3g'):>6} {num(r['d_mm'], '6.3g'):>6} {ang:>10} {tip:>18}  {r['status']}"
+                         + (", snapped" if snap else ""))
+        if snapped:
+            lines.append(f"snapped: {snapped} point(s) jumped on their load path (a fold); where and from which state: the notes (--json, --out)")
     else:
         total = sum(d["counts"].values())
         lines.append(f"{total} rows" + (f" in {d['out']}" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
