@@ -113,7 +113,7 @@ def render() -> str:
 def default_page() -> Path:
     """:data:`DOC_PATH` when run inside the checkout that holds this package, else ./derivations.md.
 
-    An installed package never writes into its own folder (``esba.outputs`` applies the same rule
+    An installed package never writes into its own folder (``esba.infra.outputs`` applies the same rule
     to the runtime's pages).
     """
     root = DOC_PATH.parent.parent

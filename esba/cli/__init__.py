@@ -1,18 +1,19 @@
 """The ``esba`` command line.
 
 Every command prints a readable table, or JSON with ``--json`` (valid JSON: no NaN or Infinity,
-see :mod:`esba.jsonsafe`). Bad input (a flag, a scene file, an output path that cannot be
+see :mod:`esba.infra.jsonsafe`). Bad input (a flag, a scene file, an output path that cannot be
 written, an unusable model cache) ends with one line ``esba: error: ...`` naming the value and
 what is allowed, and exit code 2, before any long computation; a solve that fails or lands on an
 unstable equilibrium says so and exits 1; a result outside the range the paper's model describes
 is printed with ``esba: warning: ...`` lines (and a ``validity`` list in JSON). Where each
-command writes is decided by :mod:`esba.outputs`. A failure found while a command runs, not in
+command writes is decided by :mod:`esba.infra.outputs`. A failure found while a command runs, not in
 its input (a study whose Dask scheduler was lost, a full disk), ends with one line
 ``esba: error: ...`` and exit code 1; Ctrl-C ends with ``esba: interrupted`` and exit code 130.
 
 One module per command group (:mod:`esba.cli.scenes`, :mod:`esba.cli.sweep`, ...), each adding its
 subcommands to the parser; :mod:`esba.cli.arguments` and :mod:`esba.cli.results` hold what they
-share. Building the parser imports no numerics: each command imports what it computes with.
+share. Building the parser imports no numerics: each command imports what it computes with. The
+top floor of the house: it may import every package of esba.
 """
 
 from __future__ import annotations
@@ -22,8 +23,11 @@ import os
 import sys
 from typing import Callable, Sequence
 
-from esba import __version__, console
-from esba.interrupts import caused_by_interrupt
+from derive.effects import EffectError
+from esba import __version__
+from esba.infra import console
+from esba.infra.errors import EsbaError
+from esba.infra.interrupts import caused_by_interrupt
 
 from .arguments import Parser, UsageError
 from .bench import add_bench
@@ -51,18 +55,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _input_error(exc: BaseException) -> bool:
-    """An error class of esba's own that reports bad input (SceneError, OutputError, CacheError, ...)."""
-    module = type(exc).__module__
-    return isinstance(exc, ValueError) and (module.startswith("esba.") or module.startswith("derive."))
-
-
-def _run_failure(exc: BaseException) -> bool:
-    """An error class of esba's own for a failure found while the command ran, not in its input
-    (StudyStopped: a lost scheduler, a full disk; WriteFailed)."""
-    return isinstance(exc, RuntimeError) and type(exc).__module__.startswith("esba.")
-
-
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return text[0] if text else type(exc).__name__
@@ -76,21 +68,16 @@ def _run(argv: Sequence[str] | None) -> int:
             raise UsageError("name a command: " + ", ".join(sorted(parser._subparsers._group_actions[0].choices)))  # type: ignore[union-attr]
         return int(args.func(args))
     except Exception as exc:
-        # an EquilibriumError can only come from esba.equilibrium once it is imported (--help never imports it)
-        equilibrium = sys.modules.get("esba.equilibrium")
-        if equilibrium is not None and isinstance(exc, equilibrium.EquilibriumError):
-            print(f"esba: failed: {_first_line(exc)}", file=sys.stderr)
-            return EXIT_FAILED
-        if _input_error(exc):
-            print(f"esba: error: {_first_line(exc)}", file=sys.stderr)
-            return EXIT_USAGE
+        # esba's own errors, by class (esba.infra.errors): bad input exits 2, a failure while running 1
+        if isinstance(exc, (EsbaError, EffectError)):
+            code = exc.exit_code if isinstance(exc, EsbaError) else EXIT_USAGE
+            label = exc.label if isinstance(exc, EsbaError) else "error"
+            print(f"esba: {label}: {_first_line(exc)}", file=sys.stderr)
+            return code
         if isinstance(exc, (BrokenPipeError, MemoryError)) or os.environ.get("ESBA_DEBUG"):
             raise
         if caused_by_interrupt(exc):  # Ctrl-C that surfaced inside CasADi as a SystemError
             raise KeyboardInterrupt from None
-        if _run_failure(exc):
-            print(f"esba: error: {_first_line(exc)}", file=sys.stderr)
-            return EXIT_FAILED
         if isinstance(exc, OSError) and exc.errno is not None:  # an output that could not be written (a full disk, ...)
             where = f"{exc.filename}: " if exc.filename else ""
             print(f"esba: error: {where}{exc.strerror or exc}", file=sys.stderr)

@@ -11,10 +11,11 @@ import re
 from typing import Callable, Sequence
 
 from derive.effects import DEFAULT_VARIANT, VARIANTS
-from esba import checks, outputs
+from esba.infra import checks, outputs
+from esba.infra.errors import InputError
 
 
-class UsageError(ValueError):
+class UsageError(InputError):
     """Bad input from the command line: reported in one line with exit code 2."""
 
 
@@ -29,7 +30,7 @@ _WHOLE = re.compile(r"\s*\d+\s*")
 
 
 def segments_arg(text: str) -> int:
-    """An argparse type: the segment count n, 1 to :data:`esba.checks.MAX_SEGMENTS`."""
+    """An argparse type: the segment count n, 1 to :data:`esba.infra.checks.MAX_SEGMENTS`."""
     if not _WHOLE.fullmatch(text):
         raise argparse.ArgumentTypeError(f"segments={text!r}: expected a whole number from 1 to {checks.MAX_SEGMENTS}")
     try:
@@ -117,7 +118,7 @@ def scene_changes(args: argparse.Namespace, skip: tuple[str, ...] = ()) -> dict:
 
 def load_scene_file(path: str | None, default):
     """The scene file ``path`` (an empty name is an error, not the default), else ``default``."""
-    from esba.scene import SceneError, load_scene
+    from esba.model.scene import SceneError, load_scene
 
     if path is None:
         return default
@@ -128,7 +129,7 @@ def load_scene_file(path: str | None, default):
 
 def scene_from_args(args: argparse.Namespace, payloads: bool = True):
     """The scene file (or the main job) with the flags applied; bad values are usage errors."""
-    from esba.scene import MAIN_JOB, Payload, SceneError
+    from esba.model.scene import MAIN_JOB, Payload, SceneError
 
     try:
         scene = load_scene_file(args.scene, MAIN_JOB)
@@ -154,7 +155,7 @@ def scene_from_args(args: argparse.Namespace, payloads: bool = True):
 
 
 def output_file_arg(*suffixes: str) -> Callable[[str], str]:
-    """An argparse type for a file to write (:func:`esba.outputs.check_file`), checked when the flags are
+    """An argparse type for a file to write (:func:`esba.infra.outputs.check_file`), checked when the flags are
     parsed, before any computation."""
 
     def check(text: str) -> str:

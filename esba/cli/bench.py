@@ -5,15 +5,22 @@ from __future__ import annotations
 import argparse
 import sys
 
-from esba import outputs
+from esba.infra import outputs
 
-from .arguments import Parser, UsageError, count_arg, output_file_arg, refuse, segments_arg
+from .arguments import (
+    Parser,
+    UsageError,
+    count_arg,
+    output_file_arg,
+    refuse,
+    segments_arg,
+)
 from .cluster import chunk_arg, scheduler_arg, timeout_arg, workers_arg
 from .results import EXIT_OK, print_result
 
 
 def _cmd_bench_generation(args: argparse.Namespace) -> int:
-    from esba import bench
+    from esba.bench import timing as bench
 
     page = outputs.check_file(args.markdown, "--markdown") if args.markdown else None
     ns = [n for n in bench.GENERATION_NS if n <= args.max_n]
@@ -26,16 +33,18 @@ def _cmd_bench_generation(args: argparse.Namespace) -> int:
     data = {"rows": [r.__dict__ for r in rows], "growth_exponent": exponent}
     if exponent is None:
         data["growth_exponent_reason"] = why
-    print_result(args, data, lambda d: bench.generation_table(rows))
+    from esba.pages import performance
+
+    print_result(args, data, lambda d: performance.generation_table(rows))
     if page is not None:
         command = f"esba bench generation --max-n {args.max_n} --repeat {args.repeat}{' --no-naive' if args.no_naive else ''} --markdown {args.markdown}"
-        path = bench.write_generation_page(page, rows, command)
+        path = performance.write_generation_page(page, rows, command)
         print(f"esba: wrote {path}", file=sys.stderr)
     return EXIT_OK
 
 
 def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
-    from esba import accuracy as acc
+    from esba.bench import accuracy as acc
 
     if args.quick:
         refuse(args, ["max_n", "reference_n", "fixed_n"], "with --quick (it fixes n <= 4, reference n = 16)")
@@ -90,7 +99,7 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
         command = "esba bench accuracy" + (" --quick" if args.quick else "")
         if not args.quick and (max_n, reference_n, fixed_n, args.repeat) != (128, 256, 16, 5):
             command += f" --max-n {max_n} --reference-n {reference_n} --fixed-n {fixed_n} --repeat {args.repeat}"
-        from esba.accuracy_report import write_page
+        from esba.pages.accuracy import write_page
 
         doc, fig = write_page(study, tol, eff, naive, batch, command, doc=doc, fig_path=fig)
         data["page"], data["figure"] = str(doc), str(fig)
@@ -121,16 +130,16 @@ def _bench_progress(args: argparse.Namespace, form: str):
 
 def _bench_section(args: argparse.Namespace, name: str, body: str) -> None:
     """Write the ``name`` section of the --markdown page (checked when the command started)."""
-    from esba import bench
-    from esba.pages import write_section
+    from esba.pages.performance import PERFORMANCE_TITLE
+    from esba.pages.sections import write_section
 
     if args.markdown:
         command = f"esba bench {name} --repeat {args.repeat} --markdown {args.markdown}"
-        print(f"wrote {write_section(args.markdown, name, body, command, bench.PERFORMANCE_TITLE)}", file=sys.stderr)
+        print(f"wrote {write_section(args.markdown, name, body, command, PERFORMANCE_TITLE)}", file=sys.stderr)
 
 
 def _cmd_bench_solve(args: argparse.Namespace) -> int:
-    from esba import bench_solve
+    from esba.bench import solve as bench_solve
 
     if args.markdown:
         outputs.check_file(args.markdown, "--markdown", (".md",))
@@ -141,7 +150,7 @@ def _cmd_bench_solve(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench_path(args: argparse.Namespace) -> int:
-    from esba import bench_path
+    from esba.bench import path as bench_path
 
     if args.markdown:
         outputs.check_file(args.markdown, "--markdown", (".md",))
@@ -153,8 +162,8 @@ def _cmd_bench_path(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench_batch(args: argparse.Namespace) -> int:
-    from esba import accuracy as acc
-    from esba.batch import check_size
+    from esba.bench import accuracy as acc
+    from esba.statics.batch import check_size
 
     check_size(args.size, args.segments, "--size", UsageError)
     data = acc.batch_study(args.size, args.segments)
@@ -169,7 +178,7 @@ def _cmd_bench_batch(args: argparse.Namespace) -> int:
         diff = d["max_theta_difference_vs_ipopt"]
         rows += [
             ("interpreted", f"{d['interpreted_us']:.1f} us per equilibrium"),
-            ("IPOPT solve", f"{d['ipopt_us']:.0f} us per equilibrium (esba.equilibrium.solve, one by one, on {d['ipopt_samples']} of them)"),
+            ("IPOPT solve", f"{d['ipopt_us']:.0f} us per equilibrium (esba.statics.equilibrium.solve, one by one, on {d['ipopt_samples']} of them)"),
             ("naive BFGS", f"{d['naive_us']:.0f} us per equilibrium (SciPy, numeric gradients)"),
             ("speed-up", f"{d['speedup_vs_naive']:.0f}x naive, {d['speedup_vs_ipopt']:.0f}x IPOPT"),
             ("answered by", str(d["counts"])),
@@ -186,13 +195,14 @@ def _cmd_bench_batch(args: argparse.Namespace) -> int:
 _MAX_REPEAT = 100
 
 
-#: ``--size``'s bound before the memory check (esba.batch.check_size) refines it per n.
+#: ``--size``'s bound before the memory check (esba.statics.batch.check_size) refines it per n.
 _MAX_SIZE = 10_000_000
 
 
 def _cmd_bench_scaling(args: argparse.Namespace) -> int:
-    from esba import bench_scaling, scaling_report
-    from esba.distributed import DistributedError, require_dask
+    from esba.bench import scaling as bench_scaling
+    from esba.pages import scaling as scaling_report
+    from esba.studies.distributed import DistributedError, require_dask
 
     if args.scheduler is not None and args.workers is not None:
         raise UsageError("--workers N lists local cluster sizes and --scheduler ADDRESS measures an existing cluster: give one of the two")
@@ -202,7 +212,7 @@ def _cmd_bench_scaling(args: argparse.Namespace) -> int:
         require_dask("esba bench scaling")
     except DistributedError as exc:
         raise UsageError(str(exc)) from None
-    from esba.batch import check_size
+    from esba.statics.batch import check_size
 
     check_size(args.points, args.segments, f"--points {args.points} at n = {args.segments}", UsageError)
 

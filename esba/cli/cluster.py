@@ -1,5 +1,5 @@
 """The flags of studies on Dask (issue 11): ``--workers``, ``--scheduler``, ``--connect-timeout``,
-``--chunk``; checked by :mod:`esba.distributed` without importing Dask."""
+``--chunk``; checked by :mod:`esba.studies.distributed` without importing Dask."""
 
 from __future__ import annotations
 
@@ -14,10 +14,10 @@ from .results import EXIT_FAILED
 
 
 def _checked(check: Callable) -> Callable[[str], object]:
-    """An argparse type from a check of :mod:`esba.distributed` (imports no Dask)."""
+    """An argparse type from a check of :mod:`esba.studies.distributed` (imports no Dask)."""
 
     def parse(text: str):
-        from esba.distributed import DistributedError
+        from esba.studies.distributed import DistributedError
 
         try:
             return check(text, flag=None)
@@ -28,25 +28,25 @@ def _checked(check: Callable) -> Callable[[str], object]:
 
 
 def workers_arg(text: str) -> int:
-    from esba.distributed import check_workers
+    from esba.studies.distributed import check_workers
 
     return _checked(check_workers)(text)
 
 
 def scheduler_arg(text: str) -> str:
-    from esba.distributed import check_address
+    from esba.studies.distributed import check_address
 
     return _checked(check_address)(text)
 
 
 def timeout_arg(text: str) -> float:
-    from esba.distributed import check_timeout
+    from esba.studies.distributed import check_timeout
 
     return _checked(check_timeout)(text)
 
 
 def chunk_arg(text: str) -> int:
-    from esba.study import MAX_CHUNK
+    from esba.studies.chunks import MAX_CHUNK
 
     value = int(text) if re.fullmatch(r"\s*\d+\s*", text) else 0
     if not 1 <= value <= MAX_CHUNK:
@@ -75,7 +75,7 @@ def on_cluster(args: argparse.Namespace) -> bool:
         args.connect_timeout = CONNECT_TIMEOUT
     if args.workers is None and args.scheduler is None:
         return False
-    from esba.distributed import DistributedError, require_dask
+    from esba.studies.distributed import DistributedError, require_dask
 
     try:
         require_dask("--workers" if args.workers is not None else "--scheduler")
@@ -85,7 +85,7 @@ def on_cluster(args: argparse.Namespace) -> bool:
 
 
 def study_stopped(exc: Exception, out: str | None, what: str = "rows") -> int:
-    """One line for a study that stopped while it ran (:class:`esba.study.StudyStopped`: a lost
+    """One line for a study that stopped while it ran (:class:`esba.studies.chunks.StudyStopped`: a lost
     scheduler, a chunk whose workers kept dying, a full disk) and exit code 1. With ``out`` (the
     file the study streamed to) the line says that what was solved is kept there and how to go on."""
     message = str(exc)

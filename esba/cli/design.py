@@ -7,7 +7,7 @@ import math
 import sys
 
 from derive.effects import DEFAULT_VARIANT, VARIANTS
-from esba import outputs
+from esba.infra import outputs
 
 from .arguments import UsageError, count_arg, float_arg, refuse, segments_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
@@ -61,9 +61,16 @@ def _design_table(d: dict) -> str:
 
 
 def _cmd_design(args: argparse.Namespace) -> int:
-    from esba.design import DesignError, DesignOptions, DesignProblem, compare, optimise_ipopt, optimise_pso
-    from esba.design_report import write_doc
-    from esba.pso import PSOOptions, PSOOptionsError
+    from esba.design.optimise import (
+        DesignError,
+        DesignOptions,
+        DesignProblem,
+        compare,
+        optimise_ipopt,
+        optimise_pso,
+    )
+    from esba.pages.design import write_doc
+    from esba.solvers.pso import PSOOptions, PSOOptionsError
 
     if args.write_doc:
         refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot"], "with --write-doc (the study runs its own problems)")
@@ -107,7 +114,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
     for r, d in zip(results, [data] if method != "both" else [data["ipopt"], data["pso"]]):
         d["validity"] = _design_validity(r, d)
     if figure is not None:
-        from esba.design_figures import design_figure
+        from esba.figures.design import design_figure
 
         data["figure"] = str(design_figure(run, figure).resolve())
     print_result(args, data, _design_table)
@@ -120,9 +127,9 @@ def _cmd_design(args: argparse.Namespace) -> int:
 
 
 def _design_validity(result, d: dict) -> list[dict]:
-    """The validity findings (:mod:`esba.validity`) of each state of a design (its start and loaded states)."""
+    """The validity findings (:mod:`esba.model.validity`) of each state of a design (its start and loaded states)."""
 
-    from esba.validity import assess_angles
+    from esba.model.validity import assess_angles
 
     values = (d.get("r2_mm"), d.get("d_mm"), d.get("pressure_mpa"))
     if any(v is None or not math.isfinite(v) for v in values) or not isinstance(d.get("theta_deg"), dict):
@@ -141,7 +148,7 @@ def _design_validity(result, d: dict) -> list[dict]:
     return out
 
 
-#: ``esba.design.METHODS`` and ``esba.design.OBJECTIVES`` (written out so that building the parser
+#: ``esba.design.optimise.METHODS`` and ``esba.design.optimise.OBJECTIVES`` (written out so that building the parser
 #: does not import CasADi; a test checks they agree).
 _DESIGN_METHODS = ("ipopt", "pso", "both")
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from esba import outputs
+from esba.infra import outputs
 
 from .arguments import UsageError
 from .results import EXIT_OK, print_result
@@ -13,7 +13,7 @@ from .results import EXIT_OK, print_result
 def _cmd_figures(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from esba import figures
+    from esba.figures import paper as figures
 
     try:
         names = figures.check_names(args.only)

@@ -89,9 +89,9 @@ def _fit_table(d: dict) -> str:
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
-    from esba.fit import FitError, FitOptions, fit, predict
-    from esba.measurements import MeasurementError, load_measurements
-    from esba.scene import SceneError, load_scene
+    from esba.calibration.fit import FitError, FitOptions, fit, predict
+    from esba.calibration.measurements import MeasurementError, load_measurements
+    from esba.model.scene import SceneError, load_scene
 
     try:
         base = load_scene(args.scene) if args.scene else None
@@ -106,7 +106,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     out = result.to_dict()
     if args.plot:
-        from esba.fit_plots import Series, measured_vs_predicted, save_figure
+        from esba.figures.fit import Series, measured_vs_predicted, save_figure
 
         sds = {(r["row"], r["quantity"]): r["sd"] for r in out["residuals"] if r["sd_given"]}
         start = predict(data)
@@ -164,7 +164,7 @@ def _experiments_table(d: dict) -> str:
 
 
 def _cmd_experiments(args: argparse.Namespace) -> int:
-    from esba import experiments_page
+    from esba.pages import experiments as experiments_page
 
     if args.check:
         if experiments_page.check_page(args.check):
@@ -172,7 +172,7 @@ def _cmd_experiments(args: argparse.Namespace) -> int:
             return EXIT_FAILED
         print("experiments page is up to date")
         return EXIT_OK
-    from esba.experiments import run_study
+    from esba.calibration.experiments import run_study
 
     study = run_study()
     data = {

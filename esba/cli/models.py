@@ -6,8 +6,14 @@ import argparse
 import sys
 import time
 
-from derive.effects import DEFAULT_EFFECTS, DEFAULT_VARIANT, VARIANTS, EffectError, EffectSet
-from esba import outputs
+from derive.effects import (
+    DEFAULT_EFFECTS,
+    DEFAULT_VARIANT,
+    VARIANTS,
+    EffectError,
+    EffectSet,
+)
+from esba.infra import outputs
 
 from .arguments import UsageError, refuse, segments_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result
@@ -49,7 +55,7 @@ def _cmd_generate(args: argparse.Namespace) -> int:
     variant = args.variant or DEFAULT_VARIANT
     t0 = time.perf_counter()
     if out is None:  # installed esba: the model cache, where esba finds models it was not shipped with
-        from esba.model import generate_into_cache
+        from esba.model.generated import generate_into_cache
 
         path, entry = generate_into_cache(args.segments, effects, variant)
         where = "the model cache"

@@ -6,9 +6,15 @@ import argparse
 import math
 import sys
 
-from esba import outputs
+from esba.infra import outputs
 
-from .arguments import UsageError, add_scene_flags, count_arg, float_arg, scene_from_args
+from .arguments import (
+    UsageError,
+    add_scene_flags,
+    count_arg,
+    float_arg,
+    scene_from_args,
+)
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
 
 #: Where ``esba path`` writes its branches and figure unless told otherwise (the current folder).
@@ -18,7 +24,7 @@ DEFAULT_PATH_OUT = "esba-path.csv"
 DEFAULT_PATH_FIGURE = "esba-path.png"
 
 
-#: The parameters of ``esba path --param`` (``esba.path_problem.PARAMETERS``, written out so that
+#: The parameters of ``esba path --param`` (``esba.paths.problem.PARAMETERS``, written out so that
 #: building the parser does not import CasADi; a test checks they agree).
 _PATH_PARAMETERS = ("pressure", "payload", "omega", "at", "load", "r2", "d", "rho", "E", "L", "r1", "M")
 
@@ -67,7 +73,7 @@ def _path_write_doc(args: argparse.Namespace) -> int:
     if given:
         raise UsageError(f"--write-doc runs its own studies of the Table 1 actuator: give no {', '.join(given)} with it")
     outputs.check_file(args.write_doc, "--write-doc", (".md",))
-    from esba.paths_report import paths_data, write_page
+    from esba.pages.paths import paths_data, write_page
 
     def say(msg):
         if not args.json:
@@ -89,10 +95,10 @@ def _cmd_path(args: argparse.Namespace) -> int:
         raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
     out = None if args.no_out else outputs.check_file(args.out or DEFAULT_PATH_OUT, "--out", (".csv", ".json"))
     plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_PATH_FIGURE, "--plot", DEFAULT_PATH_FIGURE)
-    from esba.equilibrium import EquilibriumError
-    from esba.path import PathOptions, write_branches
-    from esba.path_problem import PathError
-    from esba.path_study import study
+    from esba.analysis.path_analysis import study
+    from esba.paths.continuation import PathOptions, write_branches
+    from esba.paths.problem import PathError
+    from esba.statics.equilibrium import EquilibriumError
 
     scene = scene_from_args(args)
     param = args.param
@@ -113,7 +119,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
         extra = {k: v for k, v in result.to_dict(points=False).items() if k != "branches"}
         data["out"] = str(write_branches(result.branches, out, extra).resolve())
     if plot:
-        from esba.path_figures import save_figure, study_figure
+        from esba.figures.paths import save_figure, study_figure
 
         data["figure"] = str(save_figure(study_figure(result, args.y), plot).resolve())
     print_result(args, data, _path_table)

@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Callable
 
-from esba import jsonsafe
+from esba.infra import jsonsafe
 
 #: Exit codes: done; a solve failed or a result is not ok; bad input; interrupted (Ctrl-C).
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
@@ -14,7 +14,7 @@ EXIT_INTERRUPTED = 130
 
 
 def print_result(args: argparse.Namespace, data: dict, table: Callable[[dict], str]) -> None:
-    """``data`` as JSON (no NaN: :mod:`esba.jsonsafe`) with ``--json``, else as ``table(data)``."""
+    """``data`` as JSON (no NaN: :mod:`esba.infra.jsonsafe`) with ``--json``, else as ``table(data)``."""
     if getattr(args, "json", False):
         print(jsonsafe.dumps(data, indent=2, sort_keys=True))
     else:

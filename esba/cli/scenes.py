@@ -8,9 +8,17 @@ import re
 import sys
 import time
 
-from esba import outputs
+from esba.infra import outputs
 
-from .arguments import UsageError, add_scene_flags, count_arg, float_arg, output_file_arg, refuse, scene_from_args
+from .arguments import (
+    UsageError,
+    add_scene_flags,
+    count_arg,
+    float_arg,
+    output_file_arg,
+    refuse,
+    scene_from_args,
+)
 from .cluster import add_cluster_flags, chunk_arg, on_cluster, study_stopped
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
 
@@ -18,7 +26,7 @@ from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
 DEFAULT_SOLVE_FIGURE = "esba-solve.png"
 
 
-#: ``--max-iter``'s bound (``esba.equilibrium.MAX_ITER_LIMIT``, written out so that building the
+#: ``--max-iter``'s bound (``esba.statics.equilibrium.MAX_ITER_LIMIT``, written out so that building the
 #: parser does not import CasADi; a test checks they agree).
 _MAX_ITER = 100_000
 
@@ -100,7 +108,7 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    from esba.equilibrium import EquilibriumError, SolverOptions, solve
+    from esba.statics.equilibrium import EquilibriumError, SolverOptions, solve
 
     if args.no_plot and args.plot is not None:
         raise UsageError("--plot and --no-plot: give one of the two")
@@ -121,7 +129,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         refuse(args, ["mc_chunk", "seed"], "without --monte-carlo N (they set its samples)")
     mc_options = None
     if args.monte_carlo is not None:
-        from esba.uncertainty import MonteCarloOptions, UncertaintyError, check_samples
+        from esba.calibration.uncertainty import (
+            MonteCarloOptions,
+            UncertaintyError,
+            check_samples,
+        )
 
         try:
             extra = {} if args.mc_chunk is None else {"chunk": args.mc_chunk}
@@ -139,17 +151,17 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     data["scene"] = scene.describe()
     propagation = mc = None
     if args.sensitivities:
-        from esba.sensitivity import sensitivities
+        from esba.analysis.sensitivity import sensitivities
 
         data["sensitivities"] = sensitivities(result).to_dict()
     if sigmas:
-        from esba.uncertainty import compare, monte_carlo, propagate
+        from esba.calibration.uncertainty import compare, monte_carlo, propagate
 
         propagation = propagate(result, sigmas)
         data["uncertainty"] = propagation.to_dict()
         if mc_options is not None:
             if chunked:
-                from esba.study import StudyStopped
+                from esba.studies.chunks import StudyStopped
 
                 try:
                     mc, info = _monte_carlo_in_chunks(args, scene, sigmas, mc_options)
@@ -166,7 +178,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
                 data["monte_carlo"]["study"] = info
             data["agreement"] = compare(propagation, mc).to_dict()
     if figure is not None:
-        from esba.plots import save_figure, solve_figure
+        from esba.figures.scenes import save_figure, solve_figure
 
         unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False), pressure=result.pressure)
         cov = propagation.cov_tip if propagation is not None and propagation.has_numbers else None
@@ -183,10 +195,10 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
 
 def _monte_carlo_in_chunks(args: argparse.Namespace, scene, sigmas, options):
-    """The Monte Carlo on --workers or --scheduler, or streamed to --mc-out (esba.mc_study)."""
-    from esba.distributed import DistributedError, open_runner
-    from esba.study import StudyError
-    from esba.uncertainty import monte_carlo
+    """The Monte Carlo on --workers or --scheduler, or streamed to --mc-out (esba.studies.monte_carlo)."""
+    from esba.studies.chunks import StudyError
+    from esba.studies.distributed import DistributedError, open_runner
+    from esba.studies.monte_carlo import monte_carlo, monte_carlo_study
 
     progress = sys.stderr.isatty()
     try:
@@ -195,8 +207,6 @@ def _monte_carlo_in_chunks(args: argparse.Namespace, scene, sigmas, options):
                 t0 = time.perf_counter()
                 mc = monte_carlo(scene, sigmas, options, runner=runner, progress=progress)
                 return mc, {"runner": runner.description, "workers": runner.workers, "seconds": time.perf_counter() - t0}
-            from esba.mc_study import monte_carlo_study
-
             return monte_carlo_study(scene, sigmas, options, runner=runner, out=args.mc_out, resume=args.resume, progress=progress)
     except (DistributedError, StudyError) as exc:
         raise UsageError(str(exc)) from None
@@ -204,7 +214,12 @@ def _monte_carlo_in_chunks(args: argparse.Namespace, scene, sigmas, options):
 
 def _sigmas_for(args: argparse.Namespace, scene) -> tuple:
     """The scene file's [uncertainty] table, then --sigma flags (a flag replaces the file's entry)."""
-    from esba.uncertainty import UncertaintyError, load_sigmas, parse_sigma, resolve_sigmas
+    from esba.calibration.uncertainty import (
+        UncertaintyError,
+        load_sigmas,
+        parse_sigma,
+        resolve_sigmas,
+    )
 
     try:
         specs = list(load_sigmas(args.scene)) if args.scene else []
@@ -270,9 +285,9 @@ def _stiffness_table(d: dict) -> str:
 
 
 def _cmd_stiffness(args: argparse.Namespace) -> int:
-    from esba.equilibrium import EquilibriumError
-    from esba.scene import SceneError
-    from esba.stiffness import PAPER_FORCES, secant_stiffness
+    from esba.analysis.stiffness import PAPER_FORCES, secant_stiffness
+    from esba.model.scene import SceneError
+    from esba.statics.equilibrium import EquilibriumError
 
     scene = scene_from_args(args, payloads=False)
     forces = tuple(args.payload) if args.payload else PAPER_FORCES
@@ -323,9 +338,9 @@ def _pressure_table(d: dict) -> str:
 
 
 def _cmd_pressure(args: argparse.Namespace) -> int:
-    from esba.equilibrium import EquilibriumError, pressure_for_angle
-    from esba.scene import SceneError
-    from esba.stiffness import pressure_for_target
+    from esba.analysis.stiffness import pressure_for_target
+    from esba.model.scene import SceneError
+    from esba.statics.equilibrium import EquilibriumError, pressure_for_angle
 
     chosen = [a for a in ("target_angle", "total_angle", "tip_x", "tip_y") if getattr(args, a) is not None]
     if args.target_angle is not None and len(chosen) > 1 or args.total_angle is not None and len(chosen) > 1:
@@ -384,7 +399,8 @@ def add_pressure(sub) -> None:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from esba import validation, validation_report
+    from esba.calibration import validation
+    from esba.pages import validation as validation_report
 
     page = outputs.default_page("validation.md") if args.out is None else args.out
     if not args.check:

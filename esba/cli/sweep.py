@@ -7,15 +7,22 @@ import os
 import sys
 
 from derive.effects import VARIANTS
-from esba import outputs
+from esba.infra import outputs
 
-from .arguments import UsageError, float_arg, load_scene_file, refuse, scene_changes, segments_arg
+from .arguments import (
+    UsageError,
+    float_arg,
+    load_scene_file,
+    refuse,
+    scene_changes,
+    segments_arg,
+)
 from .cluster import add_cluster_flags, chunk_arg, on_cluster, study_stopped
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 
 def _values_arg(text: str) -> list[float]:
-    from esba.sweep import SweepError, parse_values
+    from esba.studies.sweep import SweepError, parse_values
 
     try:
         return parse_values(text)
@@ -63,11 +70,11 @@ def _sweep_table(d: dict) -> str:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from esba.batch import BatchOptions
-    from esba.plots import save_figure
-    from esba.scene import Scene
-    from esba.sweep import sweep
-    from esba.sweep_figures import fig12, sweep_figure
+    from esba.figures.scenes import save_figure
+    from esba.figures.sweeps import fig12, sweep_figure
+    from esba.model.scene import Scene
+    from esba.statics.batch import BatchOptions
+    from esba.studies.sweep import sweep
 
     if args.fig12:
         refuse(args, ["pressure", "payload", "payload_angle", "r2", "d", "target_angle", "out", "plot"], "with --fig12 (it draws its own grid: r2 and d at P = 0.2 MPa, no payload)")
@@ -111,7 +118,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 def _warn_sweep(validity, outside: int = 0, out: str | None = None) -> None:
     """One ``esba: warning:`` line per kind of finding of a sweep's points (per-point
-    :mod:`esba.validity` findings), or their count when the rows were streamed to ``out``."""
+    :mod:`esba.model.validity` findings), or their count when the rows were streamed to ``out``."""
     found = [f for point in validity for f in point]
     for check in dict.fromkeys(f.check for f in found):
         first = next(f for f in found if f.check == check)
@@ -122,14 +129,14 @@ def _warn_sweep(validity, outside: int = 0, out: str | None = None) -> None:
 
 
 def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, figure) -> int:
-    """``esba sweep`` chunk by chunk (--workers, --scheduler, --resume): esba.sweep_study."""
-    from esba.distributed import DistributedError, open_runner
-    from esba.plots import save_figure
-    from esba.scene import SceneError
-    from esba.study import StudyError, StudyStopped
-    from esba.sweep import SweepError, plan_sweep
-    from esba.sweep_figures import sweep_figure
-    from esba.sweep_study import DEFAULT_CHUNK, check_study, sweep_study
+    """``esba sweep`` chunk by chunk (--workers, --scheduler, --resume): esba.studies.sweep_runner."""
+    from esba.figures.scenes import save_figure
+    from esba.figures.sweeps import sweep_figure
+    from esba.model.scene import SceneError
+    from esba.studies.chunks import StudyError, StudyStopped
+    from esba.studies.distributed import DistributedError, open_runner
+    from esba.studies.sweep import SweepError, plan_sweep
+    from esba.studies.sweep_runner import DEFAULT_CHUNK, check_study, sweep_study
 
     if args.fig12:
         raise UsageError("--fig12 draws its own small grid in this process: give it without --workers, --scheduler or --resume")

@@ -1,0 +1,215 @@
+"""Uncertain parameters: a standard deviation (or a tolerance) for any scene parameter of
+:mod:`esba.analysis.sensitivity`, from ``--sigma NAME=SIGMA`` or a scene file's ``[uncertainty]`` table.
+
+``E=0.05`` is a standard deviation in the parameter's scene-file unit (MPa here), ``E=10%`` one
+relative to its value, ``±t`` (also ``+-t``, ``±10%``) a tolerance: uniform on [-t, t], so sigma =
+t / sqrt(3) (the GUM's rectangular distribution). :func:`resolve_sigmas` makes them absolute for a
+scene. :mod:`esba.calibration.uncertainty` propagates them.
+
+Examples
+--------
+>>> from esba.model.scene import MAIN_JOB
+>>> [(s.name, round(s.sigma, 4), s.distribution) for s in resolve_sigmas(MAIN_JOB, [parse_sigma("E=10%"), parse_sigma("r2=±0.1")])]
+[('r2', 0.0577, 'uniform'), ('E', 0.054, 'normal')]
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+from esba.analysis.sensitivity import (
+    SensitivityError,
+    check_names,
+    parameter_names,
+    scene_parameters,
+)
+from esba.infra import jsonsafe
+from esba.infra.errors import InputError
+from esba.model.scene import Scene
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["UncertaintyError", "SigmaSpec", "Sigma", "parse_sigma", "sigmas_from_table", "load_sigmas", "resolve_sigmas"]
+
+
+class UncertaintyError(InputError):
+    """A sigma, tolerance or option that is not allowed: the message names it, the value and what is allowed."""
+
+
+@dataclass(frozen=True)
+class SigmaSpec:
+    """An uncertainty as given, before it meets a scene.
+
+    Attributes
+    ----------
+    name : str
+        Scene parameter (``E``, ``r2``, ``rho``, ``F1``, ...).
+    value : float
+        Standard deviation, or the half-width t of a tolerance, > 0.
+    relative : bool
+        ``value`` is a fraction of the parameter's value (given with ``%``).
+    distribution : str
+        ``normal`` (a standard deviation) or ``uniform`` (a tolerance ±t).
+    given : str
+        The text as given (for messages).
+    """
+
+    name: str
+    value: float
+    relative: bool
+    distribution: str
+    given: str
+
+
+@dataclass(frozen=True)
+class Sigma:
+    """An uncertainty resolved against a scene: absolute, in the parameter's unit.
+
+    Attributes
+    ----------
+    name, unit : str
+    nominal : float
+        The parameter's value in the scene.
+    sigma : float
+        Standard deviation (for a tolerance ±t: t / sqrt(3)).
+    distribution : str
+        ``normal`` or ``uniform``.
+    half_width : float or None
+        t of a tolerance.
+    given : str
+    """
+
+    name: str
+    unit: str
+    nominal: float
+    sigma: float
+    distribution: str
+    half_width: float | None
+    given: str
+
+    def to_dict(self) -> dict:
+        """JSON-ready form."""
+        return jsonsafe.clean(
+            {"name": self.name, "unit": self.unit, "nominal": self.nominal, "sigma": self.sigma,
+             "distribution": self.distribution, "half_width": self.half_width, "given": self.given}
+        )
+
+
+def parse_sigma(text: str, where: str = "--sigma") -> SigmaSpec:
+    """``NAME=VALUE`` with VALUE ``0.05``, ``10%``, ``±0.1``, ``+-0.1`` or ``±10%``.
+
+    >>> parse_sigma("r2=±0.1")
+    SigmaSpec(name='r2', value=0.1, relative=False, distribution='uniform', given='r2=±0.1')
+    >>> parse_sigma("E=-1")
+    Traceback (most recent call last):
+    ...
+    esba.calibration.sigmas.UncertaintyError: --sigma 'E=-1': expected NAME=SIGMA with SIGMA > 0 (0.05, 10%, ±0.1 or ±10%)
+    """
+    if not isinstance(text, str) or text.count("=") != 1:
+        raise UncertaintyError(f"{where} {text!r}: expected NAME=SIGMA, e.g. E=0.05, E=10%, r2=±0.1")
+    name, raw = (s.strip() for s in text.split("="))
+    return _spec(name, raw, where, text)
+
+
+def _spec(name: str, raw: Any, where: str, given: str) -> SigmaSpec:
+    bad = UncertaintyError(f"{where} {given!r}: expected NAME=SIGMA with SIGMA > 0 (0.05, 10%, ±0.1 or ±10%)")
+    if not name:
+        raise bad
+    if isinstance(raw, bool):
+        raise bad
+    if isinstance(raw, (int, float)):
+        value, relative, dist = float(raw), False, "normal"
+    elif isinstance(raw, str):
+        s = raw.strip()
+        dist = "normal"
+        for prefix in ("±", "+-", "+/-"):
+            if s.startswith(prefix):
+                s, dist = s[len(prefix):].strip(), "uniform"
+                break
+        relative = s.endswith("%")
+        if relative:
+            s = s[:-1].strip()
+        try:
+            value = float(s)
+        except ValueError:
+            raise bad from None
+        if relative:
+            value /= 100.0
+    else:
+        raise bad
+    if not math.isfinite(value) or value <= 0:
+        raise bad
+    return SigmaSpec(name, value, relative, dist, given)
+
+
+def sigmas_from_table(table: Any, where: str = "[uncertainty]") -> tuple[SigmaSpec, ...]:
+    """The specs of a scene file's ``[uncertainty]`` table (values: numbers or strings as for :func:`parse_sigma`)."""
+    if not isinstance(table, dict):
+        raise UncertaintyError(f"{where}: expected a table of NAME = SIGMA, got {table!r}")
+    return tuple(_spec(str(k), v, where, f"{k}={v}") for k, v in table.items())
+
+
+def load_sigmas(path: str | Path) -> tuple[SigmaSpec, ...]:
+    """The ``[uncertainty]`` table of a scene file (empty when it has none)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_bytes().decode("utf-8"))
+    except FileNotFoundError:
+        raise UncertaintyError(f"scene file {str(path)!r} does not exist") from None
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise UncertaintyError(f"scene file {str(path)!r} cannot be read: {exc}") from None
+    return sigmas_from_table(data.get("uncertainty", {}), f"scene file {str(path)!r} [uncertainty]")
+
+
+def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec]) -> tuple[Sigma, ...]:
+    """Absolute sigmas for ``scene``; a later spec of the same name replaces an earlier one.
+
+    Raises
+    ------
+    UncertaintyError
+        for a name that is not a parameter of the scene, or a relative sigma of a parameter at 0.
+    """
+    by_name: dict[str, SigmaSpec] = {}
+    for s in specs:
+        if not isinstance(s, SigmaSpec):
+            raise UncertaintyError(f"sigmas: expected SigmaSpec, got {s!r}")
+        by_name[s.name] = s
+    try:
+        check_names(scene, list(by_name), "sigma of")
+    except SensitivityError as exc:
+        raise UncertaintyError(str(exc)) from None
+    params = {p.name: p for p in scene_parameters(scene)}
+    out = []
+    for name in parameter_names(scene):
+        if name not in by_name:
+            continue
+        s, p = by_name[name], params[name]
+        width = s.value * abs(p.value) if s.relative else s.value
+        if width <= 0:
+            raise UncertaintyError(f"sigma {s.given!r}: {name} is 0 in this scene, so a relative sigma is 0; give it in {p.unit}")
+        sigma = width / math.sqrt(3.0) if s.distribution == "uniform" else width
+        out.append(Sigma(name, p.unit, p.value, sigma, s.distribution, width if s.distribution == "uniform" else None, s.given))
+    return tuple(out)
+
+
+def _checked_sigmas(scene: Scene | None, sigmas: Sequence[Sigma]) -> tuple[Sigma, ...]:
+    """``sigmas`` as a tuple if they are resolved sigmas of parameters of ``scene``."""
+    sigmas = tuple(sigmas)
+    if not sigmas:
+        raise UncertaintyError("sigmas: give at least one uncertain parameter (e.g. --sigma E=0.05)")
+    for s in sigmas:
+        if not isinstance(s, Sigma):
+            raise UncertaintyError(f"sigmas: expected Sigma (from resolve_sigmas), got {s!r}")
+    if scene is not None:
+        try:
+            check_names(scene, [s.name for s in sigmas], "sigma of")
+        except SensitivityError as exc:
+            raise UncertaintyError(str(exc)) from None
+    return sigmas

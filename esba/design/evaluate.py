@@ -1,0 +1,351 @@
+"""Designs evaluated in batches: the swarm's objective, IPOPT's starts and the figures.
+
+One design (r2, d) -> its 90 degree pressure in closed form (U is linear in P), its loaded state
+along a ramp of the payload from 0 (the same load path as the physical test: tangent predictor and
+Newton corrections solved in O(n) from the Hessian's structure, :mod:`esba.solvers.newton`, accepted only when
+every Hessian met is positive definite and every step contracts, so that no snap-through is taken
+silently), and its secant stiffness; a CasADi Function mapped over the designs
+(``Function.map(N, "thread", 2)``) evaluates a whole swarm in one call (:func:`evaluate`). Free
+angles at a given pressure come from a bracketed bisection on the closed-form pressure of the
+uniform unloaded shape (:func:`free_angle`). :func:`term_curvatures` splits the stiffness of the
+start state by energy term.
+
+Examples
+--------
+>>> from esba.design.problem import DesignProblem
+>>> e = evaluate(DesignProblem(), [3.0, 1.5], [4.0, 0.0])
+>>> [round(float(k), 2) for k in e.stiffness], [round(float(p), 5) for p in e.pressure]
+([26.41, 45.29], [0.12387, 0.23362])
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import casadi as ca
+import numpy as np
+
+from derive.effects import EffectSet
+from esba.model.generated import Model, load_model
+from esba.solvers.newton import CONTRACTION, parts_function, ramp_expression
+
+from .problem import DEFAULT_DESIGN_OPTIONS, DesignOptions, DesignProblem
+
+__all__ = ["Evaluation", "evaluate", "free_angle", "term_curvatures"]
+
+# ---------------------------------------------------------------------------------------------
+# symbolic pieces shared by the evaluator and the NLP
+
+
+class _Pieces:
+    """The generated model with the fixed parameters bound: CasADi Functions of (theta, r2, d, P, F)."""
+
+    def __init__(self, problem: DesignProblem):
+        self.problem = problem
+        self.model: Model = load_model(problem.segments, EffectSet.parse("air,axial,radial,fibres,payload"), problem.variant)
+        n = self.n = problem.segments
+        a = problem.actuator
+        self.L, self.r1 = a.L, a.r1
+        fixed = {"L": a.L, "r1": a.r1, "rho": math.radians(a.rho_deg), "E": a.E, "Omega1": math.radians(problem.payload_angle_deg), "s1": 1.0}
+        th = ca.SX.sym("theta", n)
+        r2, d, P, F = (ca.SX.sym(s) for s in ("r2", "d", "P", "F"))
+        values = dict(fixed, r2=r2, d=d, P=P, F1=F)
+        args = [values[name] for name in self.model.parameters]
+        grad = self.model["gradient"](th, *args)
+        hess = self.model["hessian"](th, *args)
+        names = ["theta", "r2", "d", "P", "F"]
+        self.grad = ca.Function("gradient_u", [th, r2, d, P, F], [grad], names, ["grad"])
+        self.hess = ca.Function("hessian_u", [th, r2, d, P, F], [hess], names, ["hess"])
+        tip = self.model["kinematics"](th, a.L)[0]
+        self.tip = ca.Function("tip", [th], [tip[:2]], ["theta"], ["tip"])
+        om = math.radians(problem.payload_angle_deg)
+        self.u = np.array([math.cos(om), -math.sin(om)])  # unit vector of the payload, Eq. (14)
+        # closed-form pressure of the uniform unloaded shape of total angle Theta (U linear in P)
+        Theta = ca.SX.sym("Theta")
+        uni = ca.repmat(Theta / n, n, 1)
+        g0 = self.grad(uni, r2, d, 0.0, 0.0)
+        g1 = self.grad(uni, r2, d, 1.0, 0.0) - g0
+        self.pressure_closed = ca.Function(
+            "pressure_closed", [Theta, r2, d], [-ca.dot(g0, g1) / ca.dot(g1, g1)], ["Theta", "r2", "d"], ["P"]
+        )
+
+    def stiffness_expr(self, theta_s, theta_l):
+        """K = 1000 F / delta (N/m), delta = tip displacement along the payload (mm)."""
+        delta = ca.dot(ca.DM(self.u), self.tip(theta_l) - self.tip(theta_s))
+        return 1000.0 * self.problem.payload_n / delta
+
+
+_PIECES: dict[tuple, _Pieces] = {}
+
+
+def _pieces_key(problem: DesignProblem) -> tuple:
+    a = problem.actuator
+    return (problem.segments, problem.variant, a.L, a.r1, a.rho_deg, a.E, problem.payload_n, problem.payload_angle_deg)
+
+
+def _pieces(problem: DesignProblem) -> _Pieces:
+    key = _pieces_key(problem)
+    p = _PIECES.get(key)
+    if p is None:
+        p = _PIECES[key] = _Pieces(problem)
+    return p
+
+
+# ---------------------------------------------------------------------------------------------
+# the batched evaluator (PSO, IPOPT's starts, the figures)
+
+
+class _Evaluator:
+    """One design -> start pressure, loaded state (Newton along the payload ramp), mapped over designs."""
+
+    def __init__(self, problem: DesignProblem, options: DesignOptions):
+        pc = _pieces(problem)
+        self.pieces, self.problem, self.options = pc, problem, options
+        n = pc.n
+        th = ca.SX.sym("theta", n)
+        z = ca.SX.sym("z", 4)  # r2, d, P, F
+        G = ca.Function("G", [th, z], [pc.grad(th, z[0], z[1], z[2], z[3])], ["theta", "z"], ["g"])
+        H = ca.Function("H", [th, z], [pc.hess(th, z[0], z[1], z[2], z[3])], ["theta", "z"], ["h"])
+        self._parts = parts_function(G, H, "design_ramp_parts")
+        self.single = self._single(options.load_steps)
+        self._dense: ca.Function | None = None  # the retry's ramp, four times the steps, built when needed
+        self._maps: dict[int, ca.Function] = {}
+        self._dense_maps: dict[int, ca.Function] = {}
+        self._pmaps: dict[int, ca.Function] = {}
+
+    def _single(self, steps: int) -> ca.Function:
+        """One design -> P, loaded theta, K, residual, loaded Hessian, smallest pivot, worst contraction."""
+        pc, n, F = self.pieces, self.pieces.n, self.problem.payload_n
+        x = ca.MX.sym("x", 2)
+        r2, d = x[0], x[1]
+        start = math.radians(self.problem.start_angle_deg)
+        P = pc.pressure_closed(start, r2, d)
+        theta_s = ca.DM.ones(n) * (start / n)
+        # the payload ramp from the unloaded state: stable all the way, or reported failed (esba.solvers.newton)
+        theta, g, low, contraction = ramp_expression(
+            self._parts, ca.MX(theta_s), ca.vertcat(r2, d, P, 0.0), ca.vertcat(0.0, 0.0, 0.0, F), 1.0, steps, self.options.newton_steps, 2
+        )
+        K = pc.stiffness_expr(theta_s, theta)
+        hess = pc.hess(theta, r2, d, P, F)
+        return ca.Function(
+            "design_eval",
+            [x],
+            [P, theta, K, ca.norm_inf(g), ca.reshape(hess, n * n, 1), low, contraction],
+            ["x"],
+            ["P", "theta_l", "K", "residual", "hess_l", "min_pivot", "contraction"],
+        )
+
+    def _map(self, cache: dict, fun: ca.Function, size: int) -> ca.Function:
+        f = cache.get(size)
+        if f is None:
+            f = cache[size] = fun.map(size, "thread", self.options.threads)
+        return f
+
+    def pressure(self, Theta: np.ndarray, r2: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """Closed-form pressure (MPa) of the uniform unloaded shape of total angle Theta (rad), batched."""
+        Theta, r2, d = np.broadcast_arrays(*(np.asarray(v, dtype=float).ravel() for v in (Theta, r2, d)))
+        f = self._map(self._pmaps, self.pieces.pressure_closed, Theta.size)
+        return np.asarray(f(Theta.reshape(1, -1), r2.reshape(1, -1), d.reshape(1, -1)), dtype=float).ravel()
+
+    def _run(self, fun: ca.Function, cache: dict, r2: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, ...]:
+        N, n = r2.size, self.pieces.n
+        f = self._map(cache, fun, N)
+        P, theta, K, res, hess, low, contraction = (np.asarray(v, dtype=float) for v in f(np.vstack([r2, d])))
+        H = hess.T.reshape(N, n, n)
+        ok = np.isfinite(res.ravel()) & (res.ravel() <= self.options.equilibrium_tol) & np.all(np.isfinite(H), axis=(1, 2))
+        # the ramp stayed on the stable branch it started on: no Hessian met was indefinite (no fold or
+        # branch point passed) and every step's Newton iteration contracted (esba.solvers.newton)
+        ok &= (low.ravel() > self.options.critical_tol) & (contraction.ravel() <= CONTRACTION)
+        min_eig = np.full(N, np.nan)
+        if np.any(ok):
+            ev = np.linalg.eigvalsh(0.5 * (H[ok] + np.transpose(H[ok], (0, 2, 1))))
+            min_eig[ok] = ev[:, 0] / np.maximum(np.abs(ev[:, -1]), 1e-300)
+        ok &= min_eig > self.options.critical_tol
+        return P.ravel(), theta.T, K.ravel(), ok
+
+    def __call__(self, r2: np.ndarray, d: np.ndarray) -> dict[str, np.ndarray]:
+        r2 = np.asarray(r2, dtype=float).ravel()
+        d = np.asarray(d, dtype=float).ravel()
+        P, theta, K, ok = self._run(self.single, self._maps, r2, d)
+        redo = np.flatnonzero(~ok)
+        if len(redo):  # a denser ramp for the designs the first could not follow (huge bends, thin walls)
+            if self._dense is None:
+                self._dense = self._single(4 * self.options.load_steps)
+            P2, theta2, K2, ok2 = self._run(self._dense, self._dense_maps, r2[redo], d[redo])
+            P[redo], theta[redo], K[redo], ok[redo] = P2, theta2, K2, ok2
+        K = np.where(ok, K, np.nan)
+        return {"pressure": P, "theta_l": theta, "stiffness": K, "ok": ok}
+
+
+_EVALUATORS: dict[tuple, _Evaluator] = {}
+
+
+def _evaluator(problem: DesignProblem, options: DesignOptions) -> _Evaluator:
+    key = (_pieces_key(problem), problem.start_angle_deg, options.load_steps, options.newton_steps, options.equilibrium_tol,
+           options.critical_tol, options.threads)
+    e = _EVALUATORS.get(key)
+    if e is None:
+        e = _EVALUATORS[key] = _Evaluator(problem, options)
+    return e
+
+
+def free_angle(
+    problem: DesignProblem, r2: Sequence[float], d: Sequence[float], pressure: float, options: DesignOptions | None = None
+) -> np.ndarray:
+    """Free (unloaded) bending angle, degrees, of designs (r2, d) at ``pressure`` (MPa), batched.
+
+    Without payload the equilibrium is the uniform shape theta_i = Theta / n, whose pressure is
+    a closed form P(Theta) (U is linear in P). The angle reached by raising the pressure from 0 is
+    the first Theta with P(Theta) = pressure: bracketed on a grid of Theta, then bisected. Designs
+    that need more than ``options.max_free_angle_deg`` give nan.
+
+    Examples
+    --------
+    >>> [round(float(a), 2) for a in free_angle(DesignProblem(), [3.0], [4.0], 0.12387387453)]
+    [90.0]
+    """
+    options = DEFAULT_DESIGN_OPTIONS if options is None else options
+    ev = _evaluator(problem, options)
+    r2 = np.asarray(r2, dtype=float).ravel()
+    d = np.asarray(d, dtype=float).ravel()
+    N = r2.size
+    top = math.radians(options.max_free_angle_deg)
+    grid = np.linspace(0.0, top, 65)[1:]
+    P = ev.pressure(np.repeat(grid[None, :], N, axis=0), np.repeat(r2, grid.size), np.repeat(d, grid.size)).reshape(N, grid.size)
+    reached = P >= pressure
+    found = np.any(reached, axis=1)
+    first = np.argmax(reached, axis=1)
+    hi = grid[first]
+    lo = np.where(first > 0, grid[np.maximum(first - 1, 0)], 0.0)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        above = ev.pressure(mid, r2, d) >= pressure
+        hi = np.where(above, mid, hi)
+        lo = np.where(above, lo, mid)
+    return np.where(found, np.degrees(0.5 * (lo + hi)), np.nan)
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluation:
+    """Designs evaluated by the batched evaluator (arrays, one entry per design).
+
+    Attributes
+    ----------
+    r2, d : ndarray
+        The designs, mm.
+    pressure : ndarray
+        Pressure of the unloaded start state (90 degrees), MPa.
+    stiffness : ndarray
+        Secant stiffness, N/m (nan where the loaded solve failed or was not stable).
+    theta_loaded : ndarray, shape (designs, n)
+        Loaded segment angles, rad.
+    free_angle_deg : ndarray or None
+        Free bending angle at ``max_pressure`` (objective ``angle``), degrees.
+    target_pressure : ndarray or None
+        Pressure of the target angle (objective ``pressure``), MPa.
+    ok : ndarray of bool
+        The loaded state converged along the ramp and is stable.
+    """
+
+    r2: np.ndarray
+    d: np.ndarray
+    pressure: np.ndarray
+    stiffness: np.ndarray
+    theta_loaded: np.ndarray
+    free_angle_deg: np.ndarray | None
+    target_pressure: np.ndarray | None
+    ok: np.ndarray
+
+
+def evaluate(problem: DesignProblem, r2: Sequence[float], d: Sequence[float], options: DesignOptions | None = None) -> Evaluation:
+    """Evaluate designs (r2, d) in one batched call: pressure, stiffness and the objective's state.
+
+    Examples
+    --------
+    >>> e = evaluate(DesignProblem(), [3.0, 1.5], [4.0, 0.0])
+    >>> [round(float(k), 2) for k in e.stiffness], [round(float(p), 5) for p in e.pressure]
+    ([26.41, 45.29], [0.12387, 0.23362])
+    """
+    options = DEFAULT_DESIGN_OPTIONS if options is None else options
+    r2 = np.asarray(r2, dtype=float).ravel()
+    d = np.asarray(d, dtype=float).ravel()
+    ev = _evaluator(problem, options)
+    out = ev(r2, d)
+    free = target = None
+    if problem.objective == "angle":
+        free = free_angle(problem, r2, d, problem.max_pressure, options)
+    if problem.objective == "pressure":
+        target = ev.pressure(math.radians(problem.target), r2, d)
+    return Evaluation(
+        r2=r2,
+        d=d,
+        pressure=out["pressure"],
+        stiffness=out["stiffness"],
+        theta_loaded=out["theta_l"],
+        free_angle_deg=free,
+        target_pressure=target,
+        ok=out["ok"],
+    )
+
+
+def _objective_of(problem: DesignProblem, e: Evaluation) -> np.ndarray:
+    """The objective J of evaluated designs, in its units (nan where undefined)."""
+    if problem.objective == "stiffness":
+        return e.stiffness
+    if problem.objective == "angle":
+        return np.where(e.ok, e.free_angle_deg, np.nan)
+    return np.where(e.ok, e.target_pressure, np.nan)
+
+
+def _violation_of(problem: DesignProblem, e: Evaluation) -> np.ndarray:
+    """Relative violation of the nonlinear constraints (0 = feasible; inf = evaluation failed)."""
+    v = np.zeros(e.r2.size)
+    if problem.min_stiffness is not None and problem.objective != "stiffness":
+        v += np.maximum(0.0, (problem.min_stiffness - e.stiffness) / problem.min_stiffness)
+    if problem.max_pressure is not None:
+        v += np.maximum(0.0, (e.pressure - problem.max_pressure) / problem.max_pressure)
+        if e.target_pressure is not None:
+            v += np.maximum(0.0, (e.target_pressure - problem.max_pressure) / problem.max_pressure)
+    J = _objective_of(problem, e)
+    return np.where(np.isfinite(J) & e.ok, v, np.inf)
+
+
+def _uniform_state(n: int, angle_deg: float) -> np.ndarray:
+    """theta_i = Theta / n: the unloaded equilibrium of total angle Theta (rad)."""
+    return np.full(n, math.radians(angle_deg) / n)
+
+
+# ---------------------------------------------------------------------------------------------
+# what each energy term contributes to the stiffness
+
+
+def term_curvatures(problem: DesignProblem, r2: float, d: float) -> dict[str, float]:
+    """d^2 U_term / d theta_1^2 (N mm/rad^2) of each energy term at the unloaded start state.
+
+    At the uniform start shape (90 degrees), at the design's start pressure, with the stiffness
+    test's payload applied: how much each term of Eq. (3) resists (> 0) or helps (< 0) a
+    further bend of one segment. The pressure's terms are linear in theta and give 0.
+
+    Examples
+    --------
+    >>> c = term_curvatures(DesignProblem(), 3.0, 4.0)
+    >>> sorted(c), round(c["air"], 9)
+    (['air', 'axial', 'fibres', 'payload1', 'radial'], 0.0)
+    """
+    pc = _pieces(problem)
+    m = pc.model
+    n = pc.n
+    th = ca.SX.sym("theta", n)
+    theta = _uniform_state(pc.n, problem.start_angle_deg)
+    P = float(pc.pressure_closed(math.radians(problem.start_angle_deg), r2, d))
+    a = problem.actuator
+    values = {"L": a.L, "r1": a.r1, "r2": r2, "d": d, "rho": math.radians(a.rho_deg), "E": a.E, "P": P,
+              "F1": problem.payload_n, "Omega1": math.radians(problem.payload_angle_deg), "s1": 1.0}
+    terms = m["energy"](th, *[values[k] for k in m.parameters])[1]
+    out = {}
+    for k, name in enumerate(m.terms):
+        h = ca.Function("term_hessian", [th], [ca.hessian(terms[k], th)[0]])
+        out[name] = float(np.asarray(h(theta))[0, 0])
+    return out

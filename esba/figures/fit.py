@@ -1,0 +1,91 @@
+"""Measured against predicted, with error bars (``esba fit --plot`` and ``docs/experiments.md``).
+
+One panel per kind of measured value (angles in degrees, tip coordinates in mm, stiffnesses in
+N/m): each series puts every measured value (x) against the model's prediction (y), with the
+measurement's standard deviation as a horizontal bar and the prediction's propagated uncertainty
+(95 %, from the fitted parameters' covariance) as a vertical one; the diagonal is a perfect model.
+
+Examples
+--------
+>>> import pathlib, tempfile
+>>> from esba.calibration.fit import Prediction
+>>> p = [Prediction("a", "total_angle", "deg", 90.0, 91.0, 0.5, True), Prediction("b", "tip_x", "mm", 120.0, 118.0, 1.0, True)]
+>>> fig = measured_vs_predicted([Series("example", p, {("a", "total_angle"): 1.0})])
+>>> out = pathlib.Path(tempfile.mkdtemp()) / "mvp.png"
+>>> save_figure(fig, out).exists()
+True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Mapping, Sequence
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from esba.calibration.fit import Prediction
+
+from .scenes import new_figure, save_figure
+
+__all__ = ["Series", "measured_vs_predicted", "save_figure", "PANELS"]
+
+#: The panels: (title, quantities, unit).
+PANELS = (("total angle", ("total_angle",), "deg"), ("tip position", ("tip_x", "tip_y"), "mm"), ("secant stiffness", ("stiffness",), "N/m"))
+
+
+@dataclass(frozen=True)
+class Series:
+    """One set of predictions to draw.
+
+    Attributes
+    ----------
+    label : str
+    predictions : sequence of Prediction
+    measured_sd : mapping
+        (row, quantity) -> the measurement's standard deviation (horizontal bar; none when missing).
+    marker, color : str
+    level_z : float
+        Half-width of the vertical bar in prediction standard deviations (1.96: 95 %).
+    """
+
+    label: str
+    predictions: Sequence[Prediction]
+    measured_sd: Mapping[tuple[str, str], float] = field(default_factory=dict)
+    marker: str = "o"
+    color: str = "C0"
+    level_z: float = 1.96
+
+
+def measured_vs_predicted(series: Sequence[Series], title: str = "") -> Figure:
+    """The figure: a panel per kind of measured value, a marker per measured value."""
+    used = [p for p in PANELS if any(pr.quantity in p[1] for s in series for pr in s.predictions)]
+    fig = new_figure(4.0 * max(1, len(used)), 4.2)
+    axes = fig.subplots(1, max(1, len(used)), squeeze=False)[0]
+    for ax, (name, quantities, unit) in zip(axes, used):
+        lo, hi = math.inf, -math.inf
+        for s in series:
+            pts = [p for p in s.predictions if p.quantity in quantities and p.ok and math.isfinite(p.predicted)]
+            if not pts:
+                continue
+            x = np.array([p.measured for p in pts])
+            y = np.array([p.predicted for p in pts])
+            xerr = np.array([s.measured_sd.get((p.row, p.quantity), 0.0) for p in pts])
+            yerr = np.array([s.level_z * p.sd if math.isfinite(p.sd) else 0.0 for p in pts])
+            ax.errorbar(x, y, xerr=xerr, yerr=yerr, fmt=s.marker, color=s.color, ms=5, capsize=2.5, lw=1, label=s.label, mfc="none")
+            lo, hi = min(lo, x.min() - xerr.max(), y.min() - yerr.max()), max(hi, x.max() + xerr.max(), y.max() + yerr.max())
+        if math.isfinite(lo):
+            pad = 0.06 * (hi - lo if hi > lo else 1.0)
+            ax.plot([lo - pad, hi + pad], [lo - pad, hi + pad], color="0.6", lw=0.8, zorder=0)
+            ax.set_xlim(lo - pad, hi + pad)
+            ax.set_ylim(lo - pad, hi + pad)
+        ax.set_aspect("equal", adjustable="box")
+        label = name + (" (x and y)" if len(quantities) > 1 else "")
+        ax.set_xlabel(f"measured {label} ({unit})")
+        ax.set_ylabel(f"predicted ({unit})")
+        ax.grid(True, color="0.9", lw=0.6)
+    axes[0].legend(fontsize=7, loc="upper left")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return fig

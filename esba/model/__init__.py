@@ -1,0 +1,9 @@
+"""The model: scenes, the generated CasADi models, and what follows from them without solving.
+
+:mod:`.scene` (an actuator, its loads and settings, validated and frozen), :mod:`.generated`
+(finding, checking and loading the models that ``derive`` emitted, generating a missing one on
+demand), :mod:`.closed_form` (the unloaded pressure of a target angle), :mod:`.structured` (the O(n)
+linear algebra of the chain's Hessian), :mod:`.stability` (verdicts from eigenvalues),
+:mod:`.validity` (where a result leaves the paper's model) and :mod:`.resolution` (what the
+solver can resolve). May import :mod:`esba.infra` and ``derive``.
+"""

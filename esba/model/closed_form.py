@@ -1,0 +1,99 @@
+"""The one closed form of the statics: the pressure that holds the unloaded actuator at a total angle.
+
+Without payloads and weight the equilibrium is the uniform bend theta_i = Theta / n, and the
+energy is linear in the pressure P (Eq. 5 and 18), so at that shape dU/dtheta = g0 + P g1 and
+
+    P(Theta) = -(g0 . g1) / (g1 . g1)
+
+exactly, from the generated gradient at P = 0 and P = 1 (payload forces and g set to 0).
+:func:`unloaded_pressure` is that formula on CasADi expressions (an NLP, a compiled batch, the
+design evaluator build it into their graphs) or on numbers; :func:`pressure_for_angle` is the
+same for a :class:`~esba.model.scene.Scene`, with its checks, kept per scene and angle.
+
+Examples
+--------
+>>> from esba.model.scene import Scene
+>>> round(pressure_for_angle(Scene(), 90.0), 7)
+0.1238739
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from typing import Any, Mapping
+
+import casadi as ca
+import numpy as np
+
+from esba.infra import checks
+from esba.infra.errors import EquilibriumError
+
+from .generated import Model
+from .scene import Scene, SceneError
+
+__all__ = ["pressure_for_angle", "unloaded_pressure", "load_parameter"]
+
+
+def load_parameter(name: str) -> bool:
+    """True for the model parameters that carry a load: a payload's force ``F<k>`` and gravity's ``g``."""
+    return (name.startswith("F") and name[1:].isdigit()) or name == "g"
+
+
+def unloaded_pressure(model: Model, total_angle: Any, values: Mapping[str, Any]) -> Any:
+    """The pressure that holds the unloaded actuator at a uniform bend of ``total_angle`` (rad).
+
+    ``values`` maps every name of ``model.parameters`` to a number or a CasADi expression
+    (radians for ``rho`` and ``Omega_k``); ``P`` and the loads are ignored (the loads are set to 0).
+    Returns a CasADi expression (a DM for numbers).
+    """
+    n = model.n
+    symbolic = isinstance(total_angle, (ca.SX, ca.MX))
+    uniform = ca.repmat(total_angle / n, n, 1) if symbolic else ca.DM.ones(n) * (float(total_angle) / n)
+    base = {k: (0.0 if load_parameter(k) else values[k]) for k in model.parameters if k != "P"}
+
+    def gradient(pressure: float) -> Any:
+        return model["gradient"](uniform, *[pressure if k == "P" else base[k] for k in model.parameters])
+
+    g0 = gradient(0.0)
+    g1 = gradient(1.0) - g0
+    return -ca.dot(g0, g1) / ca.dot(g1, g1)
+
+
+def pressure_for_angle(scene: Scene, angle_deg: float | None = None) -> float:
+    """The pressure (MPa) that bends the unloaded actuator of ``scene`` to a total angle, in closed form.
+
+    Parameters
+    ----------
+    scene : Scene
+        Actuator, fibres, segment count and variant (payloads and gravity are ignored).
+    angle_deg : float, optional
+        Target total angle Theta in degrees; default the scene's ``target_angle_deg``.
+
+    Raises
+    ------
+    EquilibriumError
+        when no pressure >= 0 holds the actuator at that angle.
+    """
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene={scene!r}: expected an esba.model.scene.Scene")
+    if angle_deg is None:
+        angle_deg = scene.target_angle_deg
+    if angle_deg is None:
+        raise EquilibriumError("pressure_for_angle needs angle_deg (the scene gives a pressure, not a target angle)")
+    checks.finite("target_angle_deg", angle_deg, SceneError)
+    return _pressure_for_angle(scene, float(angle_deg))
+
+
+@lru_cache(maxsize=1024)
+def _pressure_for_angle(scene: Scene, angle_deg: float) -> float:
+    """:func:`pressure_for_angle`, kept per scene and angle (a stiffness study asks several times)."""
+    model = scene.model()
+    values = scene.parameters(0.0, load_factor=0.0)
+    with np.errstate(all="ignore"):
+        pressure = float(unloaded_pressure(model, math.radians(angle_deg), values))
+    if not math.isfinite(pressure):
+        raise EquilibriumError(f"target_angle_deg={angle_deg:g}: outside the model's domain for this actuator")
+    if pressure < 0:
+        raise EquilibriumError(f"target_angle_deg={angle_deg:g}: would need a negative pressure ({pressure:.4g} MPa)")
+    return pressure

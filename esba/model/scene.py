@@ -1,0 +1,441 @@
+"""Scenes: an actuator, its loads and the model settings, validated once and then frozen.
+
+A scene is everything :func:`esba.statics.equilibrium.solve` needs: the actuator's geometry and material
+(:class:`Actuator`, defaults = the paper's Table 1 with E = 0.54 MPa), the pressure or the unloaded
+bending angle from which the pressure is found, any number of point payloads (:class:`Payload`),
+gravity and fibres on/off, the segment count and the model variant.
+
+The scene decides the model: :attr:`Scene.effects` is exactly the scene's effect set (no payload,
+no payload terms; gravity only when asked), and :meth:`Scene.model` loads that generated model.
+
+Degrees appear only here, at the edge (the fibre angle ``rho_deg``, the payload direction
+``angle_deg``, the target angle ``target_angle_deg``); :meth:`Scene.parameters` hands the model
+radians. Units: mm, N, MPa, kg, m/s^2.
+
+A scene file is TOML; every key is optional::
+
+    segments = 3              # n, 1 to 256
+    variant = "paper"         # or "printed"
+    gravity = false
+    fibres = true
+
+    [actuator]                # Table 1 (E from Section 4.2)
+    L = 135.0                 # mm
+    r1 = 8.0                  # mm
+    r2 = 3.0                  # mm
+    d = 4.0                   # mm
+    rho_deg = 10.0            # fibre angle, degrees
+    E = 0.54                  # MPa
+    M = 0.035                 # kg (only used with gravity)
+
+    [loads]
+    target_angle_deg = 90.0   # the pressure that bends the unloaded actuator this far ...
+    # pressure = 0.12         # ... or a pressure in MPa (give one of the two)
+    g = 9.81                  # m/s^2
+
+    [[payloads]]              # repeat for more payloads
+    force = 2.0               # N
+    angle_deg = 90.0          # Omega from the vertical: 0 down, 90 horizontal against the bend
+    at = 1.0                  # point of application, fraction of L from the base (1 = tip)
+
+    [uncertainty]             # optional: standard deviations (see esba.calibration.uncertainty)
+    E = "10%"                 # relative; 0.05 (MPa) absolute; "±0.1" a tolerance
+
+Examples
+--------
+>>> s = Scene(payloads=(Payload(2.0),))
+>>> s.effects.spec()
+'air,axial,radial,fibres,payload'
+>>> s.replace(segments=4).segments
+4
+>>> Scene(segments=0)
+Traceback (most recent call last):
+...
+esba.model.scene.SceneError: segments=0: expected a whole number from 1 to 256 (the finest model of the accuracy study; larger n costs n^2 memory and minutes to generate for no accuracy)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
+from esba.infra import checks
+from esba.infra.errors import InputError
+
+from .generated import Model, load_model
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure"]
+
+#: Standard gravity, m/s^2.
+STANDARD_GRAVITY = 9.81
+
+
+class SceneError(InputError):
+    """A scene value that is not allowed: the message names the field, the value and what is allowed."""
+
+
+def _number(where: str, value: Any) -> float:
+    return checks.finite(where, value, SceneError)
+
+
+def _positive(where: str, value: Any) -> float:
+    value = _number(where, value)
+    if value <= 0:
+        raise SceneError(f"{where}={value:g}: expected a number > 0")
+    return value
+
+
+def check_pressure(value: Any, where: str = "pressure") -> float:
+    """A pressure in MPa: a finite number >= 0 (the check of :attr:`Scene.pressure`, for every entry point).
+
+    >>> check_pressure(float("inf"))
+    Traceback (most recent call last):
+    ...
+    esba.model.scene.SceneError: pressure=inf: expected a finite number
+    """
+    p = _number(where, value)
+    if p < 0:
+        raise SceneError(f"{where}={p:g}: expected a pressure >= 0 MPa")
+    return p
+
+
+def _flag(where: str, value: Any) -> bool:
+    if not isinstance(value, bool):
+        raise SceneError(f"{where}={value!r}: expected true or false")
+    return value
+
+
+@dataclass(frozen=True)
+class Actuator:
+    """Geometry and material of one ESBA (Table 1 of the paper by default).
+
+    Parameters
+    ----------
+    L : float
+        Length of the inextensible layer, mm (> 0).
+    r1 : float
+        External radius, mm (> 0).
+    r2 : float
+        Radius of the chamber, mm (> 0).
+    d : float
+        Eccentric distance of the chamber, mm (>= 0), with r2 + d < r1.
+    rho_deg : float
+        Winding angle of the fibres, degrees, 0 <= rho < 90.
+    E : float
+        Young's modulus of the rubber, MPa (> 0).
+    M : float
+        Mass, kg (>= 0; used only with gravity).
+
+    Examples
+    --------
+    >>> Actuator().r2
+    3.0
+    >>> Actuator(r2=5.0)
+    Traceback (most recent call last):
+    ...
+    esba.model.scene.SceneError: actuator.r2=5 with d=4, r1=8: the chamber must lie inside the actuator, r2 + d < r1
+    """
+
+    L: float = 135.0
+    r1: float = 8.0
+    r2: float = 3.0
+    d: float = 4.0
+    rho_deg: float = 10.0
+    E: float = 0.54
+    M: float = 0.035
+
+    def __post_init__(self) -> None:
+        for name in ("L", "r1", "r2", "E"):
+            object.__setattr__(self, name, _positive(f"actuator.{name}", getattr(self, name)))
+        for name in ("d", "M", "rho_deg"):
+            value = _number(f"actuator.{name}", getattr(self, name))
+            if value < 0:
+                raise SceneError(f"actuator.{name}={value:g}: expected a number >= 0")
+            object.__setattr__(self, name, value)
+        if not self.r2 + self.d < self.r1:
+            raise SceneError(
+                f"actuator.r2={self.r2:g} with d={self.d:g}, r1={self.r1:g}: "
+                "the chamber must lie inside the actuator, r2 + d < r1"
+            )
+        if not self.rho_deg < 90.0:
+            raise SceneError(f"actuator.rho_deg={self.rho_deg:g}: expected 0 <= rho_deg < 90")
+
+    def parameters(self) -> dict[str, float]:
+        """The model parameters of the actuator (radians): L, r1, r2, d, rho, E, M."""
+        return {
+            "L": self.L,
+            "r1": self.r1,
+            "r2": self.r2,
+            "d": self.d,
+            "rho": math.radians(self.rho_deg),
+            "E": self.E,
+            "M": self.M,
+        }
+
+
+@dataclass(frozen=True)
+class Payload:
+    """A constant point force on the actuator (Eq. 14, generalised to any point).
+
+    Parameters
+    ----------
+    force : float
+        Magnitude, N (>= 0).
+    angle_deg : float
+        Direction Omega from the vertical, degrees: the force is F (cos Omega, -sin Omega) in the
+        base frame (x down, y horizontal); 0 pulls down, 90 pushes horizontally against the
+        bending direction (Table 2).
+    at : float
+        Point of application as a fraction of L from the base, 0 < at <= 1 (1 = tip).
+
+    Examples
+    --------
+    >>> Payload(2.0).angle_deg
+    90.0
+    >>> Payload(1.0, at=1.5)
+    Traceback (most recent call last):
+    ...
+    esba.model.scene.SceneError: payload.at=1.5: expected a fraction of the length with 0 < at <= 1 (1 = tip)
+    """
+
+    force: float
+    angle_deg: float = 90.0
+    at: float = 1.0
+
+    def __post_init__(self) -> None:
+        force = _number("payload.force", self.force)
+        if force < 0:
+            raise SceneError(f"payload.force={force:g}: expected a magnitude >= 0 N (turn angle_deg by 180 to reverse it)")
+        object.__setattr__(self, "force", force)
+        object.__setattr__(self, "angle_deg", _number("payload.angle_deg", self.angle_deg))
+        at = _number("payload.at", self.at)
+        if not 0.0 < at <= 1.0:
+            raise SceneError(f"payload.at={at:g}: expected a fraction of the length with 0 < at <= 1 (1 = tip)")
+        object.__setattr__(self, "at", at)
+
+    def scaled(self, factor: float) -> Payload:
+        """The same payload with its magnitude times ``factor``."""
+        return Payload(self.force * factor, self.angle_deg, self.at)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """An actuator, its loads and the model settings; validated on creation, frozen after.
+
+    Parameters
+    ----------
+    actuator : Actuator
+        Geometry and material (Table 1 by default).
+    pressure : float or None
+        Pressure in MPa (>= 0). Give this or ``target_angle_deg``; when neither is given the
+        target is 90 degrees (the paper's starting state, Section 4.4.2).
+    target_angle_deg : float or None
+        Find the pressure that bends the unloaded actuator (no payloads, no gravity) to this
+        total angle, degrees (> 0): :func:`esba.analysis.stiffness.pressure_for_angle`.
+    payloads : tuple of Payload
+        Point payloads (any number, up to the model's limit); none means no payload terms.
+    gravity : bool
+        Include the actuator's weight (Eq. 15) with mass ``actuator.M`` and ``g``.
+    g : float
+        Gravitational acceleration, m/s^2 (> 0).
+    fibres : bool
+        Include the fibre restraint (Eq. 18).
+    segments : int
+        Segment count n, 1 to :data:`esba.infra.checks.MAX_SEGMENTS` (256).
+    variant : str
+        ``"paper"`` (default) or ``"printed"`` (see :mod:`derive.effects`).
+    """
+
+    actuator: Actuator = field(default_factory=Actuator)
+    pressure: float | None = None
+    target_angle_deg: float | None = None
+    payloads: tuple[Payload, ...] = ()
+    gravity: bool = False
+    g: float = STANDARD_GRAVITY
+    fibres: bool = True
+    segments: int = 3
+    variant: str = DEFAULT_VARIANT
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.actuator, Actuator):
+            raise SceneError(f"actuator={self.actuator!r}: expected an Actuator")
+        if self.pressure is not None and self.target_angle_deg is not None:
+            raise SceneError(
+                f"pressure={self.pressure!r} and target_angle_deg={self.target_angle_deg!r}: give one of the two, not both"
+            )
+        if self.pressure is not None:
+            object.__setattr__(self, "pressure", check_pressure(self.pressure))
+        else:
+            target = 90.0 if self.target_angle_deg is None else self.target_angle_deg
+            target = _number("target_angle_deg", target)
+            if target <= 0:
+                raise SceneError(f"target_angle_deg={target:g}: expected an angle > 0 degrees")
+            object.__setattr__(self, "target_angle_deg", target)
+        payloads = self.payloads
+        if isinstance(payloads, Payload):
+            payloads = (payloads,)
+        if not isinstance(payloads, (tuple, list)) or not all(isinstance(p, Payload) for p in payloads):
+            raise SceneError(f"payloads={self.payloads!r}: expected a list of Payload")
+        object.__setattr__(self, "payloads", tuple(payloads))
+        object.__setattr__(self, "gravity", _flag("gravity", self.gravity))
+        object.__setattr__(self, "fibres", _flag("fibres", self.fibres))
+        object.__setattr__(self, "g", _positive("g", self.g))
+        object.__setattr__(self, "segments", checks.segments(self.segments, SceneError))
+        if self.variant not in VARIANTS:
+            raise SceneError(f"variant={self.variant!r}: allowed are {', '.join(VARIANTS)}")
+        try:
+            self.effects  # noqa: B018 - the payload count limit lives in EffectSet
+        except ValueError as exc:
+            raise SceneError(f"payloads: {len(self.payloads)} given; {exc}") from None
+
+    # -- what the scene implies --------------------------------------------------------------
+
+    @property
+    def effects(self) -> EffectSet:
+        """Exactly the effects of this scene (no payload terms without payloads)."""
+        return EffectSet(fibres=self.fibres, payloads=len(self.payloads), gravity=self.gravity)
+
+    def model(self) -> Model:
+        """The generated model for this scene's segments, effects and variant (generated if missing)."""
+        return load_model(self.segments, self.effects, self.variant)
+
+    def parameters(self, pressure: float, load_factor: float = 1.0) -> dict[str, float]:
+        """Model parameter values (radians) at ``pressure`` with payloads and weight scaled by ``load_factor``.
+
+        Every parameter any model may need is present; :meth:`Model.param_vector` picks its own.
+        """
+        values = self.actuator.parameters()
+        values["P"] = float(pressure)
+        values["g"] = self.g * load_factor
+        for k, p in enumerate(self.payloads, start=1):
+            values[f"F{k}"] = p.force * load_factor
+            values[f"Omega{k}"] = math.radians(p.angle_deg)
+            values[f"s{k}"] = p.at
+        return values
+
+    # -- derived scenes ----------------------------------------------------------------------
+
+    def replace(self, **changes: Any) -> Scene:
+        """A new validated scene with some fields changed (``actuator`` fields may be given by name).
+
+        Setting ``pressure`` clears ``target_angle_deg`` and the other way round, unless both are given.
+        """
+        act_fields = {f.name for f in dataclasses.fields(Actuator)}
+        act_changes = {k: changes.pop(k) for k in list(changes) if k in act_fields}
+        if act_changes:
+            changes["actuator"] = dataclasses.replace(changes.get("actuator", self.actuator), **act_changes)
+        if "pressure" in changes and "target_angle_deg" not in changes and changes["pressure"] is not None:
+            changes["target_angle_deg"] = None
+        if "target_angle_deg" in changes and "pressure" not in changes and changes["target_angle_deg"] is not None:
+            changes["pressure"] = None
+        unknown = set(changes) - {f.name for f in dataclasses.fields(Scene)}
+        if unknown:
+            allowed = ", ".join(sorted({f.name for f in dataclasses.fields(Scene)} | act_fields))
+            raise SceneError(f"unknown scene field(s) {', '.join(sorted(unknown))}: allowed are {allowed}")
+        return dataclasses.replace(self, **changes)
+
+    def unloaded(self) -> Scene:
+        """The same actuator and pressure setting without payloads and without gravity."""
+        return dataclasses.replace(self, payloads=(), gravity=False)
+
+    def describe(self) -> str:
+        """A one-line summary, e.g. for a table header."""
+        a = self.actuator
+        drive = f"P={self.pressure:g} MPa" if self.pressure is not None else f"unloaded angle {self.target_angle_deg:g} deg"
+        loads = "; ".join(f"{p.force:g} N at {p.angle_deg:g} deg, s={p.at:g}" for p in self.payloads) or "no payload"
+        extra = (", gravity" if self.gravity else "") + ("" if self.fibres else ", no fibres")
+        return (
+            f"L={a.L:g} r1={a.r1:g} r2={a.r2:g} d={a.d:g} rho={a.rho_deg:g} deg E={a.E:g} MPa; "
+            f"{drive}; {loads}; n={self.segments}, {self.variant}{extra}"
+        )
+
+
+#: The main job (``esba solve`` without arguments): Table 1 at its 90 degree pressure, a 2 N
+#: horizontal tip payload, n = 3 (Table 2 of the paper).
+MAIN_JOB = Scene(target_angle_deg=90.0, payloads=(Payload(2.0, 90.0, 1.0),), segments=3)
+
+
+# ---------------------------------------------------------------------------------------------
+# TOML
+
+#: ``uncertainty`` (standard deviations of the parameters) is read by :func:`esba.calibration.uncertainty.load_sigmas`.
+_TOP_KEYS = {"segments", "variant", "gravity", "fibres", "actuator", "loads", "payloads", "uncertainty"}
+_LOAD_KEYS = {"pressure", "target_angle_deg", "g"}
+_PAYLOAD_KEYS = {"force", "angle_deg", "at"}
+
+
+def _check_keys(where: str, table: Any, allowed: set[str]) -> Mapping[str, Any]:
+    if not isinstance(table, Mapping):
+        raise SceneError(f"{where}: expected a table, got {table!r}")
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise SceneError(f"{where}: unknown key(s) {', '.join(unknown)}; allowed are {', '.join(sorted(allowed))}")
+    return table
+
+
+def scene_from_dict(data: Mapping[str, Any]) -> Scene:
+    """Build a validated :class:`Scene` from the nested mapping of a scene file.
+
+    Examples
+    --------
+    >>> s = scene_from_dict({"segments": 2, "payloads": [{"force": 1.0, "angle_deg": 0}]})
+    >>> s.segments, s.payloads[0].angle_deg, s.target_angle_deg
+    (2, 0.0, 90.0)
+    >>> scene_from_dict({"actuator": {"R1": 8}})
+    Traceback (most recent call last):
+    ...
+    esba.model.scene.SceneError: [actuator]: unknown key(s) R1; allowed are E, L, M, d, r1, r2, rho_deg
+    """
+    data = _check_keys("scene", data, _TOP_KEYS)
+    act_keys = {f.name for f in dataclasses.fields(Actuator)}
+    actuator = Actuator(**_check_keys("[actuator]", data.get("actuator", {}), act_keys))
+    loads = _check_keys("[loads]", data.get("loads", {}), _LOAD_KEYS)
+    raw_payloads = data.get("payloads", [])
+    if not isinstance(raw_payloads, list):
+        raise SceneError(f"payloads={raw_payloads!r}: expected an array of tables [[payloads]]")
+    payloads = []
+    for k, item in enumerate(raw_payloads, start=1):
+        item = _check_keys(f"[[payloads]] #{k}", item, _PAYLOAD_KEYS)
+        if "force" not in item:
+            raise SceneError(f"[[payloads]] #{k}: missing key force (N)")
+        payloads.append(Payload(**item))
+    kwargs: dict[str, Any] = {k: data[k] for k in ("segments", "variant", "gravity", "fibres") if k in data}
+    kwargs.update(loads)
+    return Scene(actuator=actuator, payloads=tuple(payloads), **kwargs)
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a TOML scene file.
+
+    Raises
+    ------
+    SceneError
+        when the file is missing, is not valid TOML (with the line), or holds a bad value.
+    """
+    path = Path(path)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise SceneError(f"scene file {str(path)!r} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"scene file {str(path)!r} cannot be read: {exc}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"scene file {str(path)!r} is not valid TOML: {exc}") from None
+    try:
+        return scene_from_dict(data)
+    except SceneError as exc:
+        raise SceneError(f"scene file {str(path)!r}: {exc}") from None
+    except TypeError as exc:  # pragma: no cover - guarded by the key checks
+        raise SceneError(f"scene file {str(path)!r}: {exc}") from None

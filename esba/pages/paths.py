@@ -1,0 +1,306 @@
+"""``docs/paths.md``: where the Table 1 actuator snaps, how wide its hysteresis is, where it buckles.
+
+:func:`paths_data` runs the studies (path traces, :mod:`esba.analysis.path_analysis`), :func:`write_page`
+writes the page and its figures; ``esba path --write-doc docs/paths.md`` runs both.
+
+* the pressure under the 2 N horizontal tip payload (Table 2's load): the bistable range, its two
+  folds and the hysteresis of inflating and deflating under the load;
+* the same for payloads of 1 to 3 N: how the bistable range opens with the payload;
+* the payload direction at the 90 degree pressure (2 N): the bistable range near 120 degrees;
+* the fold pressures against n (how many segments the folds need);
+* the straight actuator pushed along its axis, n = 1..8: the buckling load found by the trace
+  against the closed form (:func:`esba.analysis.path_analysis.column_buckling_load`), and what each side of
+  the crossing branch does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from esba.analysis.path_analysis import PathStudy, column_buckling_load, study
+from esba.figures.paths import save_figure, study_figure
+from esba.model.scene import Payload, Scene
+from esba.paths.continuation import (
+    PathOptions,
+    PathProblem,
+    bifurcating_branches,
+    trace,
+)
+
+__all__ = ["paths_data", "write_page", "PathsData"]
+
+#: Payloads of the bistable-range table, N.
+PAYLOADS = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
+#: Segment counts of the fold convergence table.
+FOLD_NS = (1, 2, 3, 4, 6, 8, 16)
+#: Segment counts of the buckling table.
+COLUMN_NS = tuple(range(1, 9))
+
+
+#: Path settings of the studies: a finer largest step than the default, for the figures.
+OPTIONS = PathOptions(ds_max=0.1)
+
+
+@dataclass(frozen=True, eq=False)
+class PathsData:
+    pressure: PathStudy
+    direction: PathStudy
+    column: PathStudy
+    by_payload: list[dict[str, Any]]
+    cusp_n: float | None
+    history_mpa: float | None
+    by_segments: list[dict[str, Any]]
+    buckling: list[dict[str, Any]]
+
+
+def _folds(problem: PathProblem, theta: np.ndarray, lam0: float, to: float) -> list[float]:
+    b = trace(problem, theta, lam0, to=to, options=OPTIONS)
+    return [f.lam for f in b.folds]
+
+
+def _pressure_folds(force: float, segments: int = 3, to: float = 0.4) -> list[float]:
+    from esba.statics.equilibrium import solve
+
+    scene = Scene(pressure=0.0, payloads=(Payload(force, 90.0),), segments=segments)
+    return _folds(PathProblem.from_scene(scene, "pressure"), solve(scene).theta, 0.0, to)
+
+
+def _bisect(low: float, high: float, above, tol: float) -> float:
+    """The boundary in [low, high] where ``above`` turns True (False at low, True at high)."""
+    while high - low > tol:
+        mid = 0.5 * (low + high)
+        if above(mid):
+            high = mid
+        else:
+            low = mid
+    return 0.5 * (low + high)
+
+
+def paths_data(progress=None) -> PathsData:
+    """Run every study of the page (about half a minute)."""
+    say = progress or (lambda msg: None)
+    from esba.statics.equilibrium import solve
+
+    say("pressure under 2 N")
+    p_study = study(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", 0.3, options=OPTIONS)
+    say("payload direction at the 90 degree pressure")
+    d_study = study(Scene(payloads=(Payload(2.0, 90.0),)), "omega", 150.0, options=OPTIONS)
+    say("bistable range against the payload")
+    by_payload = [{"payload_n": f, "folds_mpa": _pressure_folds(f)} for f in PAYLOADS]
+    without = [r["payload_n"] for r in by_payload if len(r["folds_mpa"]) < 2]
+    with_folds = [r["payload_n"] for r in by_payload if len(r["folds_mpa"]) == 2]
+    cusp = None
+    if without and with_folds and max(without) < min(with_folds):
+        cusp = _bisect(max(without), min(with_folds), lambda f: len(_pressure_folds(f)) == 2, 1e-3)
+    say("which state solve()'s history reaches in the bistable range")
+    upper, lower = (f.lam for f in p_study.main.folds[:2]) if len(p_study.main.folds) >= 2 else (None, None)
+    history_p = None
+    if upper is not None:
+
+        def reaches_upper(p: float) -> bool:
+            r = solve(Scene(pressure=p, payloads=(Payload(2.0, 90.0),)))
+            return r.total_angle_deg > p_study.main.folds[0].total_angle_deg
+
+        if reaches_upper(upper) and not reaches_upper(lower):
+            history_p = _bisect(lower, upper, reaches_upper, 1e-5)
+    say("fold pressures against n")
+    by_segments = [{"n": n, "folds_mpa": _pressure_folds(2.0, n, 0.3)} for n in FOLD_NS]
+    say("column buckling, n = 1..8")
+    buckling = []
+    for n in COLUMN_NS:
+        f_cr = column_buckling_load(segments=n)
+        scene = Scene(pressure=0.0, payloads=(Payload(0.5 * f_cr, 180.0),), segments=n)
+        problem = PathProblem.from_scene(scene, "payload")
+        b = trace(problem, np.zeros(n), 0.5 * f_cr, to=1.5 * f_cr)
+        row: dict[str, Any] = {"n": n, "closed_form_n": f_cr, "traced_n": None, "sides": []}
+        if b.branch_points:
+            bp = b.branch_points[0]
+            row["traced_n"] = bp.lam
+            row["status"] = bp.status
+            for side in bifurcating_branches(problem, bp, bounds=(0.5 * f_cr, 1.5 * f_cr), options=OPTIONS):
+                bend = float(np.degrees(np.sum(side.theta[min(1, len(side) - 1)])))
+                row["sides"].append(
+                    {
+                        "direction": "towards the chamber (theta > 0)" if bend > 0 else "away from the chamber (theta < 0)",
+                        "load_after": "falls" if len(side) > 1 and side.lam[1] < bp.lam else "rises",
+                        "stable_at_first": bool(side.stable[min(1, len(side) - 1)]),
+                        "folds_n": [f.lam for f in side.folds],
+                        "fold_angles_deg": [f.total_angle_deg for f in side.folds],
+                    }
+                )
+        buckling.append(row)
+    say("column, n = 4, for the figure")
+    c_study = study(Scene(pressure=0.0, payloads=(Payload(1.0, 180.0),), segments=4), "payload", 6.4, options=OPTIONS)
+    return PathsData(p_study, d_study, c_study, by_payload, cusp, history_p, by_segments, buckling)
+
+
+def _fold_row(label: str, folds: list[float]) -> str:
+    """A table row: the label, the fold pressures (MPa) and the width between two folds (kPa)."""
+    width = f"{1000 * abs(folds[0] - folds[1]):.2f}" if len(folds) == 2 else "-"
+    return f"| {label} | {_fmt_folds(folds)} | {width} |"
+
+
+def _fmt_folds(folds: list[float], digits: int = 5) -> str:
+    return ", ".join(f"{f:.{digits}f}" for f in folds) if folds else "none"
+
+
+def write_page(path: str | Path, data: PathsData, command: str, figures: str | Path | None = None) -> Path:
+    """Write ``docs/paths.md`` (and its figures into ``figures``, default ``figures/`` beside the page)."""
+    path = Path(path)
+    fig_dir = Path(figures) if figures is not None else path.parent / "figures"
+    names = {"pressure": "path-pressure-2N.png", "direction": "path-omega-2N.png", "column": "path-column-n4.png"}
+    save_figure(study_figure(data.pressure), fig_dir / names["pressure"])
+    save_figure(study_figure(data.direction), fig_dir / names["direction"])
+    save_figure(study_figure(data.column), fig_dir / names["column"])
+    rel = {k: Path(v).name for k, v in names.items()}
+    try:
+        fig_rel = fig_dir.resolve().relative_to(path.parent.resolve())
+    except ValueError:
+        fig_rel = fig_dir.resolve()
+    p = data.pressure
+    up, down = p.main.folds[0].lam, p.main.folds[1].lam
+    h = p.hysteresis or {"width": float("nan")}
+    d = data.direction
+    d_folds = sorted(f.lam for f in d.main.folds)
+    dh = d.hysteresis or {"width": float("nan")}
+    jumps_p = [j for r in p.loading for j in r.jumps]
+    loads = [r["traced_n"] for r in data.buckling if r["traced_n"] is not None]
+    column_text = f"{min(loads):.2f} to {max(loads):.2f} N (n = {COLUMN_NS[-1]} to 1)" if loads else "a load the traces did not find"
+    n3 = next(r["folds_mpa"] for r in data.by_segments if r["n"] == 3)
+    nmax = data.by_segments[-1]["folds_mpa"]
+    fold_gap = 1000 * max(abs(a - b) for a, b in zip(n3, nmax)) if len(n3) == len(nmax) == 2 else float("nan")
+    jumps_d = [j for r in d.loading for j in r.jumps]
+    lines = [
+        "# Equilibrium paths: where the actuator snaps and where it buckles",
+        "",
+        f"<!-- Written by `{command}`; rerun it to refresh. -->",
+        "",
+        "The Table 1 actuator (E = 0.54 MPa, n = 3 unless said otherwise, variant `paper`) is *multistable*",
+        "in the paper's own operating range. This page follows its equilibria as one parameter changes",
+        "(`esba path`, pseudo-arclength continuation on the generated exact derivatives, see `esba/paths/continuation.py`):",
+        "a **fold** (limit point, LP) is where a stable and an unstable equilibrium meet and vanish, so that a",
+        "slowly changing load makes the actuator *snap*; a **branch point** (BP) is where two branches cross,",
+        "as when a straight actuator buckles. Every special point is located to a relative 1e-8 in the",
+        "parameter (folds by the extended system g = 0, H v = 0, v0 . v = 1; branch points by Moore's",
+        "extended system), and the Morse index (the number of negative Hessian eigenvalues) changes by one at",
+        "each. In the figures, stable branches are solid and unstable ones dashed; the thick translucent",
+        "lines are quasi-static loading up and down, the arrows its jumps.",
+        "",
+        "## Pressure under the 2 N horizontal tip payload",
+        "",
+        "Inflating the actuator under Table 2's load, the stable branch bends on until the fold at",
+        f"**P = {up:.5f} MPa**, where it snaps by {jumps_p[0].distance_mm:.0f} mm"
+        f" (total angle {math.degrees(np.sum(jumps_p[0].theta_before)):.1f} -> {math.degrees(np.sum(jumps_p[0].theta_after)):.1f} deg)",
+        f"to the far branch. Deflating from there it holds on until the other fold at **P = {down:.5f} MPa**"
+        f" and snaps back by {jumps_p[-1].distance_mm:.0f} mm.",
+        f"The hysteresis loop is **{1000 * h['width']:.2f} kPa** wide; between the folds two stable states",
+        "exist, and which one the actuator is in depends on its history. esba's `solve` inflates first and",
+        "then applies the payload"
+        + (
+            f": that history reaches the upper state for pressures above {data.history_mpa:.4f} MPa (bisection on `solve`)."
+            if data.history_mpa is not None
+            else "."
+        ),
+        "",
+        f"![pressure path under 2 N]({fig_rel / rel['pressure']})",
+        "",
+        "`esba path --param pressure --from 0 --to 0.3 --payload 2` draws this figure.",
+        "",
+        "### The bistable range opens with the payload",
+        "",
+        "The folds of the pressure path (0 to 0.4 MPa) for horizontal tip payloads of 0.5 to 3 N:",
+        "",
+        "| payload (N) | folds (MPa) | bistable range (kPa) |",
+        "|---|---|---|",
+    ]
+    lines += [_fold_row(f"{row['payload_n']:g}", row["folds_mpa"]) for row in data.by_payload]
+    lines += [
+        "",
+        "Below the smallest payload with two folds the pressure path is monotonic: no snap-through, one",
+        "stable state per pressure."
+        + (f" The two folds are born together (a cusp) at a payload of **{data.cusp_n:.3f} N** (bisection to 1e-3 N)." if data.cusp_n else ""),
+        "",
+        "### How many segments the folds need",
+        "",
+        "The fold pressures under 2 N against the segment count n:",
+        "",
+        "| n | folds (MPa) | hysteresis (kPa) |",
+        "|---|---|---|",
+    ]
+    lines += [_fold_row(str(row["n"]), row["folds_mpa"]) for row in data.by_segments]
+    lines += [
+        "",
+        "## Payload direction at the 90 degree pressure",
+        "",
+        "With the pressure held at its 90 degree value and a 2 N tip payload turned from 90 to 150 degrees",
+        f"(Omega from the vertical), the branch folds at **{d_folds[1]:.3f} deg** (turning up, the actuator",
+        f"snaps by {jumps_d[0].distance_mm:.0f} mm) and at **{d_folds[0]:.3f} deg** (turning back, it snaps back):",
+        f"a hysteresis of **{dh['width']:.2f} deg**.",
+        "",
+        "![direction path](" + str(fig_rel / rel["direction"]) + ")",
+        "",
+        "`esba path --param omega --to 150` draws this figure.",
+        "",
+        "## The straight actuator pushed along its axis",
+        "",
+        "At P = 0 the straight state is an equilibrium under any compressive tip load (Omega = 180 deg). It",
+        "loses stability at a branch point where the Hessian at theta = 0 turns singular; the closed form",
+        "is F = k0 / lambda_max(-X''), with k0 the elastic stiffness of a segment at theta = 0 (Eq. 8 and",
+        "Eq. 13) and X'' the Hessian of the tip's x (`esba.analysis.path_analysis.column_buckling_load`). The trace finds:",
+        "",
+        "| n | closed form (N) | traced (N) | relative difference | towards the chamber | away from it |",
+        "|---|---|---|---|---|---|",
+    ]
+    for row in data.buckling:
+        diff = "-" if row["traced_n"] is None else f"{abs(row['traced_n'] / row['closed_form_n'] - 1):.1e}"
+        traced = "-" if row["traced_n"] is None else f"{row['traced_n']:.6f}"
+        sides = {s["direction"].split(" (")[0]: s for s in row["sides"]}
+
+        def describe(s: dict | None) -> str:
+            if s is None:
+                return "-"
+            text = f"load {s['load_after']}, {'stable' if s['stable_at_first'] else 'unstable'}"
+            if s["folds_n"]:
+                text += f"; fold at {s['folds_n'][0]:.4f} N ({s['fold_angles_deg'][0]:.1f} deg)"
+            return text
+
+        lines.append(
+            f"| {row['n']} | {row['closed_form_n']:.6f} | {traced} | {diff} | {describe(sides.get('towards the chamber'))} | "
+            f"{describe(sides.get('away from the chamber'))} |"
+        )
+    lines += [
+        "",
+        "The eccentric chamber makes the energy not even in theta, so the bifurcation is transcritical, not",
+        "a symmetric pitchfork: bending away from the chamber carries more load and is stable (the actuator",
+        "buckles smoothly that way), while bending towards the chamber sheds load, is unstable, and turns",
+        "stable again only at a fold far from the straight state. Between that fold and the buckling load",
+        "the straight actuator and the bent one are both stable.",
+        "",
+        f"![column path, n = 4]({fig_rel / rel['column']})",
+        "",
+        "`esba path --param payload --pressure 0 --payload 1 --payload-angle 180 -n 4 --to 6.4` draws this figure.",
+        "",
+        "## What a designer should take from this",
+        "",
+        f"- Under a 2 N side load the Table 1 actuator has a bistable window of {1000 * h['width']:.1f} kPa",
+        f"  ({down:.4f} to {up:.4f} MPa): commanding a pressure in that window does not determine the shape;",
+        "  the history does. A controller that ramps the pressure through it sees the tip jump by",
+        f"  {min(j.distance_mm for j in jumps_p):.0f} mm or more. Larger payloads widen the window (the table above)"
+        + (f"; below about {data.cusp_n:.2f} N there is none." if data.cusp_n else "."),
+        f"- A 2 N side load turned past {d_folds[1]:.1f} degrees from the vertical flips the actuator the same way, and it",
+        f"  flips back only below {d_folds[0]:.1f} degrees: tasks with the load in that direction are where a snap is to",
+        "  be expected.",
+        f"- A straight, unpressurised actuator pushed along its axis buckles at {column_text},",
+        "  bending away from its chamber; bent towards the chamber it is stable only beyond the fold, so a",
+        "  small disturbance in that direction near the buckling load can make it snap to a large bend.",
+        f"- The folds converge fast in n: n = 3, as in the paper, places them within {fold_gap:.2f} kPa of n = {FOLD_NS[-1]}.",
+        "",
+    ]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines), encoding="utf-8")
+    return path

@@ -1,0 +1,616 @@
+"""Static equilibria: minimise the total potential energy U(theta), Eq. (3)-(4).
+
+:func:`solve` finds the state an actuator reaches along its *load history*: from a known state
+(the unloaded constant-curvature shape, exact when the pressure comes from a target angle; else
+theta = 0 at P = 0 and the pressure raised quasi-statically), the payloads and weight are raised
+together from 0 to their values. Each ramp is a path trace (:mod:`esba.paths.continuation`, pseudo-arclength
+continuation on the generated exact gradient and Hessian) that stops exactly at the target. When
+the stable branch ends before the target, at a fold (or a branch point with no stable way on), the
+quasi-static load snaps: :mod:`esba.paths.loading` finds the state it lands in, and the result says
+where it jumped and from which state to which (:attr:`Equilibrium.jumps`). A straight actuator
+that buckles at a branch point goes on along the stable bent branch, and the result says so.
+
+IPOPT (``casadi.nlpsol``, :mod:`esba.solvers.minimise`) stays the solver of record: the path supplies
+its start, IPOPT certifies the minimiser with the generated exact gradient and Hessian and the
+model's domain as bounds on theta (the square root of Eq. 10 and L + n (d + r1) theta_i > 0), and
+a few Newton steps polish the stationarity to round-off.
+
+Every result carries a stability verdict from the Hessian's eigenvalues (``stable`` /
+``unstable`` / ``critical``), IPOPT's return status, iterations and time. A solve that fails,
+stops on a bound or lands on an equilibrium that is not stable has ``ok == False`` and says why
+in ``message``; :meth:`Equilibrium.check` turns that into an :class:`EquilibriumError`.
+
+Examples
+--------
+>>> from esba.model.scene import MAIN_JOB
+>>> r = solve(MAIN_JOB)
+>>> r.ok, r.stability, r.certificate.split(":")[0]
+(True, 'stable', 'IPOPT Solve_Succeeded')
+>>> [round(t, 2) for t in r.theta_deg]
+[-3.29, 7.17, 21.44]
+>>> [round(v, 2) for v in r.tip_mm]
+[133.24, 10.22]
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from esba.infra import checks
+from esba.infra.errors import EquilibriumError, InputError
+from esba.infra.threads import single_threaded
+from esba.model import resolution
+from esba.model.closed_form import pressure_for_angle
+from esba.model.generated import Model, near_domain_bound
+from esba.model.scene import Scene, SceneError, check_pressure
+from esba.model.stability import STABILITY, stability_verdict, stability_verdicts
+from esba.model.validity import Finding, assess
+from esba.paths.continuation import PathOptions, PathProblem, SpecialPoint
+from esba.paths.loading import Jump, Ramp, follow
+from esba.solvers.minimise import LINEAR_SOLVERS, minimise
+from esba.solvers.newton import FINAL, NEWTON, STEPS, run_ramp
+
+__all__ = [
+    "SolverOptions",
+    "SolverOptionsError",
+    "Equilibrium",
+    "EquilibriumError",
+    "solve",
+    "evaluate",
+    "pressure_for_angle",
+    "stability_verdict",
+    "stability_verdicts",
+    "STABILITY",
+]
+
+
+#: Upper bounds of the counts in SolverOptions (IPOPT keeps its iteration limit in a 32-bit int,
+#: and each count multiplies the work of one solve).
+MAX_ITER_LIMIT = 100_000
+MAX_SAMPLES_LIMIT = 1_000
+
+
+class SolverOptionsError(InputError):
+    """A solver option that is not allowed: the message names the option, the value and what is allowed."""
+
+
+def _check_int(name: str, value: Any, low: int, high: int | None = None, why: str = "") -> int:
+    return checks.whole(name, value, low, SolverOptionsError, high, why)
+
+
+def _check_pos(name: str, value: Any, high: float | None = None) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise SolverOptionsError(f"{name}={value!r}: expected a finite number > 0")
+    if high is not None and value >= high:
+        raise SolverOptionsError(f"{name}={value!r}: expected a number > 0 and < {high:g}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Settings of :func:`solve`, validated on creation.
+
+    Parameters
+    ----------
+    tol : float
+        IPOPT's convergence tolerance (``ipopt.tol``), > 0.
+    max_iter : int
+        IPOPT's iteration limit per solve, >= 1.
+    linear_solver : str
+        IPOPT's linear solver: ``"mumps"`` or ``"spral"`` (the HSL solvers are not in the wheel).
+    continuation : bool
+        Follow the load history (pressure, then payloads and weight) from a known state by path
+        following. When False, or when :func:`solve` is given ``theta0``, one IPOPT solve at the
+        full load.
+    path : PathOptions
+        Settings of the path traces of the load history (:class:`esba.paths.continuation.PathOptions`).
+    fast : bool
+        Try each ramp of the load history first as one compiled natural-parameter continuation
+        (:mod:`esba.solvers.newton`), accepted only when it provably stayed on one stable branch; otherwise,
+        and always when False, the adaptive path trace of :mod:`esba.paths.loading` follows it.
+    polish : bool
+        Newton steps on the exact Hessian after IPOPT (stationarity to round-off).
+    stationarity_tol : float
+        Largest |dU/dtheta_i| (N mm/rad) accepted as an equilibrium.
+    critical_tol : float
+        A Hessian whose smallest eigenvalue is within ``critical_tol`` times its largest (in
+        absolute value) of zero is ``critical``; below that ``unstable``, above ``stable``.
+    samples_per_segment : int
+        Centre-line samples per segment in the result (>= 1).
+
+    Examples
+    --------
+    >>> SolverOptions().tol
+    1e-10
+    >>> SolverOptions(max_iter=0)
+    Traceback (most recent call last):
+    ...
+    esba.statics.equilibrium.SolverOptionsError: max_iter=0: expected a whole number from 1 to 100000 (an equilibrium takes tens of iterations; IPOPT counts in a 32-bit int)
+    """
+
+    tol: float = 1e-10
+    max_iter: int = 200
+    linear_solver: str = "mumps"
+    continuation: bool = True
+    path: PathOptions = field(default_factory=PathOptions)
+    fast: bool = True
+    polish: bool = True
+    stationarity_tol: float = 1e-7
+    critical_tol: float = 1e-9
+    samples_per_segment: int = 20
+
+    def __post_init__(self) -> None:
+        _check_pos("tol", self.tol, 1.0)
+        _check_int("max_iter", self.max_iter, 1, MAX_ITER_LIMIT, "an equilibrium takes tens of iterations; IPOPT counts in a 32-bit int")
+        if self.linear_solver not in LINEAR_SOLVERS:
+            raise SolverOptionsError(f"linear_solver={self.linear_solver!r}: allowed are {', '.join(LINEAR_SOLVERS)}")
+        for name in ("continuation", "polish", "fast"):
+            if not isinstance(getattr(self, name), bool):
+                raise SolverOptionsError(f"{name}={getattr(self, name)!r}: expected True or False")
+        if not isinstance(self.path, PathOptions):
+            raise SolverOptionsError(f"path={self.path!r}: expected a PathOptions")
+        _check_pos("stationarity_tol", self.stationarity_tol)
+        _check_pos("critical_tol", self.critical_tol, 1.0)
+        _check_int("samples_per_segment", self.samples_per_segment, 1, MAX_SAMPLES_LIMIT)
+
+
+DEFAULT_OPTIONS = SolverOptions()
+
+#: Points and Newton iterations of one fast ramp (:mod:`esba.solvers.newton`), for ``steps`` and ``iterations``.
+RAMP_STEPS, RAMP_ITERATIONS = STEPS, STEPS * NEWTON + FINAL
+
+
+# ---------------------------------------------------------------------------------------------
+# the result
+
+
+@dataclass(frozen=True, eq=False)
+class Equilibrium:
+    """One solved scene: the equilibrium, its stability and how it was found.
+
+    Angles are in radians (``theta``, ``total_angle``, ``tip[2]``) with degree twins; lengths in
+    mm, energies in N mm, pressure in MPa.
+
+    Attributes
+    ----------
+    scene : Scene
+        The scene solved.
+    model : Model
+        The generated model used (the scene's effects).
+    pressure : float
+        The pressure, MPa (from the scene, or found from its target angle).
+    theta : ndarray
+        Bending angle of each segment, rad.
+    tip : ndarray
+        Tip pose [x, y, orientation] in the base frame (x down, y horizontal), mm, mm, rad.
+    centreline : ndarray
+        Deformed centre-line (the inextensible layer), shape (k, 3): x, y (mm), heading (rad),
+        at ``samples_per_segment`` points along each arc.
+    energy : float
+        Total potential energy U, N mm.
+    terms : dict
+        Each energy term by name, N mm.
+    gradient_norm : float
+        max |dU/dtheta_i| at the result, N mm/rad.
+    eigenvalues : ndarray
+        Eigenvalues of the Hessian at the result, ascending, N mm/rad^2.
+    stability : str
+        ``stable``, ``critical`` or ``unstable`` (see :func:`stability_verdict`).
+    status : str
+        IPOPT's return status of the certifying solve, or ``Continuation_Failed`` / ``At_Bound`` /
+        ``Not_Stationary``.
+    success : bool
+        The solver converged to a stationary point inside the domain.
+    iterations : int
+        Newton corrector iterations along the load history plus IPOPT iterations.
+    steps : int
+        Points traced along the load history plus IPOPT solves (1 without continuation).
+    solve_time_s : float
+        Wall time of the whole solve, s.
+    message : str
+        Why the result is not ok (empty when it is).
+    notes : tuple of str
+        What happened on the way that the result does not show (a jump, a buckling).
+    jumps : tuple of Jump
+        The snap-throughs of the load history (:class:`esba.paths.loading.Jump`): the fold's lambda and
+        the states before and after.
+    switches : tuple of SpecialPoint
+        Branch points the load history went through along a stable crossing branch (buckling).
+    certificate : str
+        What certified the returned state: IPOPT's status from the path's end, and how far it moved.
+    validity : tuple of Finding
+        Where the result leaves the range the paper's model describes (strains past 1, a bend past
+        360 deg, the tip behind the base, loads far outside the paper's): see :mod:`esba.model.validity`.
+        Empty when it is inside; a result can be ``ok`` and still outside.
+    """
+
+    scene: Scene
+    model: Model = field(repr=False)
+    pressure: float
+    theta: np.ndarray
+    tip: np.ndarray
+    centreline: np.ndarray = field(repr=False)
+    energy: float
+    terms: dict[str, float]
+    gradient_norm: float
+    eigenvalues: np.ndarray
+    stability: str
+    status: str
+    success: bool
+    iterations: int
+    steps: int
+    solve_time_s: float
+    message: str = ""
+    notes: tuple[str, ...] = ()
+    jumps: tuple[Jump, ...] = ()
+    switches: tuple[SpecialPoint, ...] = ()
+    certificate: str = ""
+    validity: tuple[Finding, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        """True for a converged, stable equilibrium; anything else is not an answer."""
+        return self.success and self.stability == "stable"
+
+    @property
+    def theta_deg(self) -> list[float]:
+        """Segment angles in degrees."""
+        return [math.degrees(t) for t in self.theta]
+
+    @property
+    def total_angle(self) -> float:
+        """Total bending angle theta_TOL, Eq. (17), rad."""
+        return float(np.sum(self.theta))
+
+    @property
+    def total_angle_deg(self) -> float:
+        """Total bending angle, degrees."""
+        return math.degrees(self.total_angle)
+
+    @property
+    def tip_mm(self) -> list[float]:
+        """Tip position [x, y], mm."""
+        return [float(self.tip[0]), float(self.tip[1])]
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        """The model parameter values of this solve (radians)."""
+        return self.scene.parameters(self.pressure)
+
+    def check(self) -> Equilibrium:
+        """Return self when :attr:`ok`, else raise :class:`EquilibriumError` with the message."""
+        if not self.ok:
+            raise EquilibriumError(self.message or f"solve not ok: status {self.status}, {self.stability}")
+        return self
+
+    def to_dict(self, centreline: bool = False) -> dict[str, Any]:
+        """A JSON-ready summary (the keys ``esba solve --json`` prints)."""
+        out: dict[str, Any] = {
+            "ok": self.ok,
+            "theta_deg": self.theta_deg,
+            "total_angle_deg": self.total_angle_deg,
+            "tip_mm": self.tip_mm,
+            "tip_angle_deg": math.degrees(float(self.tip[2])),
+            "pressure_mpa": self.pressure,
+            "pressure_from": "pressure" if self.scene.pressure is not None else f"target_angle_deg={self.scene.target_angle_deg:g}",
+            "stable": self.stability == "stable",
+            "stability": self.stability,
+            "eigenvalues": [float(v) for v in self.eigenvalues],
+            "status": self.status,
+            "message": self.message,
+            "notes": list(self.notes),
+            "jumps": [j.to_dict() for j in self.jumps],
+            "branch_points": [
+                {"lambda": b.lam, "total_angle_deg": b.total_angle_deg, "tip_mm": [float(b.tip[0]), float(b.tip[1])], "status": b.status}
+                for b in self.switches
+            ],
+            "certificate": self.certificate,
+            "validity": [f.to_dict() for f in self.validity],
+            "iterations": self.iterations,
+            "steps": self.steps,
+            "gradient_norm": self.gradient_norm,
+            "energy_nmm": self.energy,
+            "energy_terms_nmm": dict(self.terms),
+            "effects": list(self.scene.effects.names()),
+            "segments": self.scene.segments,
+            "variant": self.scene.variant,
+            "payloads": [{"force_n": p.force, "angle_deg": p.angle_deg, "at": p.at} for p in self.scene.payloads],
+            "gravity": self.scene.gravity,
+            "solve_time_s": self.solve_time_s,
+        }
+        if centreline:
+            out["centreline_mm"] = self.centreline[:, :2].tolist()
+        return out
+
+
+# ---------------------------------------------------------------------------------------------
+# solving
+
+
+def _check_inputs(scene: Any, pressure: Any, options: Any) -> SolverOptions:
+    """The checks the command line makes, for the Python API: the scene, a pressure, the options."""
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene={scene!r}: expected an esba.model.scene.Scene")
+    if pressure is not None:
+        check_pressure(pressure)
+    options = DEFAULT_OPTIONS if options is None else options
+    if not isinstance(options, SolverOptions):
+        raise SolverOptionsError(f"options={options!r}: expected a SolverOptions")
+    return options
+
+
+def _angles(name: str, values: Any, n: int) -> np.ndarray:
+    """``values`` as n finite angles (rad), else :class:`SolverOptionsError` naming ``name``."""
+    try:
+        theta = np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise SolverOptionsError(f"{name}={values!r}: expected {n} finite angles (rad)") from None
+    if theta.shape != (n,) or not np.all(np.isfinite(theta)):
+        raise SolverOptionsError(f"{name} has shape {theta.shape}: expected {n} finite angles (rad)")
+    return theta
+
+
+def _resolve_pressure(scene: Scene, pressure: float | None) -> tuple[float, np.ndarray | None]:
+    """The pressure to use and, when it comes from the target angle, the exact unloaded state."""
+    if pressure is not None:
+        return float(pressure), None
+    if scene.pressure is not None:
+        return scene.pressure, None
+    p = pressure_for_angle(scene)
+    return p, np.full(scene.segments, math.radians(scene.target_angle_deg) / scene.segments)
+
+
+@single_threaded
+def evaluate(
+    scene: Scene,
+    theta: Sequence[float],
+    pressure: float | None = None,
+    options: SolverOptions | None = None,
+    *,
+    status: str = "Evaluated",
+    success: bool = True,
+    iterations: int = 0,
+    steps: int = 0,
+    solve_time_s: float = 0.0,
+    message: str = "",
+    notes: Sequence[str] = (),
+    jumps: Sequence[Jump] = (),
+    switches: Sequence[SpecialPoint] = (),
+    certificate: str = "",
+) -> Equilibrium:
+    """An :class:`Equilibrium` for given angles: energy, tip, centre-line, stationarity and stability.
+
+    :func:`solve` ends here; call it directly to assess angles found some other way (e.g. by an
+    NLP that only asks for dU/dtheta = 0). ``success`` is withdrawn when theta is on the domain
+    boundary or not stationary within ``options.stationarity_tol``.
+
+    Examples
+    --------
+    >>> from esba.model.scene import Scene, Payload
+    >>> column = Scene(pressure=0.0, payloads=(Payload(20.0, 180.0),))   # a 20 N push up the axis
+    >>> r = evaluate(column, [0.0, 0.0, 0.0])
+    >>> r.stability, r.ok
+    ('unstable', False)
+    """
+    options = _check_inputs(scene, pressure, options)
+    model = scene.model()
+    pressure, _ = _resolve_pressure(scene, pressure)
+    resolution.check_resolvable(scene, pressure, options.stationarity_tol, DEFAULT_OPTIONS.stationarity_tol)
+    theta = _angles("theta", theta, scene.segments)
+    full = scene.parameters(pressure)
+    lbx = model.lower_bounds(full)
+    pv = model.param_vector(full)
+    if np.any(theta < lbx):
+        raise EquilibriumError(f"theta={np.degrees(theta).round(3).tolist()} deg lies outside the model's domain (Eq. 10)")
+    state = model.state(theta, pv)
+    gnorm = float(np.max(np.abs(state["gradient"])))
+    finite = bool(np.all(np.isfinite(state["hessian"])) and np.isfinite(gnorm) and np.isfinite(state["energy"]))
+    eig = np.sort(np.linalg.eigvalsh(state["hessian"])) if finite else np.full(scene.segments, np.nan)
+    verdict = stability_verdict(eig, options.critical_tol)
+    if not finite:
+        success, status = False, "Not_Finite"
+        message = "the model's energy, gradient or Hessian is not finite at the result (overflow): not an equilibrium"
+    elif success and near_domain_bound(theta, lbx):
+        success, status = False, "At_Bound"
+        message = "the solve stopped on the model's domain boundary (Eq. 10: the chamber closes): not an equilibrium"
+    elif success and gnorm > options.stationarity_tol:
+        success, status = False, "Not_Stationary"
+        message = f"max |dU/dtheta| = {gnorm:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}"
+    if success and verdict != "stable":
+        message = f"the equilibrium is {verdict}: smallest Hessian eigenvalue {eig[0]:.3g} N mm/rad^2 (largest {eig[-1]:.3g})"
+    cl = model.centreline(theta, full["L"], samples=scene.segments * options.samples_per_segment + 1, points=state["points"])
+    return Equilibrium(
+        scene=scene,
+        model=model,
+        pressure=pressure,
+        theta=theta,
+        tip=state["tip"],
+        centreline=cl,
+        energy=state["energy"],
+        terms=state["terms"],
+        gradient_norm=gnorm,
+        eigenvalues=eig,
+        stability=verdict,
+        status=status,
+        success=success,
+        iterations=iterations,
+        steps=steps,
+        solve_time_s=solve_time_s,
+        message=message,
+        notes=tuple(notes),
+        jumps=tuple(jumps),
+        switches=tuple(switches),
+        certificate=certificate,
+        validity=assess(scene, theta, pressure, state["tip"]),
+    )
+
+
+def _load_value(scene: Scene, pressure: float, name: str, lam: float) -> str:
+    """Where on a ramp of solve() lambda lies, in the scene's terms."""
+    if name == "pressure":
+        return f"P = {lam:.6g} MPa (unloaded)"
+    parts = [f"payload {k} = {p.force * lam:.6g} N" for k, p in enumerate(scene.payloads, start=1)]
+    if scene.gravity:
+        parts.append(f"weight {100 * lam:.4g} %")
+    return f"{100 * lam:.6g} % of the loads ({', '.join(parts)}) at P = {pressure:.6g} MPa"
+
+
+@single_threaded
+def solve(
+    scene: Scene,
+    options: SolverOptions | None = None,
+    *,
+    pressure: float | None = None,
+    theta0: Sequence[float] | None = None,
+    unloaded: Sequence[float] | None = None,
+) -> Equilibrium:
+    """The equilibrium of ``scene`` reached along its load history.
+
+    Parameters
+    ----------
+    scene : Scene
+        What to solve (the model is ``scene.model()``).
+    options : SolverOptions, optional
+        Solver settings; defaults to ``SolverOptions()``.
+    pressure : float, optional
+        Use this pressure (MPa) instead of the scene's (saves the closed form in sweeps).
+    theta0 : sequence of float, optional
+        Warm start (rad): one IPOPT solve at the full load from here, no load history.
+    unloaded : sequence of float, optional
+        The unloaded equilibrium at this pressure (rad), when it is already known (a stiffness
+        study solves several payloads at one pressure): the load ramp starts there.
+
+    Raises
+    ------
+    SceneError
+        for a scene that is not a :class:`~esba.model.scene.Scene`, a bad ``pressure`` (the same
+        messages as the scene's own field), or scales the solver cannot resolve to its
+        tolerances (a Young's modulus so small that every angle passes as an equilibrium, a
+        pressure or payload whose moments exceed double precision), all checked before solving.
+    SolverOptionsError
+        for ``options`` that are not a :class:`SolverOptions`, or a bad ``theta0`` or ``unloaded``.
+
+    Returns
+    -------
+    Equilibrium
+        Check :attr:`Equilibrium.ok` (or call :meth:`Equilibrium.check`): a failed or unstable
+        solve is returned with ``ok == False`` and a ``message``. The load history is: the
+        unloaded state at the pressure (exact for a target angle, else the pressure raised from 0),
+        then the payloads and weight raised together from 0. A snap-through on the way (the stable
+        branch ends at a fold) is followed as the actuator would, and recorded in ``jumps`` and
+        ``notes``; so is buckling at a branch point (``switches``).
+    """
+    options = _check_inputs(scene, pressure, options)
+    if theta0 is not None:
+        theta0 = _angles("theta0", theta0, scene.segments)
+    if unloaded is not None:
+        unloaded = _angles("unloaded", unloaded, scene.segments)
+    model = scene.model()  # loaded (or generated) before the clock starts
+    t_start = time.perf_counter()
+    n = scene.segments
+    pressure, known_unloaded = _resolve_pressure(scene, pressure)
+    resolution.check_resolvable(scene, pressure, options.stationarity_tol, DEFAULT_OPTIONS.stationarity_tol)
+    if unloaded is not None:
+        known_unloaded = unloaded
+    full = scene.parameters(pressure)
+    lbx = model.lower_bounds(full)
+    pv_full = model.param_vector(full)
+    pv_unloaded = model.param_vector(scene.parameters(pressure, load_factor=0.0))
+    loaded = bool(np.any(pv_full != pv_unloaded))  # payloads of 0 N and no weight leave nothing to ramp
+
+    message = ""
+    ramps: list[tuple[str, Ramp]] = []
+    fast_ramps = 0
+    if theta0 is not None:
+        theta = theta0
+    elif not options.continuation:
+        theta = known_unloaded if known_unloaded is not None else np.zeros(n)
+    else:
+        if known_unloaded is not None:
+            theta = known_unloaded
+        else:
+            p_zero = model.param_vector(scene.parameters(0.0, load_factor=0.0))
+            dp = model.param_vector(scene.parameters(1.0, load_factor=0.0)) - p_zero  # U is linear in P
+            fast = run_ramp(model, np.zeros(n), p_zero, dp, pressure) if options.fast else None
+            if fast is not None and fast.accepted(critical_tol=options.critical_tol):
+                theta, fast_ramps = fast.theta, fast_ramps + 1
+            else:
+                ramp = PathProblem(model, p_zero, dp, "pressure", "MPa", (0.0, math.inf), 0.1, what="pressure")
+                r = follow(ramp, np.zeros(n), 0.0, pressure, options.path, ipopt_tol=options.tol)
+                ramps.append(("pressure", r))
+                theta = r.theta
+                if not r.reached:
+                    message = f"the pressure ramp from P = 0 stopped at {_load_value(scene, pressure, 'pressure', r.lam)}: {r.message}"
+        if loaded and not message:
+            fast = run_ramp(model, theta, pv_unloaded, pv_full - pv_unloaded, 1.0) if options.fast else None
+            if fast is not None and fast.accepted(critical_tol=options.critical_tol):
+                theta, fast_ramps = fast.theta, fast_ramps + 1
+            else:
+                ramp = PathProblem.homotopy(model, pv_unloaded, pv_full, name="load", what="payloads and weight")
+                r = follow(ramp, theta, 0.0, 1.0, options.path, ipopt_tol=options.tol)
+                ramps.append(("load", r))
+                theta = r.theta
+                if not r.reached:
+                    message = f"the load ramp from the unloaded state stopped at {_load_value(scene, pressure, 'load', r.lam)}: {r.message}"
+
+    final = minimise(
+        model,
+        theta,
+        pv_full,
+        lbx,
+        tol=options.tol,
+        max_iter=options.max_iter,
+        linear_solver=options.linear_solver,
+        polish_steps=4 if options.polish else 0,
+        warm=bool(ramps) or fast_ramps > 0 or (known_unloaded is not None and theta0 is None and not loaded),
+    )
+    moved = float(np.max(np.abs(final.theta - theta)))
+    if ramps or fast_ramps:
+        start_from = "the path's end"
+    else:
+        start_from = "the known unloaded state" if known_unloaded is not None and theta0 is None else "the start"
+    certificate = f"IPOPT {final.status}: {final.iterations} iterations from {start_from}, which it moved by {moved:.2g} rad"
+    notes = []
+    jumps: list[Jump] = []
+    switches: list[SpecialPoint] = []
+    for name, r in ramps:
+        for sp in r.switches:
+            switches.append(sp)
+            notes.append(
+                f"the straight-through branch loses stability at a branch point at {_load_value(scene, pressure, name, sp.lam)}: "
+                f"the state goes on along the stable crossing branch (buckling)"
+            )
+        for j in r.jumps:
+            jumps.append(j)
+            notes.append(j.describe(_load_value(scene, pressure, name, j.lam)))
+    if (ramps or fast_ramps) and final.success and moved > 1e-6:
+        notes.append(f"IPOPT moved the path's end by {moved:.3g} rad: the certified state is not the one the path reached")
+    if message:  # the load history failed: report the full-load solve from the last good state, not as an answer
+        status, success = "Continuation_Failed", False
+    else:
+        status, success = final.status, final.success
+        if not success:
+            message = f"IPOPT did not converge: {final.status}"
+    iterations = final.iterations + sum(r.corrector_iterations + r.ipopt_iterations for _, r in ramps) + fast_ramps * RAMP_ITERATIONS
+    steps = 1 + sum(r.points for _, r in ramps) + sum(len(r.jumps) for _, r in ramps) + fast_ramps * RAMP_STEPS
+    return evaluate(
+        scene,
+        final.theta,
+        pressure,
+        options,
+        status=status,
+        success=success,
+        iterations=iterations,
+        steps=steps,
+        solve_time_s=time.perf_counter() - t_start,
+        message=message,
+        notes=notes,
+        jumps=tuple(jumps),
+        switches=tuple(switches),
+        certificate=certificate,
+    )

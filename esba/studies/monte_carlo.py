@@ -1,0 +1,191 @@
+"""The Monte Carlo's samples in a CSV file, written chunk by chunk and resumed after an interruption.
+
+:func:`monte_carlo_study` runs :func:`esba.calibration.uncertainty.monte_carlo` (in this process or on Dask
+workers) and appends each chunk's samples to a :class:`esba.studies.chunks.StudyFile` as soon as it and
+the chunks before it are solved: one row per sample with the sample's parameter values (in the
+scene file's units), its outcome (``ok``; ``invalid``: outside the scene's rules, not solved;
+``not ok``: no stable equilibrium), the pressure (MPa), the segment angles and the total angle
+(rad) and the tip (mm); empty cells where a sample has no equilibrium. Numbers are written in
+Python's shortest round-trip form, so a resumed study reads back exactly the values it wrote and
+ends with the same statistics as an uninterrupted one.
+
+A study is resumed only by the same scene, sigmas, samples, seed, batch settings and esba code
+(the file's header hash), and only when the samples in the file are the ones drawn again from
+the seed (a NumPy whose generator draws other numbers is refused).
+
+Examples
+--------
+>>> import tempfile, pathlib
+>>> from esba.model.scene import MAIN_JOB
+>>> from esba.calibration.uncertainty import MonteCarloOptions, parse_sigma, resolve_sigmas
+>>> sig = resolve_sigmas(MAIN_JOB, [parse_sigma("E=5%")])
+>>> out = pathlib.Path(tempfile.mkdtemp()) / "mc.csv"
+>>> opts = MonteCarloOptions(samples=20, chunk=8)
+>>> mc, info = monte_carlo_study(MAIN_JOB, sig, opts, out=out)
+>>> mc.counts["ok"], info["resumed_from_sample"], len(out.read_text().splitlines())
+(20, 0, 22)
+>>> again, info = monte_carlo_study(MAIN_JOB, sig, opts, out=out, resume=True)
+>>> info["resumed_from_sample"], bool((again.tip == mc.tip).all())
+(20, True)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from esba.calibration import uncertainty
+from esba.calibration.uncertainty import (
+    SAMPLE_INVALID,
+    SAMPLE_NOT_OK,
+    SAMPLE_OK,
+    MonteCarlo,
+    MonteCarloOptions,
+    Sigma,
+    _batch_options,
+    draw_samples,
+)
+from esba.model.scene import Scene
+from esba.statics.batch import BatchOptions
+
+from .chunks import StudyError, StudyFile, run_chunks
+from .distributed import ModelKey, SerialRunner, code_digest
+
+__all__ = ["monte_carlo", "monte_carlo_study", "sample_fields", "OUTCOMES"]
+
+
+def monte_carlo(scene: Scene, sigmas: Sequence[Sigma], options: MonteCarloOptions | None = None, *, runner=None, **kwargs: Any) -> MonteCarlo:
+    """:func:`esba.calibration.uncertainty.monte_carlo` with its chunks run on ``runner``
+    (:func:`esba.studies.distributed.open_runner`: a local Dask cluster or an existing one; default:
+    in this process, one after the other). The same samples and the same result either way.
+    ``kwargs`` are those of :func:`esba.calibration.uncertainty.monte_carlo` (``chunks``, ``solved``,
+    ``on_chunk``, ``progress``)."""
+    if runner is None:
+        return uncertainty.monte_carlo(scene, sigmas, options, **kwargs)
+
+    def execute(scene_, fn, bounds, args_of, on_result, progress):
+        run_chunks(runner, ModelKey.of(scene_), fn, bounds, args_of, on_result, progress)
+
+    return uncertainty.monte_carlo(scene, sigmas, options, execute=execute, **kwargs)
+
+#: A sample's outcome in the file, by code.
+OUTCOMES = {SAMPLE_OK: "ok", SAMPLE_INVALID: "invalid", SAMPLE_NOT_OK: "not ok"}
+
+
+def sample_fields(names: Sequence[str], n: int) -> list[str]:
+    """The columns of a sample file for the parameters ``names`` and n segments."""
+    return ["sample", *names, "outcome", "pressure_mpa", *[f"theta{k + 1}_rad" for k in range(n)], "total_angle_rad", "tip_x_mm", "tip_y_mm"]
+
+
+def _cell(v: float) -> float | None:
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def _rows(start: int, names: Sequence[str], values: np.ndarray, part: dict[str, np.ndarray]) -> list[dict[str, Any]]:
+    rows = []
+    for j in range(len(part["code"])):
+        row: dict[str, Any] = {"sample": start + j}
+        row.update({name: float(values[i, start + j]) for i, name in enumerate(names)})
+        row["outcome"] = OUTCOMES[int(part["code"][j])]
+        row["pressure_mpa"] = _cell(part["pressure"][j])
+        row.update({f"theta{k + 1}_rad": _cell(v) for k, v in enumerate(part["theta"][j])})
+        row["total_angle_rad"] = _cell(part["total_angle"][j])
+        row["tip_x_mm"], row["tip_y_mm"] = _cell(part["tip"][j, 0]), _cell(part["tip"][j, 1])
+        rows.append(row)
+    return rows
+
+
+def _number(text: str) -> float:
+    return float(text) if text != "" else math.nan
+
+
+def monte_carlo_study(
+    scene: Scene,
+    sigmas: Sequence[Sigma],
+    options: MonteCarloOptions | None = None,
+    *,
+    runner=None,
+    out: str | Path,
+    resume: bool = False,
+    progress: bool = False,
+) -> tuple[MonteCarlo, dict[str, Any]]:
+    """:func:`esba.calibration.uncertainty.monte_carlo` with every sample streamed to ``out`` (CSV), resumable.
+
+    Returns the Monte Carlo (all samples, the resumed ones read back from the file) and how the
+    study ran: ``runner``, ``workers``, ``resumed_from_sample``, ``seconds``, ``out``, ``hash``.
+
+    Raises
+    ------
+    StudyError
+        for a file that cannot be written, or resumed as this study.
+    """
+    options = MonteCarloOptions() if options is None else options
+    runner = SerialRunner() if runner is None else runner
+    t0 = time.perf_counter()
+    names = [s.name for s in sigmas]
+    identity = {
+        "scene": dataclasses.asdict(scene),
+        "sigmas": [s.to_dict() for s in sigmas],
+        "samples": options.samples,
+        "seed": options.seed,
+        "batch": None if options.batch is None else {k: v for k, v in dataclasses.asdict(options.batch).items() if k not in ("progress", "cache")},
+        "esba": code_digest(),
+    }
+    n = scene.segments
+    file = StudyFile(out, "monte-carlo", identity, sample_fields(names, n), options.samples)
+    solved = None
+    values = draw_samples(sigmas, options.samples, options.seed)
+    if resume and file.path.exists() and file.path.stat().st_size > 0:
+        rows: list[dict[str, str]] = []
+        count = file.resume(rows.append)
+        try:
+            drawn = np.array([[float(r[name]) for name in names] for r in rows]).reshape(count, len(names)).T
+            same = all(int(r["sample"]) == i for i, r in enumerate(rows)) and np.array_equal(drawn, values[:, :count])
+            codes = {v: k for k, v in OUTCOMES.items()}
+            solved = {
+                "code": np.array([codes[r["outcome"]] for r in rows], dtype=int),
+                "theta": np.array([[_number(r[f"theta{k + 1}_rad"]) for k in range(n)] for r in rows]).reshape(count, n),
+                "tip": np.array([[_number(r["tip_x_mm"]), _number(r["tip_y_mm"])] for r in rows]).reshape(count, 2),
+                "total_angle": np.array([_number(r["total_angle_rad"]) for r in rows]),
+            }
+        except (KeyError, ValueError):
+            file.close()
+            raise StudyError(f"--resume {file.path}: a row's sample number, parameter values or outcome cannot be read; remove the file to start anew") from None
+        if not same:
+            file.close()
+            raise StudyError(f"--resume {file.path}: its samples are not the ones drawn again from seed {options.seed} (another NumPy?); remove the file to start anew")
+        decided = file.settings.get("compile")
+        if decided not in ("always", "never"):
+            file.close()
+            raise StudyError(f"--resume {file.path}: its header has no backend decision (compile={decided!r})")
+        batch = options.batch if options.batch is not None else BatchOptions()
+        options = dataclasses.replace(options, batch=dataclasses.replace(batch, compile=decided))
+    else:
+        batch = _batch_options(options, scene)
+        options = dataclasses.replace(options, batch=batch)
+        file.start({"compile": batch.compile})
+    done = 0 if solved is None else len(solved["code"])
+    try:
+
+        def write(start: int, part: dict[str, np.ndarray]) -> None:
+            file.append(_rows(start, names, values, part))
+
+        workers = runner.workers
+        mc = monte_carlo(scene, sigmas, options, runner=runner, solved=solved, on_chunk=write, progress=progress)
+    finally:
+        file.close()
+    info = {
+        "runner": runner.description,
+        "workers": workers,
+        "resumed_from_sample": done,
+        "seconds": time.perf_counter() - t0,
+        "out": str(file.path),
+        "hash": file.hash,
+    }
+    return mc, info

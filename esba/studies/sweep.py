@@ -1,0 +1,735 @@
+"""Grid sweeps over pressure, payload and geometry, solved as one batch (:mod:`esba.statics.batch`).
+
+:func:`sweep` takes a base scene and values for any of the axes ``pressure`` (MPa), ``payload``
+(N, one payload at the base scene's first payload's direction and point, else horizontal at the
+tip), ``payload_angle`` (degrees), ``r2`` and ``d`` (mm), and solves every point of their
+Cartesian product. Geometries outside the design space (r2 + d >= r1) are rows marked
+``infeasible`` and not solved; every other row is ok or says why not.
+
+A sweep is a :class:`SweepPlan` (:func:`plan_sweep`: the validated grid, plain values only) and
+:func:`solve_points`, a pure function of (plan, first point, end point, batch options) that solves
+any range of the grid's points and returns plain arrays. :func:`sweep` solves the whole grid with
+it in one call; :mod:`esba.studies.sweep_runner` solves it chunk by chunk, in this process or on Dask
+workers (:mod:`esba.studies.distributed`), with the same answers element for element.
+
+:func:`load_path` follows one scene's payloads from 0 to their full magnitude by path tracing
+(:mod:`esba.paths.loading`) and reports where the path jumps (a snap-through at a fold) instead of
+connecting the two branches silently.
+
+:mod:`esba.figures.sweeps` draws a sweep, and the paper's Fig. 12.
+
+Examples
+--------
+>>> from esba.model.scene import Scene
+>>> s = sweep(Scene(pressure=0.1), r2=[2.0, 3.0, 5.0], d=[2.0, 4.0], options=BatchOptions(compile="never"))
+>>> s.shape, int(s.ok.sum()), s.status.tolist()
+((3, 2), 5, ['ok', 'ok', 'ok', 'ok', 'ok', 'infeasible'])
+>>> s.total_angle_deg[:2].round(1).tolist()
+[34.8, 37.2]
+>>> plan = plan_sweep(Scene(pressure=0.1), r2=[2.0, 3.0, 5.0], d=[2.0, 4.0])
+>>> part = solve_points(plan, 4, 6, BatchOptions(compile="never"))
+>>> part["status"].tolist(), bool(part["theta"][0, 0] == s.theta[4, 0])
+(['ok', 'infeasible'], True)
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from esba.infra import checks, jsonsafe, outputs
+from esba.infra.errors import InputError
+from esba.model import resolution
+from esba.model.scene import Payload, Scene, SceneError
+from esba.model.validity import Finding, assess_arrays
+from esba.paths.continuation import PathOptions, PathProblem
+from esba.paths.loading import follow
+from esba.statics.batch import BatchOptions, check_size, decide_backend, solve_arrays
+from esba.statics.equilibrium import (
+    DEFAULT_OPTIONS,
+    EquilibriumError,
+    pressure_for_angle,
+    solve,
+)
+
+__all__ = [
+    "AXES",
+    "SweepPlan",
+    "SweepResult",
+    "LoadPath",
+    "plan_sweep",
+    "solve_points",
+    "sweep",
+    "load_path",
+    "parse_values",
+    "row_fields",
+    "point_rows",
+    "SweepError",
+    "check_points",
+    "check_resolvable",
+    "MAX_POINTS",
+    "MAX_STUDY_POINTS",
+]
+
+#: The axes of a sweep, in the order of the grid's dimensions, with their units.
+AXES: dict[str, str] = {"pressure": "MPa", "payload": "N", "payload_angle": "deg", "r2": "mm", "d": "mm"}
+
+#: Columns of a sweep's rows that hold text (every other column is a number, empty when undefined).
+TEXT_FIELDS = ("status", "stability", "method", "message", "notes", "validity")
+
+
+#: The most points a sweep grid solved in memory (:func:`sweep`, a study gathered in memory) may
+#: have: its rows are kept and written whole (about 1 kB each in JSON).
+MAX_POINTS = 200_000
+
+#: The most points of a grid streamed to a CSV file chunk by chunk (:mod:`esba.studies.sweep_runner`): a
+#: few GB of rows at n = 16; a larger study is a set of smaller ones.
+MAX_STUDY_POINTS = 10_000_000
+
+
+class SweepError(InputError):
+    """A sweep that cannot be set up: the message names the axis and the value."""
+
+
+def parse_values(text: str) -> list[float]:
+    """Axis values from ``"a:b:k"`` (k evenly spaced values from a to b) or ``"v1,v2,..."``.
+
+    Examples
+    --------
+    >>> parse_values("0:0.2:5")
+    [0.0, 0.05, 0.1, 0.15, 0.2]
+    >>> parse_values("2,4,6")
+    [2.0, 4.0, 6.0]
+    >>> parse_values("1e-13,2e-13"), parse_values("0:1e-12:3")
+    ([1e-13, 2e-13], [0.0, 5e-13, 1e-12])
+    >>> parse_values("1:2")
+    Traceback (most recent call last):
+    ...
+    esba.studies.sweep.SweepError: '1:2': expected start:stop:count (count from 1 to 200000) or a comma-separated list of numbers
+    """
+    msg = f"{text!r}: expected start:stop:count (count from 1 to {MAX_POINTS}) or a comma-separated list of numbers"
+    try:
+        if ":" in text:
+            parts = text.split(":")
+            if len(parts) != 3:
+                raise SweepError(msg)
+            a, b = checks.number("start", parts[0]), checks.number("stop", parts[1])
+            k = checks.whole_text("count", parts[2])
+            if not 1 <= k <= MAX_POINTS or not (math.isfinite(a) and math.isfinite(b)):
+                raise SweepError(msg)
+            # 12 significant digits drop linspace's round-off (0.15000000000000002) and keep small values
+            values = [a] if k == 1 else [float(f"{v:.12g}") for v in np.linspace(a, b, k)]
+        else:
+            values = [checks.number("value", v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise SweepError(msg) from None
+    if not values or not all(math.isfinite(v) for v in values) or len(values) > MAX_POINTS:
+        raise SweepError(msg)
+    return values
+
+
+# ---------------------------------------------------------------------------------------------
+# the grid, and solving any range of its points
+
+
+@dataclass(frozen=True, eq=False)
+class SweepPlan:
+    """A validated sweep grid before it is solved: plain values only (no model, no CasADi object),
+    so that it can travel to another process.
+
+    Attributes
+    ----------
+    base : Scene
+        Everything not swept (with one payload when a payload axis is swept).
+    axes : dict
+        Axis name -> values, for the axes swept (in :data:`AXES` order).
+    fixed : dict
+        The value of every axis of :data:`AXES` at the base scene (``pressure`` NaN when each
+        design is at the pressure of its target angle; ``payload`` 0 without payload).
+    at : float
+        Point of application of a swept payload (fraction of L).
+    payload_swept, angle_mode : bool
+        A payload axis is swept; the pressure comes from the base scene's target angle.
+    """
+
+    base: Scene
+    axes: dict[str, list[float]]
+    fixed: dict[str, float]
+    at: float
+    payload_swept: bool
+    angle_mode: bool
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """The grid's shape, one entry per swept axis."""
+        return tuple(len(v) for v in self.axes.values())
+
+    @property
+    def size(self) -> int:
+        """Number of points of the grid."""
+        return math.prod(self.shape)
+
+    def columns(self, start: int = 0, stop: int | None = None) -> dict[str, np.ndarray]:
+        """Axis name -> value of points ``start`` to ``stop`` (flattened grid, C order), for every axis of :data:`AXES`."""
+        stop = self.size if stop is None else stop
+        if not 0 <= start <= stop <= self.size:
+            raise SweepError(f"points {start}:{stop}: expected 0 <= start <= stop <= {self.size}")
+        idx = np.arange(start, stop)
+        cols = {k: np.full(len(idx), float(self.fixed[k])) for k in AXES}
+        multi = np.unravel_index(idx, self.shape)
+        for j, name in enumerate(self.axes):
+            cols[name] = np.asarray(self.axes[name], dtype=float)[multi[j]]
+        return cols
+
+    def scene_of(self, cols: Mapping[str, np.ndarray], i: int) -> Scene:
+        """The scene of point ``i`` of ``cols`` (from :meth:`columns`)."""
+        changes: dict[str, Any] = {"r2": float(cols["r2"][i]), "d": float(cols["d"][i])}
+        if not self.angle_mode:
+            changes["pressure"] = float(cols["pressure"][i])
+        if self.payload_swept:
+            changes["payloads"] = (Payload(float(cols["payload"][i]), float(cols["payload_angle"][i]), self.at),)
+        return self.base.replace(**changes)
+
+    def describe(self) -> dict[str, Any]:
+        """Everything that fixes the grid's answers, as plain JSON-ready values (a study's identity)."""
+        return {
+            "base": dataclasses.asdict(self.base),
+            "axes": {k: list(v) for k, v in self.axes.items()},
+            "segments": self.base.segments,
+            "effects": self.base.effects.spec(),
+            "variant": self.base.variant,
+        }
+
+
+def _axis(name: str, values) -> list[float] | None:
+    if values is None:
+        return None
+    vals = [float(v) for v in (values if isinstance(values, (list, tuple, np.ndarray)) else [values])]
+    if not vals or not all(math.isfinite(v) for v in vals):
+        raise SweepError(f"{name}={values!r}: expected one or more finite numbers")
+    if name in ("pressure", "payload", "d") and min(vals) < 0:
+        raise SweepError(f"{name}: {min(vals):g} {AXES[name]} given; expected values >= 0")
+    if name == "r2" and min(vals) <= 0:
+        raise SweepError(f"r2: {min(vals):g} mm given; expected values > 0")
+    return vals
+
+
+def plan_sweep(base: Scene | None = None, *, pressure=None, payload=None, payload_angle=None, r2=None, d=None) -> SweepPlan:
+    """The validated grid of :func:`sweep` (same arguments but the options), not solved."""
+    base = Scene() if base is None else base
+    if not isinstance(base, Scene):
+        raise SweepError(f"base={base!r}: expected a Scene")
+    given = {"pressure": pressure, "payload": payload, "payload_angle": payload_angle, "r2": r2, "d": d}
+    axes = {k: v for k, v in ((k, _axis(k, given[k])) for k in AXES) if v is not None}
+    if not axes:
+        raise SweepError("sweep needs at least one axis: pressure, payload, payload_angle, r2 or d")
+    payload_swept = "payload" in axes or "payload_angle" in axes
+    first = base.payloads[0] if base.payloads else Payload(0.0, 90.0, 1.0)
+    if payload_swept:
+        base = base.replace(payloads=(first,))
+    fixed = {
+        "pressure": base.pressure if base.pressure is not None else float("nan"),
+        "payload": first.force if base.payloads else 0.0,
+        "payload_angle": first.angle_deg,
+        "r2": base.actuator.r2,
+        "d": base.actuator.d,
+    }
+    angle_mode = "pressure" not in axes and base.pressure is None
+    plan = SweepPlan(base, axes, {k: float(v) for k, v in fixed.items()}, first.at, payload_swept, angle_mode)
+    check_points(plan, MAX_STUDY_POINTS)
+    return plan
+
+
+def check_points(plan: SweepPlan, limit: int = MAX_POINTS) -> None:
+    """A :class:`SweepError` when the grid has more than ``limit`` points, naming its axes and both
+    bounds (:data:`MAX_POINTS` in memory, :data:`MAX_STUDY_POINTS` streamed to a file)."""
+    if plan.size > limit:
+        counts = " x ".join(f"{len(v)} {k}" for k, v in plan.axes.items())
+        raise SweepError(
+            f"the grid has {plan.size} points ({counts}): at most {MAX_POINTS} in memory, {MAX_STUDY_POINTS} streamed "
+            "chunk by chunk to --out FILE.csv with --resume or --workers; sweep fewer values, or split the grid"
+        )
+
+
+def check_resolvable(plan: SweepPlan) -> None:
+    """Refuse, before anything is solved, a grid whose most demanding point is at a scale the
+    solver cannot resolve (:func:`esba.model.resolution.check_resolvable`).
+
+    The checks are bounded whatever the grid's size: the stiffness test at the least stiff
+    feasible design (the segment stiffness is closed form), the moment test at the strongest
+    payload and pressure of the corner designs of the (r2, d) box, where the pressure that a
+    target angle needs is largest (a thin chamber or a concentric one needs the most).
+    """
+    r2s = np.asarray(plan.axes.get("r2", [plan.fixed["r2"]]), dtype=float)
+    ds = np.asarray(plan.axes.get("d", [plan.fixed["d"]]), dtype=float)
+    a = plan.base.actuator
+    # the stiffness of Eq. (8) at theta = 0 falls with r2 and with d: at each r2 the least stiff
+    # feasible design has the largest d with r2 + d < r1 (Actuator's rule)
+    ds_sorted = np.sort(ds)
+    top = np.searchsorted(ds_sorted, a.r1 - r2s, side="left") - 1  # index of the largest d < r1 - r2
+    ok = top >= 0
+    if not ok.any():
+        return
+    r2_ok, d_top = r2s[ok], ds_sorted[top[ok]]
+    stiffness = 5 * a.r1**4 - 4 * r2_ok**2 * (a.r1 + d_top) ** 2 - r2_ok**4  # up to a positive factor
+    soft = int(np.argmin(stiffness))
+    designs = {(float(r2_ok[soft]), float(d_top[soft]))}
+    for r2_ in (r2s.min(), r2s.max()):
+        column = ds[ds + r2_ < a.r1]  # the feasible d at this r2 (Actuator: r2 + d < r1)
+        if column.size:
+            designs |= {(float(r2_), float(column.min())), (float(r2_), float(column.max()))}
+    payloads = plan.axes.get("payload", [plan.fixed["payload"]])
+    strongest = max(payloads) if plan.payload_swept else 0.0
+    top_pressure = None if plan.angle_mode else max(plan.axes.get("pressure", [plan.fixed["pressure"]]))
+    for r2_, d_ in sorted(designs):
+        try:
+            extreme = plan.base.replace(r2=r2_, d=d_)
+        except SceneError:  # infeasible: reported as such, not solved
+            continue
+        resolution.check_domain(extreme)
+        if plan.payload_swept:
+            extreme = extreme.replace(payloads=(Payload(strongest, plan.fixed["payload_angle"], plan.at),))
+        if top_pressure is not None:
+            extreme = extreme.replace(pressure=top_pressure)
+            resolution.check_resolvable(extreme, top_pressure, DEFAULT_OPTIONS.stationarity_tol)
+            continue
+        try:
+            top = pressure_for_angle(extreme)
+        except EquilibriumError:  # that design's points are reported not ok by the batch
+            continue
+        resolution.check_resolvable(extreme, top, DEFAULT_OPTIONS.stationarity_tol)
+
+
+def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions | None = None) -> dict[str, Any]:
+    """Solve points ``start`` to ``stop`` of a sweep grid on the batch path: a pure function of its
+    arguments, so that any chunk of a grid can be solved anywhere (another process, a Dask worker).
+
+    The model is loaded with :meth:`esba.model.scene.Scene.model` (:func:`esba.model.generated.load_model`, once
+    per process). Each point's answer depends on the point alone: any split of the grid gives
+    the same arrays, element for element, when ``options.compile`` is the same for every chunk
+    (``"always"`` or ``"never"``: see :func:`esba.statics.batch.decide_backend`).
+
+    Returns
+    -------
+    dict
+        ``status`` (str array), ``messages``, ``notes`` and ``validity`` (lists: text, text,
+        :class:`esba.model.validity.Finding` tuples), ``pressure`` (k,),
+        ``theta`` (k, n) rad, ``tip`` (k, 3), ``stability`` and ``method`` (str arrays),
+        ``backend`` (str) and ``timings`` (dict, s).
+    """
+    cols = plan.columns(start, stop)
+    size = stop - start
+    # geometry: validated once per distinct (r2, d)
+    status = np.full(size, "ok", dtype=object)
+    messages = [""] * size
+    bad: dict[tuple[float, float], str] = {}
+    for key in set(zip(cols["r2"].tolist(), cols["d"].tolist())):
+        try:
+            dataclasses.replace(plan.base.actuator, r2=key[0], d=key[1])
+        except SceneError as exc:
+            bad[key] = str(exc)
+    for i, key in enumerate(zip(cols["r2"].tolist(), cols["d"].tolist())):
+        if key in bad:
+            status[i], messages[i] = "infeasible", bad[key]
+    feasible = np.where(status != "infeasible")[0]
+
+    base = plan.base
+    n = base.segments
+    theta = np.full((size, n), np.nan)
+    tip = np.full((size, 3), np.nan)
+    pres = cols["pressure"].copy()
+    stability = np.full(size, "", dtype=object)
+    method = np.full(size, "", dtype=object)
+    notes: list[tuple[str, ...]] = [()] * size
+    validity: list[tuple[Finding, ...]] = [()] * size
+    backend, timings = "", {}
+    if len(feasible):
+        model = base.model()
+        values: dict[str, Any] = base.parameters(0.0 if plan.angle_mode else plan.fixed["pressure"])
+        values = {k: np.full(len(feasible), float(values[k])) for k in model.parameters}
+        values["r2"] = cols["r2"][feasible]
+        values["d"] = cols["d"][feasible]
+        if not plan.angle_mode:
+            values["P"] = cols["pressure"][feasible]
+        if plan.payload_swept:
+            values["F1"] = cols["payload"][feasible]
+            values["Omega1"] = np.radians(cols["payload_angle"][feasible])
+        target = math.radians(base.target_angle_deg) if plan.angle_mode else None
+        batch = solve_arrays(model, values, target_angle=target, options=options, scene_of=lambda j: plan.scene_of(cols, int(feasible[j])))
+        theta[feasible] = batch.theta
+        tip[feasible] = batch.tip
+        pres[feasible] = batch.pressure
+        stability[feasible] = batch.stability
+        method[feasible] = batch.method
+        for j, i in enumerate(feasible):
+            notes[i] = batch.notes[j]
+            if not batch.ok[j]:
+                status[i], messages[i] = "not ok", batch.messages[j]
+        backend, timings = batch.backend, dict(batch.timings)
+        a = base.actuator
+        found = assess_arrays(
+            n, a.L, a.r1, cols["r2"][feasible], cols["d"][feasible], theta[feasible], tip[feasible, 0], pres[feasible],
+            cols["payload"][feasible] if plan.payload_swept else max((p.force for p in base.payloads), default=0.0),
+        )
+        for j, i in enumerate(feasible):
+            validity[i] = found[j]
+    return {
+        "status": status.astype(str),
+        "messages": messages,
+        "notes": notes,
+        "validity": validity,
+        "pressure": pres,
+        "theta": theta,
+        "tip": tip,
+        "stability": stability.astype(str),
+        "method": method.astype(str),
+        "backend": backend,
+        "timings": timings,
+    }
+
+
+# ---------------------------------------------------------------------------------------------
+# rows
+
+
+def row_fields(n: int) -> list[str]:
+    """The columns of a sweep's rows (and CSV file) for n segments."""
+    head = ["pressure_mpa", "payload_n", "payload_angle_deg", "r2_mm", "d_mm", "status", "stability", "method", "total_angle_deg", "tip_x_mm", "tip_y_mm"]
+    return head + [f"theta{k + 1}_deg" for k in range(n)] + ["message", "notes", "validity"]
+
+
+def _number(v: float) -> float | None:
+    """A finite float, else None (an empty cell, JSON null: never NaN)."""
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def point_rows(points: Mapping[str, np.ndarray], part: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """One dict per point (the columns of :func:`row_fields`): the axes, status, angles (degrees),
+    tip (mm), solver facts; None where a value is undefined (an infeasible point, a solve that
+    left no finite angle).
+
+    ``points`` are the points' axis columns (:meth:`SweepPlan.columns`), ``part`` the arrays of
+    :func:`solve_points` (or of a :class:`SweepResult`).
+    """
+    out = []
+    theta, tip = part["theta"], part["tip"]
+    n = theta.shape[1]
+    for i in range(len(part["status"])):
+        feasible = part["status"][i] != "infeasible"
+        row: dict[str, Any] = {
+            "pressure_mpa": _number(part["pressure"][i] if feasible else points["pressure"][i]),
+            "payload_n": _number(points["payload"][i]),
+            "payload_angle_deg": _number(points["payload_angle"][i]),
+            "r2_mm": _number(points["r2"][i]),
+            "d_mm": _number(points["d"][i]),
+            "status": str(part["status"][i]),
+            "stability": str(part["stability"][i]),
+            "method": str(part["method"][i]),
+            "total_angle_deg": _number(math.degrees(float(np.sum(theta[i])))) if feasible else None,
+            "tip_x_mm": _number(tip[i, 0]) if feasible else None,
+            "tip_y_mm": _number(tip[i, 1]) if feasible else None,
+        }
+        for k in range(n):
+            row[f"theta{k + 1}_deg"] = _number(math.degrees(theta[i, k])) if feasible else None
+        row["message"] = part["messages"][i]
+        row["notes"] = " | ".join(part["notes"][i])
+        found = part.get("validity")
+        row["validity"] = " | ".join(f.message for f in found[i]) if found else ""
+        out.append(row)
+    return out
+
+
+def csv_cells(row: Mapping[str, Any]) -> dict[str, Any]:
+    """A row as CSV cells: None as an empty cell."""
+    return {k: ("" if v is None else v) for k, v in row.items()}
+
+
+def parse_row(cells: Mapping[str, str]) -> dict[str, Any]:
+    """A row read back from CSV: numbers as floats (exact: Python writes floats in their shortest
+    round-trip form), empty cells as None, text as text.
+
+    >>> parse_row({"pressure_mpa": "0.1", "tip_x_mm": "", "status": "ok"})
+    {'pressure_mpa': 0.1, 'tip_x_mm': None, 'status': 'ok'}
+    """
+    return {k: (v if k in TEXT_FIELDS else (float(v) if v != "" else None)) for k, v in cells.items()}
+
+
+# ---------------------------------------------------------------------------------------------
+# the result
+
+
+@dataclass(frozen=True, eq=False)
+class SweepResult:
+    """Every point of a sweep grid: the axes, the status and the equilibrium of each point.
+
+    Attributes
+    ----------
+    base : Scene
+        The scene the grid varies.
+    axes : dict
+        Axis name -> values, for the axes swept (in :data:`AXES` order).
+    points : dict
+        Axis name -> value of every point (flattened grid, C order), for every axis of
+        :data:`AXES` (fixed ones repeat the base scene's value; ``payload`` 0 without payload).
+    status : ndarray of str
+        ``ok``, ``infeasible`` (geometry outside the design space, not solved) or ``not ok``.
+    messages : tuple of str
+        Why a point is not ok (empty when it is).
+    notes : tuple of tuple of str
+        What happened on a point's load path (a jump, noted by the IPOPT fallback).
+    validity : tuple of tuple of Finding
+        Where each point leaves the range the paper's model describes (:mod:`esba.model.validity`).
+    backend : str
+        How the batch path ran (compiled or interpreted, and why), decided once for the grid.
+    timings : dict
+        Wall times of the batch path in s (summed over chunks).
+    """
+
+    base: Scene
+    axes: dict[str, list[float]]
+    points: dict[str, np.ndarray]
+    status: np.ndarray
+    messages: tuple[str, ...]
+    pressure: np.ndarray
+    theta: np.ndarray
+    tip: np.ndarray
+    stability: np.ndarray
+    method: np.ndarray
+    backend: str = ""
+    timings: dict = dataclasses.field(default_factory=dict)
+    notes: tuple[tuple[str, ...], ...] = ()
+    validity: tuple[tuple[Finding, ...], ...] = ()
+
+    @classmethod
+    def from_parts(cls, plan: SweepPlan, parts: Sequence[Mapping[str, Any]], backend: str) -> SweepResult:
+        """The result of a whole grid from the :func:`solve_points` arrays of its chunks, in order."""
+        timings: dict[str, float] = {}
+        for p in parts:
+            for k, v in p["timings"].items():
+                timings[k] = timings.get(k, 0.0) + v
+        return cls(
+            base=plan.base,
+            axes=plan.axes,
+            points=plan.columns(),
+            status=np.concatenate([p["status"] for p in parts]),
+            messages=tuple(m for p in parts for m in p["messages"]),
+            pressure=np.concatenate([p["pressure"] for p in parts]),
+            theta=np.vstack([p["theta"] for p in parts]),
+            tip=np.vstack([p["tip"] for p in parts]),
+            stability=np.concatenate([p["stability"] for p in parts]),
+            method=np.concatenate([p["method"] for p in parts]),
+            backend=backend,
+            timings=timings,
+            notes=tuple(tuple(t) for p in parts for t in p["notes"]),
+            validity=tuple(tuple(v) for p in parts for v in p.get("validity", [()] * len(p["status"]))),
+        )
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """The grid's shape, one entry per swept axis."""
+        return tuple(len(v) for v in self.axes.values())
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Converged and stable, per point (flattened)."""
+        return self.status == "ok"
+
+    @property
+    def total_angle_deg(self) -> np.ndarray:
+        """Total bending angle per point, degrees (NaN where infeasible: see :attr:`status`)."""
+        return np.degrees(np.sum(self.theta, axis=1))
+
+    def counts(self) -> dict[str, int]:
+        """Points ok, not ok and infeasible."""
+        return {s: int(np.sum(self.status == s)) for s in ("ok", "not ok", "infeasible")}
+
+    def scene(self, i: int) -> Scene:
+        """The scene of point ``i`` (the base scene with the point's axis values)."""
+        changes: dict[str, Any] = {"r2": float(self.points["r2"][i]), "d": float(self.points["d"][i])}
+        if "pressure" in self.axes or self.base.pressure is not None:
+            changes["pressure"] = float(self.points["pressure"][i])
+        if "payload" in self.axes or "payload_angle" in self.axes:
+            at = self.base.payloads[0].at if self.base.payloads else 1.0
+            changes["payloads"] = (Payload(float(self.points["payload"][i]), float(self.points["payload_angle"][i]), at),)
+        return self.base.replace(**changes)
+
+    def grid(self, values: np.ndarray) -> np.ndarray:
+        """A flattened per-point array reshaped to the grid."""
+        return np.asarray(values).reshape(self.shape)
+
+    def rows(self) -> list[dict[str, Any]]:
+        """One dict per point: the axes, status, angles (degrees), tip (mm), solver facts, validity (:func:`point_rows`)."""
+        part = {
+            "status": self.status, "stability": self.stability, "method": self.method, "pressure": self.pressure,
+            "theta": self.theta, "tip": self.tip, "messages": self.messages, "notes": self.notes,
+            "validity": self.validity,
+        }
+        return point_rows(self.points, part)
+
+    def to_csv(self) -> str:
+        """The rows as CSV text (empty cells where a value is undefined)."""
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, fieldnames=row_fields(self.base.segments), lineterminator="\n")
+        writer.writeheader()
+        for r in self.rows():
+            writer.writerow(csv_cells(r))
+        return buf.getvalue()
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the base scene, the axes, counts, the backend and every row."""
+        return {
+            "base": self.base.describe(),
+            "segments": self.base.segments,
+            "axes": {k: {"values": v, "unit": AXES[k]} for k, v in self.axes.items()},
+            "counts": self.counts(),
+            "outside_model_range": sum(1 for v in self.validity if v),
+            "backend": self.backend,
+            "timings_s": dict(self.timings),
+            "rows": self.rows(),
+        }
+
+    def write(self, path: str | Path) -> Path:
+        """Write CSV (``.csv``) or JSON (``.json``, no NaN) by the file's suffix; the folder must exist."""
+        path = Path(path)
+        if path.suffix.lower() == ".csv":
+            text = self.to_csv()
+        elif path.suffix.lower() == ".json":
+            text = jsonsafe.dumps(self.to_dict(), indent=1)
+        else:
+            raise SweepError(f"output {str(path)!r}: expected a .csv or .json file")
+        return outputs.write_text(path, text)  # WriteFailed (one line naming the file) when the disk is full
+
+
+def sweep(
+    base: Scene | None = None,
+    *,
+    pressure=None,
+    payload=None,
+    payload_angle=None,
+    r2=None,
+    d=None,
+    options: BatchOptions | None = None,
+) -> SweepResult:
+    """Solve every point of the grid of the given axes around ``base`` in one batch.
+
+    Parameters
+    ----------
+    base : Scene, optional
+        Everything not swept (default ``Scene()``: Table 1 at its 90 degree pressure, n = 3).
+        Without a ``pressure`` axis the base scene's pressure (or target angle, per geometry) is used.
+    pressure, payload, payload_angle, r2, d : float or sequence of float, optional
+        Axis values (MPa, N, degrees, mm, mm). A ``payload`` or ``payload_angle`` axis replaces
+        the base scene's payloads with one payload.
+    options : BatchOptions, optional
+        ``compile="auto"`` is decided once for the whole grid (:func:`esba.statics.batch.decide_backend`).
+
+    Returns
+    -------
+    SweepResult
+    """
+    plan = plan_sweep(base, pressure=pressure, payload=payload, payload_angle=payload_angle, r2=r2, d=d)
+    check_points(plan)
+    check_size(plan.size, plan.base.segments, "the sweep", SweepError)
+    check_resolvable(plan)
+    options, backend = decide_backend(plan.base.model(), options, plan.angle_mode, plan.size)
+    part = solve_points(plan, 0, plan.size, options)
+    return SweepResult.from_parts(plan, [part], backend)
+
+
+# ---------------------------------------------------------------------------------------------
+# one load path, jumps reported
+
+
+@dataclass(frozen=True, eq=False)
+class LoadPath:
+    """Equilibria along a payload ramp from 0 to the full load, and where the path jumps.
+
+    Attributes
+    ----------
+    factors : ndarray
+        Load factors of the points (0 ... 1), in the order the ramp met them.
+    theta : ndarray, shape (k, n)
+        Angles at each point, rad.
+    tip : ndarray, shape (k, 3)
+        Tip pose at each point.
+    min_eigenvalue : ndarray
+        Smallest Hessian eigenvalue at each point (it falls to 0 at a fold, where the path snaps).
+    kind : ndarray of str
+        What each point is (``start``, ``regular``, ``fold``, ``branch point``, ``end``; see
+        :class:`esba.paths.branch.Branch`).
+    jumps : list of dict
+        Each jump: the load factor of the fold and just after it, the tip before and after (mm),
+        the distance, and the kind of special point.
+    ok : bool
+        The ramp reached the full load on a stable equilibrium.
+    message : str
+        What went wrong, when ``ok`` is False.
+    """
+
+    factors: np.ndarray
+    theta: np.ndarray
+    tip: np.ndarray
+    min_eigenvalue: np.ndarray
+    kind: np.ndarray
+    jumps: list[dict]
+    ok: bool
+    message: str = ""
+
+    @property
+    def continuous(self) -> bool:
+        """True when no jump was found."""
+        return not self.jumps
+
+
+def load_path(scene: Scene, options: PathOptions | None = None) -> LoadPath:
+    """Follow ``scene``'s payloads (and weight) from 0 to full, quasi-statically.
+
+    The load factor is followed by path tracing (:func:`esba.paths.loading.follow`): every fold where
+    the stable branch ends is located, and the jump from it is recorded (a snap-through to another
+    branch), not smoothed over.
+
+    Examples
+    --------
+    >>> from esba.model.scene import Scene, Payload
+    >>> p = load_path(Scene(target_angle_deg=90.0, payloads=(Payload(2.0),)))
+    >>> p.ok, p.continuous, round(float(p.tip[-1, 1]), 2)
+    (True, True, 10.22)
+    """
+    unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False))
+    if not unloaded.ok or not (scene.payloads or scene.gravity):
+        one = np.array([0.0])
+        kind = np.array(["start"])
+        return LoadPath(one, unloaded.theta[None, :], unloaded.tip[None, :], np.array([unloaded.eigenvalues[0]]), kind, [], unloaded.ok, unloaded.message)
+    problem = PathProblem.from_scene(scene, "load", pressure=unloaded.pressure)
+    ramp = follow(problem, unloaded.theta, 0.0, 1.0, options)
+    pieces = ramp.pieces
+    jumps = [
+        {
+            "kind": j.kind,
+            "from_factor": j.lam,
+            "to_factor": j.lam_after,
+            "tip_before_mm": [float(v) for v in j.tip_before[:2]],
+            "tip_after_mm": [float(v) for v in j.tip_after[:2]],
+            "distance_mm": j.distance_mm,
+            "min_eigenvalue_before": j.point.eigenvalue,
+        }
+        for j in ramp.jumps
+    ]
+    return LoadPath(
+        factors=np.concatenate([b.lam for b in pieces]),
+        theta=np.vstack([b.theta for b in pieces]),
+        tip=np.vstack([b.tip for b in pieces]),
+        min_eigenvalue=np.concatenate([b.eigenvalues[:, 0] for b in pieces]),
+        kind=np.concatenate([b.kind for b in pieces]),
+        jumps=jumps,
+        ok=ramp.reached,
+        message=ramp.message,
+    )

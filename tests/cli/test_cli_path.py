@@ -1,0 +1,145 @@
+"""The command line: esba path (issue 8): special points, branch files, the figure, bad input."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from esba.cli import EXIT_OK, EXIT_USAGE, main
+from esba.cli.path import _PATH_PARAMETERS, DEFAULT_PATH_FIGURE, DEFAULT_PATH_OUT
+from esba.paths.problem import PARAMETERS
+from tests.tolerances import LOCATE_RTOL
+
+
+def run(capsys, *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_parser_knows_every_path_parameter():
+    assert set(_PATH_PARAMETERS) == set(PARAMETERS)
+
+
+def test_pressure_path_prints_folds_and_hysteresis(capsys, tmp_path):
+    out_json, fig = tmp_path / "b.json", tmp_path / "b.png"
+    code, out, err = run(capsys, "path", "--param", "pressure", "--from", "0", "--to", "0.3", "--payload", "2", "--out", str(out_json), "--plot", str(fig))
+    assert code == EXIT_OK, err
+    assert out.count("LP fold") == 2 and "hysteresis:" in out and "jumps at the fold" in out
+    assert f"wrote {out_json}" in out and f"wrote {fig}" in out
+    assert fig.stat().st_size > 20_000
+    data = json.loads(out_json.read_text())
+    (main_branch,) = data["branches"]
+    folds = [sp for sp in main_branch["special_points"] if sp["kind"] == "fold"]
+    assert [sp["label"] for sp in folds] == ["LP", "LP"] and all(sp["status"] == "converged" for sp in folds)
+    assert data["hysteresis"]["width"] == pytest.approx(folds[0]["lambda"] - folds[1]["lambda"], rel=LOCATE_RTOL)
+    assert len(main_branch["lambda"]) == main_branch["points"]
+
+
+def test_json_and_csv(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, "path", "--param", "payload", "--pressure", "0", "--payload", "1", "--payload-angle", "180", "--to", "5", "-n", "2", "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)  # strict JSON: no NaN
+    labels = [sp["label"] for b in d["branches"] for sp in b["special_points"]]
+    assert labels.count("BP") == 1 and len(d["branches"]) == 3  # the straight branch and both sides of the crossing one
+    assert (tmp_path / DEFAULT_PATH_OUT).exists() and (tmp_path / DEFAULT_PATH_FIGURE).exists()
+    rows = list(csv.DictReader((tmp_path / DEFAULT_PATH_OUT).open()))
+    assert {"branch", "kind", "payload1 (N)", "total_angle_deg", "morse_index", "stable", "theta1_deg"} <= set(rows[0])
+    assert {r["branch"] for r in rows} == {"main", "BP1 +", "BP1 -"}
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--param", "pressure"], "the following arguments are required: --to"),
+        (["--to", "nan"], "--to nan: expected the finite value"),
+        (["--param", "presure", "--to", "1"], "argument --param: invalid choice: 'presure'"),
+        (["--to", "0.3", "--out", "x.txt"], "--out 'x.txt': '.txt'; expected a file ending in .csv, .json"),
+        (["--to", "0.3", "--out", "missing/x.csv"], "the folder 'missing' does not exist"),
+        (["--to", "0.3", "--plot", "x.xyz"], "--plot 'x.xyz': unsupported figure format '.xyz'"),
+        (["--to", "0.3", "--from", "-1"], "from=-1.0: outside the range of pressure, 0 to inf MPa"),
+        (["--param", "payload", "--no-payload", "--to", "1"], "the scene has 0 payloads"),
+        (["--param", "omega", "--payload-index", "2", "--to", "100"], "the scene has 1 payload"),
+        (["--param", "r2", "--payload-index", "2", "--to", "2"], "--payload-index 2: only means something with --param payload, omega or at"),
+        (["--param", "M", "--to", "0.1"], "the mass only acts with gravity"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, tmp_path, monkeypatch, args, message):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, "path", *args)
+    assert code == EXIT_USAGE
+    assert err.count("\n") == 1 and err.startswith("esba: error: ") and message in err, err
+    assert "Traceback" not in err and out == ""
+    assert not (tmp_path / DEFAULT_PATH_OUT).exists()  # refused before anything was computed or written
+
+
+def test_write_doc_writes_the_page_and_its_figures(capsys, tmp_path):
+    page = tmp_path / "docs" / "paths.md"
+    page.parent.mkdir()
+    code, out, err = run(capsys, "path", "--write-doc", str(page))
+    assert code == EXIT_OK, err
+    text = page.read_text()
+    for heading in ("## Pressure under the 2 N horizontal tip payload", "## Payload direction", "## The straight actuator", "## What a designer"):
+        assert heading in text
+    assert f"esba path --write-doc {page}" in text
+    for name in ("path-pressure-2N.png", "path-omega-2N.png", "path-column-n4.png"):
+        assert (tmp_path / "docs" / "figures" / name).stat().st_size > 20_000
+        assert f"figures/{name}" in text
+    assert "nan" not in text.lower()
+
+
+def test_write_doc_refuses_other_flags(capsys, tmp_path):
+    code, out, err = run(capsys, "path", "--write-doc", str(tmp_path / "p.md"), "--to", "0.3")
+    assert code == EXIT_USAGE and "give no --to with it" in err
+
+
+def test_load_factor_from_zero_ends_at_the_scenes_own_state(capsys, tmp_path):
+    from esba.model.scene import MAIN_JOB
+    from esba.statics.equilibrium import solve
+
+    code, out, err = run(capsys, "path", "--param", "load", "--from", "0", "--to", "1", "--no-out", "--no-plot", "--json", "--points")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    assert d["start"]["total_angle_deg"] == pytest.approx(90.0, abs=1e-9)  # unloaded: the 90 degree state
+    assert d["branches"][0]["total_angle_deg"][-1] == pytest.approx(solve(MAIN_JOB).total_angle_deg, abs=1e-8)
+
+
+def test_a_start_inside_the_bistable_range_reaches_to_through_both_folds(capsys):
+    """From the lower stable state at 0.168 MPa the branch turns back at the upper fold, runs down
+    its unstable middle past the start to the lower fold and then up the far stable branch to --to."""
+    code, out, err = run(capsys, "path", "--param", "pressure", "--from", "0.168", "--to", "0.3", "--payload", "2", "--no-out", "--no-plot",
+                         "--json")
+    assert code == EXIT_OK, err
+    main = json.loads(out)["branches"][0]
+    assert main["stopped"] == "bound" and main["stop_reason"] == "reached pressure = 0.3 MPa"
+    folds = sorted(p["lambda"] for p in main["special_points"] if p["kind"] == "fold")
+    assert folds == pytest.approx([0.16360178, 0.17353550], abs=1e-7)
+
+
+def test_a_branch_that_turns_back_before_to_says_so_and_exits_1(capsys):
+    """A slightly inflated actuator pushed along its axis from 2.85 N: the branch folds at 2.904 N and
+    runs back down, past its start, out of the window (2.7 to 3 N) before its next fold (2.629 N)."""
+    code, out, err = run(capsys, "path", "--param", "payload", "--pressure", "0.001", "--payload", "2.85", "--payload-angle", "180",
+                         "--to", "3", "--no-out", "--no-plot", "--no-loading")
+    assert code == 1
+    assert "turned back and reached payload1 = 2.7 N without reaching 3 N" in out
+    assert err.startswith("esba: the branch did not reach --to 3")
+
+
+def test_a_branch_leaving_the_models_range_warns(capsys):
+    """One segment, no payload, inflated to 0.8 MPa: the branch passes its clamp, a full turn and an
+    outer-fibre strain of 1; each is a warning line with the first traced point past it, and in JSON."""
+    code, out, err = run(capsys, "path", "-n", "1", "--no-payload", "--param", "pressure", "--to", "0.8", "--no-out", "--no-plot", "--json")
+    assert code == EXIT_OK
+    checks = {v["check"]: v for v in json.loads(out)["validity"]}
+    assert {"tip_behind_base", "total_bend", "axial_strain"} <= set(checks)
+    assert checks["tip_behind_base"]["lambda"] < checks["total_bend"]["lambda"] < checks["axial_strain"]["lambda"]
+    assert err.count("esba: warning: main, from pressure = ") == len(checks)
+
+
+def test_the_table_2_paths_stay_inside_the_models_range(capsys):
+    code, out, err = run(capsys, "path", "--param", "payload", "--to", "0", "--no-out", "--no-plot", "--json")
+    assert code == EXIT_OK and json.loads(out)["validity"] == [] and "warning" not in err

@@ -1,0 +1,151 @@
+"""The paper-style figures (``esba figures``): the data behind each makes sense, the PNGs are written.
+
+The data checks are the paper's own statements (Section 4.4): the unloaded bending angle grows
+with pressure, faster as the pressure grows, and less for a larger fibre angle (Fig. 7b); more
+segments move the loaded tip less and less (Table 2, Fig. 8c); the tip moves back against a
+growing horizontal payload (Fig. 10), and the secant stiffness falls as the payload grows
+(Fig. 11).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from esba.analysis.stiffness import PAPER_FORCES
+from esba.cli import main
+from esba.figures import paper as figures
+from esba.statics.equilibrium import solve
+from tests.tolerances import TABLE2_ANGLE_DEG, TABLE2_TIP_MM
+
+CORE = ["fig7b", "fig8c", "fig10", "fig11"]
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+#: a drawn figure at 150 dpi is tens of kB; an empty canvas is a few kB
+MIN_PNG_BYTES = 20_000
+#: solver accuracy on angles (IPOPT + Newton polish stop near |dU/dtheta| ~ 1e-8), degrees
+SOLVE_ANGLE_DEG = 1e-6
+
+
+# ---------------------------------------------------------------------------------------------
+# the data
+
+
+@pytest.fixture(scope="module")
+def curves():
+    return figures.pressure_angle_curves(points=21)
+
+
+def test_fig7b_angle_grows_with_pressure_and_faster_at_higher_pressure(curves):
+    for c in curves:
+        assert c.pressure_mpa[0] == 0.0 and c.angle_deg[0] == 0.0
+        assert c.pressure_mpa[-1] == pytest.approx(figures.FIG7B_MAX_PRESSURE, rel=1e-9)
+        assert np.all(np.diff(c.pressure_mpa) > 0)
+        # equal angle steps need ever smaller pressure steps: the angle grows faster with pressure
+        assert np.all(np.diff(c.pressure_mpa, 2) < 0)
+
+
+def test_fig7b_angle_falls_with_fibre_angle(curves):
+    assert [c.rho_deg for c in curves] == list(figures.FIBRE_ANGLES_DEG)
+    for p in (0.05, 0.1, 0.15, 0.2):
+        angles = [np.interp(p, c.pressure_mpa, c.angle_deg) for c in curves]
+        assert np.all(np.diff(angles) < 0), (p, angles)
+
+
+def test_fig7b_inversion_agrees_with_forward_solves(curves):
+    """The closed-form inversion and IPOPT solves at the same pressures give the same angle."""
+    c = curves[1]
+    for k in (5, 10, 15):
+        r = solve(c.check.scene.replace(pressure=float(c.pressure_mpa[k]))).check()
+        assert r.total_angle_deg == pytest.approx(c.angle_deg[k], abs=SOLVE_ANGLE_DEG)
+
+
+def test_fig8c_shapes_converge_with_segments():
+    data = figures.payload_shapes()
+    assert data.unloaded.total_angle_deg == pytest.approx(90.0, abs=SOLVE_ANGLE_DEG)
+    assert [r.scene.segments for r in data.loaded] == [1, 2, 3, 4]
+    for r in data.loaded:
+        assert r.ok and r.pressure == data.pressure
+        assert r.total_angle_deg < 90.0
+    tips = np.array([r.tip_mm for r in data.loaded])
+    steps = np.linalg.norm(np.diff(tips, axis=0), axis=1)
+    assert np.all(np.diff(steps) < 0), steps  # n -> n + 1 changes the tip less and less
+    # the n = 3 shape is Table 2's
+    assert data.loaded[2].total_angle_deg == pytest.approx(25.2, abs=TABLE2_ANGLE_DEG)
+    assert tips[2] == pytest.approx([133.2, 10.2], abs=TABLE2_TIP_MM)
+
+
+@pytest.fixture(scope="module")
+def sweep():
+    return figures.horizontal_payload_sweep(np.arange(1, 41) * 0.05)
+
+
+def test_fig10_tip_moves_back_monotonically(sweep):
+    tips = np.array([sweep.initial.tip_mm] + [r.tip_mm for r in sweep.loaded])
+    assert np.all(np.diff(tips[:, 1]) < 0)  # y falls as the payload grows
+    assert np.all(np.diff(tips[:, 0]) > 0)  # and the tip swings down
+    assert tips[0] == pytest.approx([270.0 / math.pi] * 2, abs=1e-6)  # the 90 deg arc: x = y = 2L/pi
+
+
+def test_fig11_secant_stiffness_falls_with_payload(sweep):
+    paper = figures.horizontal_payload_sweep(PAPER_FORCES)
+    assert np.all(np.diff(paper.stiffness_n_per_m) < 0)  # "increase of payload ... reduction in stiffness"
+    f = np.array(sweep.forces)
+    k = np.array(sweep.stiffness_n_per_m)
+    assert np.all(np.diff(k[f <= 1.9]) < 0)
+    # near 2 N the curve is flat: it has a shallow minimum (about 1.95 N) and rises by < 0.1 %
+    assert k.max() == k[0] and k[-1] <= 1.001 * k.min()
+    # below the smallest payload it tends to the tangent stiffness of the unloaded state
+    assert k[0] < sweep.tangent.along(90.0) < 1.05 * k[0]
+
+
+# ---------------------------------------------------------------------------------------------
+# the files and the command
+
+
+def test_write_all_writes_every_figure(tmp_path):
+    written = figures.write_all(tmp_path, CORE)
+    assert list(written) == CORE
+    for name, path in written.items():
+        assert path.parent == tmp_path and path.suffix == ".png"
+        data = path.read_bytes()
+        assert data[:8] == PNG_SIGNATURE, name
+        assert len(data) > MIN_PNG_BYTES, (name, len(data))
+
+
+def test_cli_writes_the_chosen_figures(tmp_path, capsys):
+    assert main(["figures", "--out", str(tmp_path), "--only", "fig7b", "--only", "fig7b", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert list(data["figures"]) == ["fig7b"]
+    assert (tmp_path / "fig7b.png").stat().st_size > MIN_PNG_BYTES
+
+
+def test_cli_bad_name_is_a_one_line_usage_error(tmp_path, capsys):
+    assert main(["figures", "--out", str(tmp_path / "new"), "--only", "fig7b", "fig9"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert err.startswith("esba: error: --only: unknown figure 'fig9': allowed are fig7b, fig8c, fig10, fig11")
+    assert not (tmp_path / "new").exists()  # nothing drawn before the names are checked
+
+
+def test_registry_core_names():
+    assert list(figures.registry())[:4] == CORE
+
+
+def test_design_figures_registered_only_when_their_module_exists(tmp_path, monkeypatch):
+    monkeypatch.setattr(figures, "_DESIGN_MODULE", "esba_no_such_design_figures")
+    assert list(figures.registry()) == CORE
+    (tmp_path / "fake_design_figures.py").write_text(
+        "from pathlib import Path\n"
+        "def figure_13a(out_dir):\n"
+        "    path = Path(out_dir) / 'fig13a.png'\n"
+        "    path.write_bytes(b'x')\n"
+        "    return path\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(figures, "_DESIGN_MODULE", "fake_design_figures")
+    reg = figures.registry()
+    assert list(reg) == CORE + ["fig13a", "fig13b", "fig14"]
+    assert figures.write_all(tmp_path / "out", ["fig13a"]) == {"fig13a": tmp_path / "out" / "fig13a.png"}
