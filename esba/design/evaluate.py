@@ -124,7 +124,7 @@ class _Evaluator:
         P = pc.pressure_closed(start, r2, d)
         theta_s = ca.DM.ones(n) * (start / n)
         # the payload ramp from the unloaded state: stable all the way, or reported failed (esba.solvers.newton)
-        theta, g, low, contraction = ramp_expression(
+        theta, g, low, contraction, _ = ramp_expression(
             self._parts, ca.MX(theta_s), ca.vertcat(r2, d, P, 0.0), ca.vertcat(0.0, 0.0, 0.0, F), 1.0, steps, self.options.newton_steps, 2
         )
         K = pc.stiffness_expr(theta_s, theta)

@@ -32,7 +32,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-__all__ = ["generators", "pivots", "solve", "inertia", "pivots_sx", "solve_sx", "check_structure"]
+__all__ = ["generators", "pivots", "solve", "inertia", "pivots_sx", "solve_sx", "matvec_sx", "check_structure"]
 
 
 def generators(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -122,3 +122,19 @@ def solve_sx(h, b) -> ca.SX:
     e, c, n = _sx_generators(h)
     bs = [b[k] for k in range(n)]
     return ca.vertcat(*_solve(e, c, bs, n, ca.SX(0.0), lambda x, y: x / y))
+
+
+def matvec_sx(h, v) -> ca.SX:
+    """H v in O(n) from the structure (row 0 and the diagonal of ``h``), as CasADi expressions:
+    (C v)_j = c[j] (v_0 + ... + v_j) + c[j+1] v_{j+1} + ... + c[n-1] v_{n-1}."""
+    e, c, n = _sx_generators(h)
+    vs = [v[k] for k in range(n)]
+    below = [ca.SX(0.0)] * n  # v_0 + ... + v_j
+    total = ca.SX(0.0)
+    for j in range(n):
+        total = total + vs[j]
+        below[j] = total
+    above = [ca.SX(0.0)] * (n + 1)  # c[j] v_j + ... + c[n-1] v_{n-1}
+    for j in range(n - 1, -1, -1):
+        above[j] = above[j + 1] + c[j] * vs[j]
+    return ca.vertcat(*[e[j] * vs[j] + c[j] * below[j] + above[j + 1] for j in range(n)])

@@ -14,8 +14,9 @@ import io
 import json
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -130,9 +131,13 @@ class Branch:
     arclength : ndarray, shape (m,)
         Scaled arclength from the start.
     eigenvalues : ndarray, shape (m, n)
-        Hessian eigenvalues, ascending, N mm/rad^2.
+        Hessian eigenvalues, ascending, N mm/rad^2: computed when first asked for (``spectrum``),
+        since the trace itself needs only the Hessian's LDL^T pivots.
+    min_pivot : ndarray, shape (m,)
+        The Hessian's smallest LDL^T pivot relative to the largest magnitude (its sign is the smallest
+        eigenvalue's: Sylvester's law of inertia).
     morse : ndarray of int, shape (m,)
-        Morse index (number of negative eigenvalues).
+        Morse index (number of negative eigenvalues, counted as negative pivots).
     kind : ndarray of str, shape (m,)
         ``start``, ``regular``, ``fold``, ``branch point``, ``user``, ``event`` or ``end``.
     special : tuple of SpecialPoint
@@ -158,7 +163,8 @@ class Branch:
     theta: np.ndarray
     tip: np.ndarray
     arclength: np.ndarray
-    eigenvalues: np.ndarray
+    spectrum: Callable[[], np.ndarray] = field(repr=False)
+    min_pivot: np.ndarray
     morse: np.ndarray
     kind: np.ndarray
     special: tuple[SpecialPoint, ...]
@@ -174,11 +180,15 @@ class Branch:
     def __len__(self) -> int:
         return len(self.lam)
 
+    @cached_property
+    def eigenvalues(self) -> np.ndarray:
+        """Hessian eigenvalues per point, ascending, shape (m, n), N mm/rad^2 (computed on first use)."""
+        return np.asarray(self.spectrum(), dtype=float).reshape(len(self), self.theta.shape[1])
+
     @property
     def stable(self) -> np.ndarray:
-        """Per point: a strict minimum (Morse index 0 and no eigenvalue within the critical band)."""
-        scale = np.maximum(np.max(np.abs(self.eigenvalues), axis=1), 1e-300)
-        return (self.morse == 0) & (self.eigenvalues[:, 0] > self.critical_tol * scale)
+        """Per point: a strict minimum (Morse index 0 and no pivot within the critical band)."""
+        return (self.morse == 0) & (self.min_pivot > self.critical_tol)
 
     @property
     def total_angle_deg(self) -> np.ndarray:

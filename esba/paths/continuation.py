@@ -322,7 +322,6 @@ def trace(
     first = corr.at_lambda(theta0, lam0)
     if first is None:
         return _branch(corr, [], [], "start", f"no equilibrium found near the start at {problem.describe(lam0)}", label)
-    corr.spectrum(first)
     if tangent is not None:
         t = _check_vector("tangent", tangent, problem.n + 1)
         if corr.norm(t) == 0.0:
@@ -364,7 +363,6 @@ def trace(
             reject = b.tangent is None
         if not reject:
             turn = math.acos(max(-1.0, min(1.0, corr.dot(a.tangent, b.tangent))))
-            corr.spectrum(b)
             sharp = turn > max_turn
             double = abs(b.morse - a.morse) > 1
             # lambda ran against both end tangents: it turned back at least twice inside the step
@@ -393,8 +391,6 @@ def trace(
         stop_here = None
         for s_pt, kind, pt, sp in found:
             if pt is not a and pt is not b:
-                if pt.eig is None:
-                    corr.spectrum(pt)
                 if pt.tangent is None:
                     pt.tangent = corr.tangent(pt, a.tangent) if pt.tangent is None else pt.tangent
                 if pt.tangent is None:
@@ -435,7 +431,7 @@ def trace(
         factor = 2.0 ** ((opts.target_iterations - max(b.iterations, 1)) / 2.0)
         ds = min(opts.ds_max, max(opts.ds_min, ds * min(2.0, max(0.5, factor))))
         # back at the start: a closed branch
-        if steps >= 3 and travelled > 2.0 * opts.ds_max:
+        if steps >= 3 and travelled > 2.0 * opts.ds_max and abs(_lam_delta(problem, b.lam - first.lam)) < 0.5 * s_b * corr.sigma:
             d = np.concatenate([b.theta - first.theta, [_lam_delta(problem, b.lam - first.lam)]])
             if corr.norm(d) < 0.5 * s_b and corr.dot(b.tangent, first.tangent) > 0:
                 stopped, reason = "loop", f"returned to the start (a closed branch) after {steps} steps"
@@ -450,25 +446,26 @@ CORRECTOR_CONTRACTION = 0.25
 #: The smallest eigenvalue is watched for a hidden sign change (two crossings inside one step) when it
 #: is below this fraction of the largest at both ends of the step.
 WATCH = 0.05
-
-
-def _eigen_slope(corr: Corrector, pt: Point, idx: int) -> float:
-    """d(eigenvalue idx)/ds along the tangent at ``pt``: v . (d(H v)/dtheta t_theta + d(H v)/dlambda t_lambda)."""
-    v = pt.vec[:, idx]
-    _, hv_t, hv_l, _ = corr.prob.fold_terms(pt.theta, pt.lam, v)
-    t = pt.tangent
-    return float(v @ (hv_t @ t[:-1] + hv_l * t[-1]))
+#: ... and the spectra that watch needs are computed when H's smallest pivot (in magnitude) is below
+#: this fraction of the largest at both ends.
+WATCH_PIVOT = 0.25
 
 
 def _dips(corr: Corrector, a: Point, b: Point, ds: float) -> bool:
     """The eigenvalue nearest zero keeps its sign at both ends but the cubic Hermite interpolant of it
-    (values and slopes along the arclength) crosses zero inside the step: two folds hide in it."""
-    idx = int(np.argmin(np.abs(a.eig)))
-    mu_a, mu_b = float(a.eig[idx]), float(b.eig[idx])
-    scale = max(float(np.max(np.abs(a.eig))), float(np.max(np.abs(b.eig))), 1e-300)
+    (values and slopes along the arclength) crosses zero inside the step: two folds hide in it.
+
+    The eigenvalue, its eigenvector and its slope come from inverse iteration in O(n)
+    (:meth:`Corrector.critical_mode`), asked for only where H's smallest pivot is within
+    :data:`WATCH_PIVOT` of its largest at both ends (near singular)."""
+    if a.small_pivot > WATCH_PIVOT or b.small_pivot > WATCH_PIVOT:
+        return False
+    v_a, mu_a, slope_a = corr.critical_mode(a, a.tangent[:-1] if np.any(a.tangent[:-1]) else np.ones(corr.n), a.tangent)
+    _, mu_b, slope_b = corr.critical_mode(b, v_a, b.tangent)
+    scale = max(a.pivot_scale, b.pivot_scale, 1e-300)
     if mu_a * mu_b <= 0 or max(abs(mu_a), abs(mu_b)) > WATCH * scale:
         return False
-    da, db = _eigen_slope(corr, a, idx) * ds, _eigen_slope(corr, b, idx) * ds
+    da, db = slope_a * ds, slope_b * ds
     u = np.linspace(0.0, 1.0, 33)[1:-1]
     h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
     cubic = h00 * mu_a + h10 * da + h01 * mu_b + h11 * db
@@ -499,11 +496,12 @@ def _events_on_segment(corr: Corrector, a: Point, b: Point, s_b: float, lo: floa
     turned = np.sign(b.tangent[-1]) != np.sign(a.tangent[-1]) and a.tangent[-1] != 0
     if opts.detect and (b.morse != a.morse or turned):
         idx = min(a.morse, b.morse, corr.n - 1)  # the eigenvalue (ascending) that crosses zero
-        if turned and a.morse == b.morse:
+        if turned and a.morse == b.morse and opts.locate != "extended":
+            corr.spectrum(b)
             idx = int(np.argmin(np.abs(b.eig)))
         kind = "fold" if turned else "branch point"
-        pt, status, method = locate_crossing(corr, a, b, s_b, turned, idx, opts.locate)
-        found.append((corr.arclength_of(a, pt), kind, pt, special_from(corr, kind, pt, idx, a, b, status, method)))
+        pt, status, method, vector = locate_crossing(corr, a, b, s_b, turned, idx, opts.locate)
+        found.append((corr.arclength_of(a, pt), kind, pt, special_from(corr, kind, pt, idx, a, b, status, method, vector)))
         ended = any(k == "end" for _, k, _, _ in found)
         for bound in (lo, hi):
             if turned and not ended and math.isfinite(bound) and (a.lam - bound) * (pt.lam - bound) < 0:
@@ -550,21 +548,22 @@ def _branch(
     beyond: tuple[float, np.ndarray] | None = None,
 ) -> Branch:
     prob, n = corr.prob, corr.n
-    for pt in points:
-        if pt.eig is None:
-            corr.spectrum(pt)
     m = len(points)
     kinds = kinds if kinds is not None else (["start"] + ["regular"] * (m - 1))[:m]
     arclength = arclength if arclength is not None else [0.0] * m
     special = tuple(replace(sp, index=i, arclength=float(arclength[i])) for i, sp in specials)
+    lam = np.array([pt.lam for pt in points], dtype=float)
+    theta = np.array([pt.theta for pt in points], dtype=float).reshape(m, n)
+    known = {i: pt.eig for i, pt in enumerate(points) if pt.eig is not None}
     return Branch(
         name=prob.name,
         unit=prob.unit,
-        lam=np.array([pt.lam for pt in points], dtype=float),
-        theta=np.array([pt.theta for pt in points], dtype=float).reshape(m, n),
-        tip=np.array([prob.tip(pt.theta, pt.lam) for pt in points], dtype=float).reshape(m, 3),
+        lam=lam,
+        theta=theta,
+        tip=prob.tips(theta, lam) if m else np.zeros((0, 3)),
         arclength=np.array(arclength, dtype=float),
-        eigenvalues=np.array([pt.eig for pt in points], dtype=float).reshape(m, n),
+        spectrum=_spectrum_of(prob, theta, lam, known),
+        min_pivot=np.array([pt.min_pivot for pt in points], dtype=float),
         morse=np.array([pt.morse for pt in points], dtype=int),
         kind=np.array(kinds, dtype=object).astype(str) if m else np.array([], dtype=str),
         special=special,
@@ -577,6 +576,23 @@ def _branch(
         beyond=beyond,
         evaluations=corr.evaluations,
     )
+
+
+def _spectrum_of(problem: PathProblem, theta: np.ndarray, lam: np.ndarray, known: dict):
+    """The branch's eigenvalues, computed when first asked for: the Hessians of every point in mapped
+    calls, then one stacked ``eigvalsh`` (the trace itself needs only the pivots)."""
+
+    def spectrum() -> np.ndarray:
+        m, n = theta.shape
+        out = np.empty((m, n))
+        todo = [i for i in range(m) if i not in known]
+        for i, eig in known.items():
+            out[i] = eig
+        if todo:
+            out[todo] = np.linalg.eigvalsh(problem.hessians(theta[todo], lam[todo]))
+        return out
+
+    return spectrum
 
 
 # ---------------------------------------------------------------------------------------------
@@ -650,7 +666,7 @@ def crossing_start(corr: Corrector, point: SpecialPoint, sign: float, traced_tan
     """
     direction = sign * bifurcation_tangents(corr.prob, point, _branch_tangent(corr.prob, point, traced_tangent), corr.w, corr.sigma)
     phi = point.eigenvector / np.linalg.norm(point.eigenvector)
-    anchor = Point(point.theta.copy(), point.lam, *corr.prob.ghl(point.theta, point.lam))
+    anchor = corr.point(point.theta.copy(), point.lam)
     anchor.tangent = direction
     ds = corr.opts.ds
     while ds >= corr.opts.ds_min:

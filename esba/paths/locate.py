@@ -32,21 +32,28 @@ class _SegmentError(Exception):
     pass
 
 
-def special_from(corr: Corrector, kind: str, pt: Point, idx: int | None, a: Point, b: Point, status: str, method: str) -> SpecialPoint:
-    """A :class:`SpecialPoint` at ``pt``: ``idx`` is the critical eigenvalue's index (None for a value)."""
-    if pt.eig is None:
-        corr.spectrum(pt)
+def special_from(
+    corr: Corrector, kind: str, pt: Point, idx: int | None, a: Point, b: Point, status: str, method: str, vector: np.ndarray | None = None
+) -> SpecialPoint:
+    """A :class:`SpecialPoint` at ``pt``: ``idx`` is the critical eigenvalue's index (None for a value);
+    ``vector`` the critical vector when the extended system found it (its Rayleigh quotient is then
+    the critical eigenvalue, without an eigendecomposition)."""
     if idx is None:
         eigval, vec = float("nan"), np.zeros(0)
+    elif vector is not None:
+        vec = vector / np.linalg.norm(vector)
+        eigval = float(vec @ pt.h @ vec)
     else:
+        corr.spectrum(pt)
         eigval, vec = float(pt.eig[idx]), pt.vec[:, idx].copy()
+    if idx is not None:
         k = int(np.argmax(np.abs(vec)))
         vec = vec * np.sign(vec[k])  # a sign convention: the largest component positive
     return SpecialPoint(
         kind=kind,
         lam=float(pt.lam),
         theta=pt.theta.copy(),
-        tip=corr.prob.tip(pt.theta, pt.lam),
+        tip=corr.prob.tips(pt.theta[None, :], np.array([pt.lam]))[0],
         eigenvalue=eigval,
         eigenvector=vec,
         morse_before=a.morse,
@@ -103,12 +110,17 @@ def _on_segment(corr: Corrector, a: Point, s_b: float, pt: Point) -> bool:
     slack = 0.05 * s_b
     if not -slack <= s <= s_b + slack:
         return False
-    there = corr.on_segment(a, s)
+    there = corr.on_segment(a, s, dense=True)
     return there is not None and corr.distance(there, pt) <= 1e-6 * max(1.0, corr.norm(pt.x))
 
 
 def _extended_newton(corr: Corrector, z: np.ndarray, system: Callable[[np.ndarray], tuple], max_iter: int = 40) -> np.ndarray | None:
-    """Newton on an extended system: ``system(z) -> (residual, jacobian, converged)``, or (None, None, False)."""
+    """Newton on an extended system: ``system(z) -> (residual, jacobian, converged)``, or (None, None, False).
+
+    A step of at most 1e-7 (relative) after one that it squares (quadratic convergence) leaves the
+    next one at round-off: z + step is returned without evaluating the system there again (the
+    caller checks the gradient at the point it gets)."""
+    previous = np.inf
     for _ in range(max_iter):
         res, jac, converged = system(z)
         if res is None:
@@ -122,8 +134,10 @@ def _extended_newton(corr: Corrector, z: np.ndarray, system: Callable[[np.ndarra
         if not np.all(np.isfinite(step)):
             return None
         z = z + step
-        if np.max(np.abs(step)) <= 1e-15 * (1.0 + np.max(np.abs(z))):
+        size = float(np.max(np.abs(step))) / (1.0 + float(np.max(np.abs(z))))
+        if size <= 1e-15 or (size <= 1e-7 and size <= previous**1.5):
             return z
+        previous = size
     return None
 
 
@@ -135,8 +149,8 @@ def _fold_system(corr: Corrector, v0: np.ndarray):
         theta, lam, v = z[:n], float(z[n]), z[n + 1 :]
         if not corr.admissible(theta, lam):
             return None, None, False
-        g, h, gl = corr.evaluate(theta, lam)
-        hv, hv_t, hv_l, _ = prob.fold_terms(theta, lam, v)
+        corr.evaluations += 1
+        g, h, gl, hv, hv_t, hv_l, _ = prob.extended_terms(theta, lam, v)
         res = np.concatenate([g, hv, [v0 @ v - 1.0]])
         if not np.all(np.isfinite(res)):
             return None, None, False
@@ -162,8 +176,8 @@ def _branch_point_system(corr: Corrector):
         theta, lam, phi, mu = z[:n], float(z[n]), z[n + 1 : 2 * n + 1], float(z[-1])
         if not corr.admissible(theta, lam):
             return None, None, False
-        g, h, gl = corr.evaluate(theta, lam)
-        hv, hv_t, hv_l, vgll = prob.fold_terms(theta, lam, phi)
+        corr.evaluations += 1
+        g, h, gl, hv, hv_t, hv_l, vgll = prob.extended_terms(theta, lam, phi)
         res = np.concatenate([g + mu * phi, hv, [phi @ phi - 1.0, phi @ gl]])
         if not np.all(np.isfinite(res)):
             return None, None, False
@@ -186,39 +200,75 @@ def _branch_point_system(corr: Corrector):
     return system
 
 
-def _extended(corr: Corrector, start: Point, idx: int, fold: bool) -> Point | None:
+def _extended(corr: Corrector, start: Point, v0: np.ndarray, fold: bool) -> tuple[Point, np.ndarray] | None:
+    """Newton on the fold (or Moore's branch point) system from ``start`` and the critical vector ``v0``:
+    the point and its critical vector (the null vector of H there)."""
     n = corr.n
-    v0 = start.vec[:, idx].copy()
+    v0 = v0 / np.linalg.norm(v0)
     if fold:
         z = _extended_newton(corr, np.concatenate([start.theta, [start.lam], v0]), _fold_system(corr, v0))
     else:
         z = _extended_newton(corr, np.concatenate([start.theta, [start.lam], v0, [0.0]]), _branch_point_system(corr))
     if z is None:
         return None
-    theta, lam = z[:n], float(z[n])
-    if not corr.admissible(theta, lam):
+    theta, lam, v = z[:n], float(z[n]), z[n + 1 : 2 * n + 1]
+    if not corr.admissible(theta, lam) or not np.all(np.isfinite(v)):
         return None
-    g, h, gl = corr.evaluate(theta, lam)
-    if np.max(np.abs(g)) > 1e3 * corr.opts.tol:
+    pt = corr.point(theta, lam)
+    if np.max(np.abs(pt.g)) > 1e3 * corr.opts.tol:
         return None
-    return Point(theta, lam, g, h, gl)
+    return pt, v / np.linalg.norm(v)
 
 
-def locate_crossing(corr: Corrector, a: Point, b: Point, s_b: float, fold: bool, idx: int, method: str = "extended") -> tuple[Point, str, str]:
-    """The point between a and b where eigenvalue ``idx`` (ascending) crosses zero: (point, status, method).
+def _fold_start(corr: Corrector, a: Point, b: Point, s_b: float) -> tuple[Point, np.ndarray] | None:
+    """A start for the fold system: the corrected point where the tangent's lambda component,
+    interpolated linearly between a and b, is zero, and its tangent's theta part (at a fold the
+    tangent is (v, 0) with H v = 0: the critical vector, without an eigendecomposition)."""
+    ta, tb = float(a.tangent[-1]), float(b.tangent[-1])
+    if ta == tb:
+        return None
+    s = s_b * ta / (ta - tb)
+    if not 0.0 < s < s_b:
+        return None
+    guess = corr.on_segment(a, s)
+    if guess is None:
+        return None
+    t = corr.tangent(guess, a.tangent)
+    if t is None or not np.any(t[:-1]):
+        return None
+    return guess, t[:-1]
+
+
+def locate_crossing(corr: Corrector, a: Point, b: Point, s_b: float, fold: bool, idx: int, method: str = "extended") -> tuple[Point, str, str, np.ndarray | None]:
+    """The point between a and b where eigenvalue ``idx`` (ascending) crosses zero: (point, status,
+    method, critical vector or None).
 
     ``fold``: lambda turns back there (else a branch point). ``method``: ``"extended"`` tries the
     extended system first (always for a branch point: the corrector is singular there), then Brent.
+    A fold's extended system starts where the tangent's lambda component, interpolated between a
+    and b, vanishes, with the tangent as its critical vector; a branch point's from the nearer end
+    and the crossing eigenvector.
     """
+    if method == "extended" or not fold:
+        found = None
+        if fold:
+            start = _fold_start(corr, a, b, s_b)
+            if start is not None:
+                found = _extended(corr, start[0], start[1], True)
+        if found is None:
+            corr.spectrum(a)
+            corr.spectrum(b)
+            nearer = a if abs(float(a.eig[idx])) <= abs(float(b.eig[idx])) else b
+            found = _extended(corr, nearer, nearer.vec[:, idx].copy(), fold)
+        if found is not None and _on_segment(corr, a, s_b, found[0]):
+            how = "extended system (g = 0, H v = 0, v0 . v = 1)" if fold else "extended system (g + mu phi = 0, H phi = 0, phi . phi = 1, phi . dg/dlambda = 0)"
+            return found[0], "converged", how, found[1]
+    corr.spectrum(a)
+    corr.spectrum(b)
     f_a, f_b = float(a.eig[idx]), float(b.eig[idx])
     nearer = a if abs(f_a) <= abs(f_b) else b
-    if method == "extended" or not fold:
-        pt = _extended(corr, nearer, idx, fold)
-        if pt is not None and _on_segment(corr, a, s_b, pt):
-            how = "extended system (g = 0, H v = 0, v0 . v = 1)" if fold else "extended system (g + mu phi = 0, H phi = 0, phi . phi = 1, phi . dg/dlambda = 0)"
-            return pt, "converged", how
     if f_a * f_b < 0:
         pt = _brent(corr, a, s_b, lambda p: float(np.linalg.eigvalsh(p.h)[idx]), f_a, f_b)
         if pt is not None:
-            return pt, "converged", "eigenvalue bisection (Brent's method on the arclength)"
-    return nearer, "guess", "bracketed only (the end with the smaller critical eigenvalue)"
+            return pt, "converged", "eigenvalue bisection (Brent's method on the arclength)", None
+    return nearer, "guess", "bracketed only (the end with the smaller critical eigenvalue)", None

@@ -33,6 +33,7 @@ from esba.infra.errors import InputError
 from esba.model.closed_form import pressure_for_angle
 from esba.model.generated import Model, domain_lower_bound
 from esba.model.scene import Scene, SceneError
+from esba.solvers.native import Kernel
 
 __all__ = ["PathError", "PathProblem", "PARAMETERS", "ghl_function", "fold_function"]
 
@@ -98,10 +99,7 @@ def _split_name(name: str) -> tuple[str, int]:
 
 
 # ---------------------------------------------------------------------------------------------
-# the CasADi functions of a path (per model, cached)
-
-_GHL: dict[str, ca.Function] = {}
-_FOLD: dict[str, ca.Function] = {}
+# the CasADi functions of a path (in the model's registry)
 
 
 def _symbols(model: Model):
@@ -116,36 +114,68 @@ def _symbols(model: Model):
 def ghl_function(model: Model) -> ca.Function:
     """(theta, p, dp) -> g, H, dg/dp . dp: the generated gradient and Hessian and the gradient's
     derivative along a parameter direction (CasADi forward AD of the generated gradient)."""
-    key = str(model.path)
-    fun = _GHL.get(key)
-    if fun is None:
+
+    def build() -> ca.Function:
         th, p, dp, g, h = _symbols(model)
-        fun = ca.Function(
-            "esba_path_ghl", [th, p, dp], [g, h, ca.jtimes(g, p, dp)], ["theta", "p", "dp"], ["g", "H", "g_lambda"], {"cse": True}
-        )
-        _GHL[key] = fun
-    return fun
+        return ca.Function("esba_path_ghl", [th, p, dp], [g, h, ca.jtimes(g, p, dp)], ["theta", "p", "dp"], ["g", "H", "g_lambda"], {"cse": True})
+
+    return model.derived("path_ghl", build, builder_files=(__file__,))
 
 
 def fold_function(model: Model) -> ca.Function:
-    """(theta, p, dp, v) -> H v, d(Hv)/dtheta, d(Hv)/dlambda, d2(v . g)/dlambda2 (third derivatives by AD)."""
-    key = str(model.path)
-    fun = _FOLD.get(key)
-    if fun is None:
+    """(theta, p, dp, v) -> g, H, dg/dlambda, H v, d(Hv)/dtheta, d(Hv)/dlambda, d2(v . g)/dlambda2:
+    everything an extended system (folds, branch points) needs at one point, third derivatives by AD."""
+
+    def build() -> ca.Function:
         th, p, dp, g, h = _symbols(model)
         v = ca.SX.sym("v", model.n)
         hv = ca.mtimes(h, v)
         vg_l = ca.jtimes(ca.dot(v, g), p, dp)
-        fun = ca.Function(
+        return ca.Function(
             "esba_path_fold",
             [th, p, dp, v],
-            [hv, ca.jacobian(hv, th), ca.jtimes(hv, p, dp), ca.jtimes(vg_l, p, dp)],
+            [g, h, ca.jtimes(g, p, dp), hv, ca.jacobian(hv, th), ca.jtimes(hv, p, dp), ca.jtimes(vg_l, p, dp)],
             ["theta", "p", "dp", "v"],
-            ["Hv", "Hv_theta", "Hv_lambda", "vg_lambda_lambda"],
+            ["g", "H", "g_lambda", "Hv", "Hv_theta", "Hv_lambda", "vg_lambda_lambda"],
             {"cse": True},
         )
-        _FOLD[key] = fun
-    return fun
+
+    return model.derived("path_fold", build, builder_files=(__file__,))
+
+
+#: Up to this n the dense terms (g, H, dg/dlambda; the extended system's third derivatives) run
+#: compiled; beyond it their n x n outputs cost as much as CasADi's interpreter, and gcc takes
+#: seconds (g, H: 9 s at n = 100) to a minute (the extended system's Jacobian).
+DENSE_COMPILE_MAX_N = 32
+
+
+def _packed_kernel(model: Model, which: str):
+    """The ``ghl`` or ``fold`` Function of ``model`` with its inputs and outputs packed into one vector
+    each, as a :class:`esba.solvers.native.Kernel` (compiled when it pays)."""
+
+    def build():
+        fun = ghl_function(model) if which == "ghl" else fold_function(model)
+        ins = [ca.MX.sym(fun.name_in(i), fun.sparsity_in(i)) for i in range(fun.n_in())]
+        z = ca.vertcat(*[ca.vec(a) for a in ins])
+        outs = fun(*ins)
+        packed = ca.Function(f"esba_path_{which}_packed", [z], [ca.vertcat(*[ca.vec(ca.densify(o)) for o in outs])])
+        mode = "auto" if model.n <= DENSE_COMPILE_MAX_N else "never"
+        return Kernel(packed, mode, model.n)
+
+    return model.derived(f"path_{which}_kernel", build, persist=False)
+
+
+#: Points per call of the mapped Hessian (:meth:`PathProblem.hessians`); the last call is padded.
+HESSIAN_CHUNK = 32
+
+
+def _hessian_map(model: Model) -> ca.Function:
+    def build() -> ca.Function:
+        th, p, _, _, h = _symbols(model)
+        one = ca.Function("esba_path_hessian", [th, p], [ca.vec(0.5 * (h + h.T))], {"cse": True})
+        return one.map(HESSIAN_CHUNK, "serial")
+
+    return model.derived("path_hessian_map", build, persist=False)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -287,15 +317,52 @@ class PathProblem:
 
     def ghl(self, theta: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """g, H (symmetrised) and dg/dlambda at (theta, lambda)."""
-        g, h, gl = ghl_function(self.model)(theta, self.params(lam), self.dp)
-        h = np.asarray(h, dtype=float)
-        return np.asarray(g, dtype=float).ravel(), 0.5 * (h + h.T), np.asarray(gl, dtype=float).ravel()
+        n = self.n
+        out = _packed_kernel(self.model, "ghl")(np.concatenate([theta, self.params(lam), self.dp]))
+        h = out[n : n + n * n].reshape(n, n)
+        return out[:n], 0.5 * (h + h.T), out[n + n * n :]
+
+    def extended_terms(self, theta: np.ndarray, lam: float, v: np.ndarray):
+        """g, H (symmetrised), dg/dlambda, H v, d(Hv)/dtheta, d(Hv)/dlambda and d2(v . g)/dlambda2 at
+        (theta, lambda), in one call: what Newton on an extended system needs per iteration."""
+        n = self.n
+        out = _packed_kernel(self.model, "fold")(np.concatenate([theta, self.params(lam), self.dp, v]))
+        g, h, gl = out[:n], out[n : n + n * n].reshape(n, n), out[n + n * n : 2 * n + n * n]
+        at = 2 * n + n * n
+        hv, hv_t, hv_l = out[at : at + n], out[at + n : at + n + n * n].reshape(n, n, order="F"), out[at + n + n * n : at + 2 * n + n * n]
+        return g, 0.5 * (h + h.T), gl, hv, hv_t, hv_l, float(out[-1])
 
     def fold_terms(self, theta: np.ndarray, lam: float, v: np.ndarray):
         """H v, d(Hv)/dtheta, d(Hv)/dlambda and d2(v . g)/dlambda2 at (theta, lambda)."""
-        out = fold_function(self.model)(theta, self.params(lam), self.dp, v)
-        hv, hv_t, hv_l, vgll = (np.asarray(o, dtype=float) for o in out)
-        return hv.ravel(), hv_t, hv_l.ravel(), float(vgll.reshape(-1)[0])
+        return self.extended_terms(theta, lam, v)[3:]
+
+    def hessians(self, theta: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        """The symmetrised Hessians of many points, shape (m, n, n), in mapped calls."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        lam = np.asarray(lam, dtype=float).ravel()
+        m, n = theta.shape
+        out = np.empty((m, n, n))
+        fun = _hessian_map(self.model)
+        for start in range(0, m, HESSIAN_CHUNK):
+            stop = min(m, start + HESSIAN_CHUNK)
+            th = np.zeros((n, HESSIAN_CHUNK))
+            th[:, : stop - start] = theta[start:stop].T
+            th[:, stop - start :] = theta[stop - 1][:, None]
+            lams = np.concatenate([lam[start:stop], np.full(HESSIAN_CHUNK - (stop - start), lam[stop - 1])])
+            p = self.p0[:, None] + lams[None, :] * self.dp[:, None]
+            h = np.asarray(fun(th, p), dtype=float)
+            out[start:stop] = h[:, : stop - start].T.reshape(stop - start, n, n)
+        return out
+
+    def tips(self, theta: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        """Tip [x, y, angle] of many points, shape (m, 3) (NumPy, :meth:`esba.model.generated.Model.tips`)."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        lam = np.asarray(lam, dtype=float).ravel()
+        i = self.model.parameters.index("L")
+        lengths = self.p0[i] + lam * self.dp[i]
+        if np.all(lengths == lengths[0]):
+            return self.model.tips(theta, lengths[0]) if len(theta) else np.zeros((0, 3))
+        return np.vstack([self.model.tips(t[None, :], L) for t, L in zip(theta, lengths)])
 
     def _geometry(self, lam: float) -> tuple[float, float, float, float]:
         p = self.params(lam)

@@ -35,9 +35,6 @@ __all__ = ["Minimum", "minimise", "ipopt_solver", "LINEAR_SOLVERS"]
 #: IPOPT's linear solvers in CasADi's wheel (the HSL solvers are not bundled).
 LINEAR_SOLVERS = ("mumps", "spral")
 
-_SOLVERS: dict[tuple, ca.Function] = {}
-
-
 #: IPOPT's initial barrier parameter from a start that is already (nearly) an equilibrium. Its
 #: default, 0.1, pushes the iterate away from the bounds by about mu / (theta - lbx) / lambda_min: near
 #: a buckling load (a small lambda_min) that is enough to leave a strict minimum that is still stable.
@@ -53,10 +50,10 @@ def ipopt_solver(model: Model, tol: float = 1e-10, max_iter: int = 200, linear_s
     ``warm``: the start is (nearly) an equilibrium; a small initial barrier parameter keeps IPOPT
     at the minimiser next to it instead of pushing it off (see :data:`WARM_MU_INIT`).
     """
-    key = (str(model.path), tol, max_iter, linear_solver, warm)
-    solver = _SOLVERS.get(key)
-    if solver is not None:
-        return solver
+    return model.derived("ipopt", lambda: _build(model, tol, max_iter, linear_solver, warm), settings=(tol, max_iter, linear_solver, warm), persist=False)
+
+
+def _build(model: Model, tol: float, max_iter: int, linear_solver: str, warm: bool) -> ca.Function:
     n, npar = model.n, len(model.parameters)
     x = ca.MX.sym("x", n)
     p = ca.MX.sym("p", npar)
@@ -85,9 +82,7 @@ def ipopt_solver(model: Model, tol: float = 1e-10, max_iter: int = 200, linear_s
     if warm:
         opts["ipopt.mu_init"] = WARM_MU_INIT
         opts["ipopt.bound_mult_init_method"] = "mu-based"
-    solver = ca.nlpsol("esba_equilibrium", "ipopt", {"x": x, "f": f, "p": p}, opts)
-    _SOLVERS[key] = solver
-    return solver
+    return ca.nlpsol("esba_equilibrium", "ipopt", {"x": x, "f": f, "p": p}, opts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,7 +101,7 @@ def polish(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, ste
     in O(n) from the Hessian's structure, :func:`esba.solvers.newton.newton_parts`)."""
     parts = newton_parts(model)
     zero = np.zeros(len(pv))
-    g, step, _, pivot = (np.asarray(v, dtype=float).ravel() for v in parts(theta, pv, zero))
+    g, step, _, pivot, _, _ = (np.asarray(v, dtype=float).ravel() for v in parts(theta, pv, zero))
     for _ in range(steps):
         gnorm = float(np.max(np.abs(g)))
         if not gnorm >= 1e-13 or not pivot[0] > 0:  # stationary to round-off, not finite, or not convex here
@@ -114,7 +109,7 @@ def polish(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, ste
         new = theta - step
         if np.any(new <= lbx) or not np.all(np.isfinite(new)):
             break
-        g2, step2, _, pivot2 = (np.asarray(v, dtype=float).ravel() for v in parts(new, pv, zero))
+        g2, step2, _, pivot2, _, _ = (np.asarray(v, dtype=float).ravel() for v in parts(new, pv, zero))
         if not float(np.max(np.abs(g2))) < gnorm:
             break
         theta, g, step, pivot = new, g2, step2, pivot2
