@@ -145,7 +145,7 @@ class PathStudy:
                     "reached": r.reached,
                     "message": r.message,
                     "jumps": [j.to_dict() for j in r.jumps],
-                    "branch_points_crossed": [s.lam for s in r.switches],
+                    "branch_points_crossed": [s.lam for s in r.branch_points],
                 }
                 for r in self.loading
             ],

@@ -33,7 +33,7 @@ import numpy as np
 
 from esba.analysis.stiffness import PAPER_FORCES, secant_stiffness
 from esba.model.scene import MAIN_JOB, Payload, Scene
-from esba.solvers.newton import ramp_function
+from esba.solvers.newton import natural_function
 from esba.statics.equilibrium import pressure_for_angle, solve
 
 from .accuracy import naive_solve
@@ -55,7 +55,7 @@ def _compiled_ramp(scene: Scene, tmp: str) -> Callable[[], object] | None:
     if cc is None:
         return None
     model = scene.model()
-    fun = ramp_function(model)
+    fun = natural_function(model)
     lib = Path(tmp) / f"esba_bench_ramp_{model.n}.so"
     compile_library([fun], lib, cc)
     compiled = ca.external(fun.name(), str(lib))

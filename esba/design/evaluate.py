@@ -29,7 +29,7 @@ import numpy as np
 
 from derive.effects import EffectSet
 from esba.model.generated import Model, load_model
-from esba.solvers.newton import CONTRACTION, parts_function, ramp_expression
+from esba.solvers.newton import CONTRACTION, natural_expression, parts_function
 
 from .problem import DEFAULT_DESIGN_OPTIONS, DesignOptions, DesignProblem
 
@@ -124,7 +124,7 @@ class _Evaluator:
         P = pc.pressure_closed(start, r2, d)
         theta_s = ca.DM.ones(n) * (start / n)
         # the payload ramp from the unloaded state: stable all the way, or reported failed (esba.solvers.newton)
-        theta, g, low, contraction, _ = ramp_expression(
+        theta, g, low, contraction, _, _ = natural_expression(
             self._parts, ca.MX(theta_s), ca.vertcat(r2, d, P, 0.0), ca.vertcat(0.0, 0.0, 0.0, F), 1.0, steps, self.options.newton_steps, 2
         )
         K = pc.stiffness_expr(theta_s, theta)

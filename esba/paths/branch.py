@@ -111,7 +111,7 @@ class SpecialPoint:
 
 
 #: Why a trace stops: the codes of :attr:`Branch.stopped`.
-STOPS = ("bound", "max_steps", "event", "loop", "corrector", "domain", "instability", "start")
+STOPS = ("bound", "max_steps", "event", "loop", "corrector", "domain", "instability", "start", "refused")
 
 
 @dataclass(frozen=True, eq=False)

@@ -59,7 +59,7 @@ A straight actuator (P = 0) pushed along its axis: the straight state buckles at
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -67,6 +67,8 @@ import numpy as np
 from esba.infra import checks
 from esba.infra.threads import single_threaded
 from esba.model.stability import CRITICAL_TOL
+from esba.model.structured import pivots as structured_pivots
+from esba.solvers.newton import ACCEPTANCE, FINAL, NEWTON, STEPS, Acceptance, run_natural
 
 from .branch import Branch, SpecialPoint, branches_csv, write_branches
 from .corrector import Corrector, Point
@@ -74,6 +76,9 @@ from .locate import locate_crossing, locate_value, special_from
 from .problem import PARAMETERS, PathError, PathProblem
 
 __all__ = [
+    "Natural",
+    "PALC",
+    "continuation",
     "PathError",
     "PathOptions",
     "PathProblem",
@@ -593,6 +598,150 @@ def _spectrum_of(problem: PathProblem, theta: np.ndarray, lam: np.ndarray, known
         return out
 
     return spectrum
+
+
+# ---------------------------------------------------------------------------------------------
+# the engine: one entry, the algorithm a value
+
+
+#: Upper bound of Natural's counts (each step is unrolled into the compiled graph).
+MAX_NATURAL_STEPS = 1_000
+
+
+@dataclass(frozen=True)
+class Natural:
+    """Natural-parameter continuation: lambda in ``steps`` equal steps, each a tangent predictor and
+    ``newton`` Newton corrections (``final`` more at the end), O(n) per step and one compiled call
+    per ramp (:func:`esba.solvers.newton.natural_function`). It cannot pass a fold: the branch it
+    returns is accepted by :class:`esba.solvers.newton.Acceptance` (stationary, positive definite
+    all the way, every step contracting) or ``stopped == "refused"`` with the reason.
+
+    >>> Natural().steps
+    4
+    >>> Natural(steps=0)
+    Traceback (most recent call last):
+    ...
+    esba.paths.problem.PathError: steps=0: expected a whole number from 1 to 1000 (each step is unrolled into the compiled graph)
+    """
+
+    steps: int = STEPS
+    newton: int = NEWTON
+    final: int = FINAL
+    acceptance: Acceptance = ACCEPTANCE
+
+    def __post_init__(self) -> None:
+        why = "each step is unrolled into the compiled graph"
+        checks.whole("steps", self.steps, 1, PathError, MAX_NATURAL_STEPS, why)
+        checks.whole("newton", self.newton, 1, PathError, MAX_NATURAL_STEPS, why)
+        checks.whole("final", self.final, 0, PathError, MAX_NATURAL_STEPS, why)
+        if not isinstance(self.acceptance, Acceptance):
+            raise PathError(f"acceptance={self.acceptance!r}: expected an esba.solvers.newton.Acceptance")
+
+
+@dataclass(frozen=True)
+class PALC:
+    """Pseudo-arclength continuation (:func:`trace`): adaptive steps along the branch's tangent in the
+    arclength metric, through folds (located) and branch points (located, and switchable)."""
+
+    options: PathOptions = field(default_factory=PathOptions)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.options, PathOptions):
+            raise PathError(f"options={self.options!r}: expected a PathOptions")
+
+
+def continuation(
+    problem: PathProblem,
+    theta0: Sequence[float],
+    lam0: float,
+    *,
+    to: float | None = None,
+    algorithm: Natural | PALC | None = None,
+    label: str = "",
+    **kwargs: Any,
+) -> Branch:
+    """Continue the branch of ``problem`` through (theta0, lam0) with ``algorithm``; one result type.
+
+    The engine's one entry (in the manner of BifurcationKit's ``continuation(prob, alg, opts)``):
+    :class:`Natural` (compiled, O(n), cannot pass a fold: a :class:`Branch` that is accepted or
+    ``"refused"``) or :class:`PALC` (the default; :func:`trace`, whose keywords ``kwargs`` are).
+
+    Examples
+    --------
+    >>> from esba.model.scene import Scene, Payload
+    >>> from esba.statics.equilibrium import solve
+    >>> unloaded = solve(Scene(pressure=0.1)).theta   # the equilibrium at lambda = 0 (no payload)
+    >>> problem = PathProblem.from_scene(Scene(pressure=0.1, payloads=(Payload(1.0),)), "payload")
+    >>> nat = continuation(problem, unloaded, 0.0, to=1.0, algorithm=Natural())
+    >>> nat.stopped, len(nat), round(float(nat.total_angle_deg[-1]), 2)
+    ('bound', 5, 36.63)
+    >>> palc = continuation(problem, unloaded, 0.0, to=1.0)
+    >>> palc.stopped, round(float(palc.total_angle_deg[-1]), 2)
+    ('bound', 36.63)
+    """
+    algorithm = PALC() if algorithm is None else algorithm
+    if isinstance(algorithm, PALC):
+        return trace(problem, theta0, lam0, to=to, options=algorithm.options, label=label, **kwargs)
+    if not isinstance(algorithm, Natural):
+        raise PathError(f"algorithm={algorithm!r}: expected Natural() or PALC()")
+    if kwargs:
+        raise PathError(f"Natural continuation takes no {', '.join(sorted(kwargs))}: those are PALC's (trace's)")
+    if to is None:
+        raise PathError("Natural continuation needs to=: the value lambda is ramped to")
+    if not isinstance(problem, PathProblem):
+        raise PathError(f"problem={problem!r}: expected a PathProblem")
+    lam0 = checks.finite("lam0", lam0, PathError)
+    theta0 = _check_vector("theta0", theta0, problem.n)
+    _interval(problem, lam0, to, None)
+    return _natural(problem, theta0, lam0, float(to), algorithm, label)
+
+
+@single_threaded
+def _natural(problem: PathProblem, theta0: np.ndarray, lam0: float, to: float, alg: Natural, label: str) -> Branch:
+    model = problem.model
+    run = run_natural(model, theta0, problem.params(lam0), problem.dp, to - lam0, alg.steps, alg.newton, alg.final)
+    lam = lam0 + (to - lam0) * np.arange(alg.steps + 1) / alg.steps
+    theta = np.vstack([theta0[None, :], run.states])
+    theta[-1] = run.theta
+    finite = bool(np.all(np.isfinite(theta)))
+    why = alg.acceptance.why_not(run.gradient_norm, run.min_pivot, run.contraction, finite, run.jump)
+    m = len(lam)
+    if why or not finite:
+        # a refused ramp: the Morse index of each point from its Hessian's pivots (what is finite)
+        morse = np.zeros(m, dtype=int)
+        rel = np.full(m, np.nan)
+        if finite:
+            for i, h in enumerate(problem.hessians(theta, lam)):
+                piv = structured_pivots(h)
+                scale = max(float(np.max(np.abs(piv))), 1e-300)
+                morse[i], rel[i] = int(np.sum(piv < -alg.acceptance.critical_tol * scale)), float(np.min(piv)) / scale
+        stopped, reason = "refused", f"natural continuation refused: it {why}"
+    else:
+        morse, rel = np.zeros(m, dtype=int), np.full(m, run.min_pivot)
+        stopped, reason = "bound", f"reached {problem.describe(to)}"
+    iterations = np.full(m, alg.newton, dtype=int)
+    iterations[0] = 0
+    iterations[-1] += alg.final
+    kinds = ["start"] + ["regular"] * (m - 2) + ["end"]
+    return Branch(
+        name=problem.name,
+        unit=problem.unit,
+        lam=lam,
+        theta=theta,
+        tip=problem.tips(theta, lam) if finite else np.full((m, 3), np.nan),
+        arclength=np.abs(lam - lam0) / max(abs(to - lam0), 1e-300),
+        spectrum=_spectrum_of(problem, theta, lam, {}),
+        min_pivot=rel,
+        morse=morse,
+        kind=np.array(kinds, dtype=str),
+        special=(),
+        stopped=stopped,
+        stop_reason=reason,
+        iterations=iterations,
+        critical_tol=alg.acceptance.critical_tol,
+        label=label,
+        evaluations=alg.steps * (alg.newton + 1) + alg.final + 1,
+    )
 
 
 # ---------------------------------------------------------------------------------------------

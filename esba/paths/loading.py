@@ -24,7 +24,7 @@ Examples
 >>> from esba.model.scene import Scene, Payload
 >>> column = Scene(pressure=0.0, payloads=(Payload(1.0, 180.0),), segments=2)
 >>> up = follow(PathProblem.from_scene(column, "payload"), np.zeros(2), 1.0, 5.0)
->>> up.reached, len(up.jumps), [round(b.lam, 4) for b in up.switches]
+>>> up.reached, len(up.jumps), [round(b.lam, 4) for b in up.branch_points]
 (True, 0, [3.3303])
 >>> round(float(np.degrees(up.theta).sum()), 2)   # it buckled to the side that stays stable
 -41.45
@@ -44,16 +44,7 @@ from esba.model.generated import near_domain_bound
 from esba.model.stability import morse_index
 from esba.solvers.minimise import minimise
 
-from .continuation import (
-    DEFAULT_PATH_OPTIONS,
-    Branch,
-    PathError,
-    PathOptions,
-    PathProblem,
-    SpecialPoint,
-    crossing_start,
-    trace,
-)
+from .continuation import DEFAULT_PATH_OPTIONS, Branch, Natural, PathError, PathOptions, PathProblem, SpecialPoint, continuation, crossing_start, trace
 from .corrector import Corrector
 
 __all__ = ["Jump", "Ramp", "follow", "history"]
@@ -146,12 +137,16 @@ class Ramp:
         The ramp got to ``target`` on a stable state.
     jumps : tuple of Jump
         The snaps on the way, in order.
-    switches : tuple of SpecialPoint
+    branch_points : tuple of SpecialPoint
         Branch points where the state went on along a crossing branch without a jump.
     pieces : tuple of Branch
         The traced stable pieces, in order (a jump connects the end of one to the start of the next).
     message : str
         Why the target was not reached (empty when it was).
+    ipopt_iterations : int
+        IPOPT's iterations finding where the snaps landed.
+    algorithm : str
+        ``Natural`` when natural continuation was accepted for the whole ramp, else ``PALC``.
     """
 
     problem: PathProblem = field(repr=False)
@@ -161,10 +156,11 @@ class Ramp:
     theta: np.ndarray
     reached: bool
     jumps: tuple[Jump, ...]
-    switches: tuple[SpecialPoint, ...]
+    branch_points: tuple[SpecialPoint, ...]
     pieces: tuple[Branch, ...] = field(repr=False)
     message: str = ""
     ipopt_iterations: int = 0
+    algorithm: str = "PALC"
 
     @property
     def points(self) -> int:
@@ -258,12 +254,17 @@ def follow(
     options: PathOptions | None = None,
     *,
     ipopt_tol: float = 1e-10,
+    natural: Natural | None = None,
 ) -> Ramp:
     """Ramp lambda from ``lam0`` to ``to`` quasi-statically from the stable state near ``theta0``.
 
-    The stable branch is traced (:func:`esba.paths.continuation.trace`) until it reaches ``to``; where it ends
-    at a fold the state snaps (see the module), where it ends at a branch point it goes on along a
-    stable crossing branch or snaps; then the trace goes on from the new state.
+    With ``natural`` (a :class:`esba.paths.continuation.Natural`), the ramp is first tried by
+    natural-parameter continuation (compiled, O(n)), kept when the one acceptance rule accepts it
+    (``theta0`` must then be the equilibrium at ``lam0``). Otherwise, and always without it, the
+    stable branch is traced by pseudo-arclength continuation (:func:`esba.paths.continuation.trace`)
+    until it reaches ``to``; where it ends at a fold the state snaps (see the module), where it ends
+    at a branch point it goes on along a stable crossing branch or snaps; then the trace goes on
+    from the new state.
 
     Returns
     -------
@@ -276,10 +277,16 @@ def follow(
     theta = np.asarray(theta0, dtype=float).ravel()
     lam = checks.finite("lam0", lam0, PathError)
     to = checks.finite("to", to, PathError)
+    if natural is not None:
+        if not isinstance(natural, Natural):
+            raise PathError(f"natural={natural!r}: expected a Natural() or None")
+        fast = continuation(problem, theta, lam, to=to, algorithm=natural, label="stable")
+        if fast.stopped == "bound":
+            return Ramp(problem, float(lam0), to, to, fast.theta[-1].copy(), True, (), (), (fast,), "", 0, "Natural")
     direction = 1.0 if to >= lam else -1.0
     lo, hi = min(lam, to), max(lam, to)
     jumps: list[Jump] = []
-    switches: list[SpecialPoint] = []
+    branch_points: list[SpecialPoint] = []
     pieces: list[Branch] = []
     iterations = 0
     message = ""
@@ -315,7 +322,7 @@ def follow(
         if sp.kind == "branch point":
             start = _switch(problem, piece, sp, direction, opts, lo, hi)
             if start is not None:
-                switches.append(sp)
+                branch_points.append(sp)
                 theta, lam = start.theta, float(start.lam)
                 continue
         landed = _snap(problem, piece, sp, direction, ipopt_tol)
@@ -357,7 +364,7 @@ def follow(
         theta=np.asarray(theta, dtype=float),
         reached=reached,
         jumps=tuple(jumps),
-        switches=tuple(switches),
+        branch_points=tuple(branch_points),
         pieces=tuple(pieces),
         message=message,
         ipopt_iterations=iterations,

@@ -8,7 +8,7 @@ CasADi Function kept in the model's registry (:meth:`esba.model.generated.Model.
 
 * :func:`newton_parts`: (theta, p, dp) -> g, H^-1 g, H^-1 dg/dlambda, the smallest relative pivot
   and every pivot: one Newton step's worth of work.
-* :func:`ramp_function`: natural-parameter continuation of lambda from 0 to lambda1 in ``steps``
+* :func:`natural_function`: natural-parameter continuation of lambda from 0 to lambda1 in ``steps``
   equal steps, each a tangent predictor and ``newton`` Newton corrections, ``final`` more at the
   end; one call from Python for a whole ramp, and the graph that the batch maps over many
   elements and compiles to C (:mod:`esba.statics.compiled`).
@@ -19,9 +19,11 @@ CasADi Function kept in the model's registry (:meth:`esba.model.generated.Model.
 
 One rule accepts what these kernels did (:class:`Acceptance`): finite and stationary at the end,
 every Hessian met positive definite (its smallest pivot above ``critical_tol`` times the largest:
-no fold or branch point was crossed) and every step's Newton iteration contracting (the second
+no fold or branch point was crossed), every step's Newton iteration contracting (the second
 correction at most :data:`CONTRACTION` of the first, Deuflhard's test that the predictor lay in the
-corrector's region of convergence, so that it did not slide to another branch). A natural ramp
+corrector's region of convergence) and no corrector moving the state farther than its predictor did
+(:data:`JUMP`: a step over a fold lands on another stable branch with positive pivots and a
+contracting iteration, but far from where the predictor pointed). A natural ramp
 that breaks it is refused and handed on to pseudo-arclength continuation, which locates what
 happened (:mod:`esba.paths.continuation`).
 
@@ -32,7 +34,7 @@ Examples
 >>> m = MAIN_JOB.model()
 >>> p_from = m.param_vector(MAIN_JOB.parameters(0.1238739, load_factor=0.0))
 >>> p_to = m.param_vector(MAIN_JOB.parameters(0.1238739))
->>> r = run_ramp(m, np.full(3, np.pi / 6), p_from, p_to - p_from, 1.0)
+>>> r = run_natural(m, np.full(3, np.pi / 6), p_from, p_to - p_from, 1.0)
 >>> r.accepted(), [round(float(np.degrees(t)), 2) for t in r.theta]
 (True, [-3.29, 7.17, 21.44])
 """
@@ -55,11 +57,12 @@ __all__ = [
     "Acceptance",
     "ACCEPTANCE",
     "CONTRACTION",
+    "JUMP",
     "TINY",
-    "RampRun",
-    "run_ramp",
-    "ramp_function",
-    "ramp_expression",
+    "NaturalRun",
+    "run_natural",
+    "natural_function",
+    "natural_expression",
     "newton_parts",
     "parts_function",
     "bordered_function",
@@ -77,6 +80,11 @@ STEPS, NEWTON, FINAL = 4, 3, 2
 CONTRACTION = 0.25
 #: Corrections smaller than this (rad) are round-off: their ratio says nothing.
 TINY = 1e-10
+#: Largest accepted ratio of the distance a step's corrector moved the state to the distance its
+#: predictor moved it: a corrector that must go farther than the predictor went has left the branch
+#: the predictor followed (stepped over a fold onto another stable branch, with every pivot positive
+#: and its Newton iteration contracting).
+JUMP = 1.0
 #: Newton iterations of one call of the bordered corrector (a corrector that needs more calls again).
 BORDERED_ITERATIONS = 4
 
@@ -97,6 +105,9 @@ class Acceptance:
         Every Hessian met must have its smallest LDL^T pivot above this fraction of the largest.
     contraction : float
         Largest ratio of a step's second Newton correction to its first.
+    jump : float
+        Largest ratio of the distance a step's corrector moved the state to the distance its
+        predictor moved it (:data:`JUMP`).
 
     Examples
     --------
@@ -110,14 +121,15 @@ class Acceptance:
     tol: float = 1e-9
     critical_tol: float = CRITICAL_TOL
     contraction: float = CONTRACTION
+    jump: float = JUMP
 
     def __post_init__(self) -> None:
-        for name in ("tol", "critical_tol", "contraction"):
+        for name in ("tol", "critical_tol", "contraction", "jump"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise InputError(f"{name}={v!r}: expected a finite number > 0")
 
-    def accepted_arrays(self, gradient_norm, min_pivot, contraction, finite=True) -> np.ndarray:
+    def accepted_arrays(self, gradient_norm, min_pivot, contraction, jump=0.0, finite=True) -> np.ndarray:
         """The verdict for arrays of ramps (elementwise): True where every part of the rule holds."""
         with np.errstate(invalid="ignore"):
             return (
@@ -126,9 +138,10 @@ class Acceptance:
                 & (np.asarray(gradient_norm) <= self.tol)
                 & (np.asarray(min_pivot) > self.critical_tol)
                 & (np.asarray(contraction) <= self.contraction)
+                & (np.asarray(jump) <= self.jump)
             )
 
-    def why_not(self, gradient_norm: float, min_pivot: float, contraction: float, finite: bool = True) -> str:
+    def why_not(self, gradient_norm: float, min_pivot: float, contraction: float, finite: bool = True, jump: float = 0.0) -> str:
         """Why one ramp is not accepted (empty when it is)."""
         if not finite or not math.isfinite(gradient_norm):
             return "left the model's domain (non-finite values)"
@@ -136,6 +149,8 @@ class Acceptance:
             return f"met a Hessian that is not positive definite (relative pivot {min_pivot:.3g}): a fold or branch point"
         if not contraction <= self.contraction:
             return f"a step's Newton iteration contracted by only {contraction:.3g} (> {self.contraction:g}): it may have left its branch"
+        if not jump <= self.jump:
+            return f"a step's corrector moved the state {jump:.3g} times as far as its predictor (> {self.jump:g}): it left the predicted branch"
         if gradient_norm > self.tol:
             return f"ended with max |dU/dtheta| = {gradient_norm:.3g} N mm/rad > {self.tol:g}"
         return ""
@@ -200,19 +215,23 @@ def newton_parts(model: Model) -> ca.Function:
 # natural-parameter continuation
 
 
-def ramp_expression(parts: ca.Function, theta0, p0, dp, lam1, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL):
+def natural_expression(parts: ca.Function, theta0, p0, dp, lam1, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL):
     """The natural ramp of lambda from 0 to ``lam1`` as CasADi expressions of its (MX) inputs:
-    (theta, g, min_pivot, contraction, states) at the end, ``states`` the n x steps matrix of the
-    state reached at each step (see the module)."""
+    (theta, g, min_pivot, contraction, states, jump) at the end, ``states`` the n x steps matrix of
+    the state reached at each step and ``jump`` the largest ratio, over the steps, of the distance
+    the corrector moved the state to the distance the predictor moved it (see :class:`Acceptance`)."""
     theta = theta0
     low = ca.MX(1.0)
     worst = ca.MX(0.0)
+    jump = ca.MX(0.0)
     states = []
     for k in range(1, steps + 1):
         lam_prev, lam = lam1 * (k - 1) / steps, lam1 * k / steps
         _, _, dtheta, piv, _, _ = parts(theta, p0 + lam_prev * dp, dp)
         low = ca.fmin(low, piv)
-        theta = theta - (lam - lam_prev) * dtheta  # tangent predictor: H dtheta/dlambda = -dg/dlambda
+        start = theta
+        predicted = theta - (lam - lam_prev) * dtheta  # tangent predictor: H dtheta/dlambda = -dg/dlambda
+        theta = predicted
         first = None
         for j in range(newton):
             _, step, _, piv, _, _ = parts(theta, p0 + lam * dp, dp)
@@ -223,16 +242,19 @@ def ramp_expression(parts: ca.Function, theta0, p0, dp, lam1, steps: int = STEPS
             elif j == 1:
                 worst = ca.fmax(worst, ca.if_else(first > TINY, size / (first + 1e-300), 0.0))
             theta = theta - step
+        moved = ca.mmax(ca.fabs(theta - predicted))
+        along = ca.mmax(ca.fabs(predicted - start))
+        jump = ca.fmax(jump, ca.if_else(moved > TINY, moved / (along + 1e-300), 0.0))
         states.append(theta)
     for _ in range(final):
         _, step, _, piv, _, _ = parts(theta, p0 + lam1 * dp, dp)
         low = ca.fmin(low, piv)
         theta = theta - step
     g, _, _, piv, _, _ = parts(theta, p0 + lam1 * dp, dp)
-    return theta, g, ca.fmin(low, piv), worst, ca.horzcat(*states)
+    return theta, g, ca.fmin(low, piv), worst, ca.horzcat(*states), jump
 
 
-def ramp_function(model: Model, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL) -> ca.Function:
+def natural_function(model: Model, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL) -> ca.Function:
     """(theta0, p0, dp, lam1) -> theta, g, min_pivot, contraction, states: a natural ramp as one Function."""
 
     def build() -> ca.Function:
@@ -241,16 +263,16 @@ def ramp_function(model: Model, steps: int = STEPS, newton: int = NEWTON, final:
         p0 = ca.MX.sym("p0", npar)
         dp = ca.MX.sym("dp", npar)
         lam1 = ca.MX.sym("lam1")
-        outs = ramp_expression(newton_parts(model), theta0, p0, dp, lam1, steps, newton, final)
+        outs = natural_expression(newton_parts(model), theta0, p0, dp, lam1, steps, newton, final)
         return ca.Function(
-            "esba_ramp", [theta0, p0, dp, lam1], list(outs), ["theta0", "p0", "dp", "lam1"], ["theta", "g", "min_pivot", "contraction", "states"]
+            "esba_natural", [theta0, p0, dp, lam1], list(outs), ["theta0", "p0", "dp", "lam1"], ["theta", "g", "min_pivot", "contraction", "states", "jump"]
         )
 
-    return model.derived("ramp", build, settings=(steps, newton, final), persist=False)
+    return model.derived("natural", build, settings=(steps, newton, final), persist=False)
 
 
 @dataclass(frozen=True, eq=False)
-class RampRun:
+class NaturalRun:
     """What a natural ramp returned (its end and the state at each step), and the verdict on it."""
 
     theta: np.ndarray
@@ -258,6 +280,7 @@ class RampRun:
     min_pivot: float
     contraction: float
     states: np.ndarray  # (steps, n)
+    jump: float = 0.0
 
     def accepted(self, tol: float = 1e-9, critical_tol: float = CRITICAL_TOL) -> bool:
         """The one rule (:class:`Acceptance`): finite, stationary, positive definite all the way, contracting."""
@@ -266,18 +289,18 @@ class RampRun:
     def why_not(self, tol: float = 1e-9, critical_tol: float = CRITICAL_TOL) -> str:
         """Why :meth:`accepted` is False (empty when it is True)."""
         finite = bool(np.all(np.isfinite(self.theta)))
-        return Acceptance(tol, critical_tol).why_not(self.gradient_norm, self.min_pivot, self.contraction, finite)
+        return Acceptance(tol, critical_tol).why_not(self.gradient_norm, self.min_pivot, self.contraction, finite, self.jump)
 
 
-def run_ramp(model: Model, theta0: np.ndarray, p0: np.ndarray, dp: np.ndarray, lam1: float, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL) -> RampRun:
+def run_natural(model: Model, theta0: np.ndarray, p0: np.ndarray, dp: np.ndarray, lam1: float, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL) -> NaturalRun:
     """Ramp lambda from 0 to ``lam1`` from the equilibrium ``theta0`` at lambda = 0 (see the module)."""
-    fun = ramp_function(model, steps, newton, final)
+    fun = natural_function(model, steps, newton, final)
     with np.errstate(invalid="ignore"):
-        theta, g, low, worst, states = fun(np.asarray(theta0, dtype=float), p0, dp, float(lam1))
+        theta, g, low, worst, states, jump = fun(np.asarray(theta0, dtype=float), p0, dp, float(lam1))
     theta = np.asarray(theta, dtype=float).ravel()
     g = np.asarray(g, dtype=float).ravel()
     gnorm = float(np.max(np.abs(g))) if np.all(np.isfinite(g)) else float("inf")
-    return RampRun(theta, gnorm, float(low), float(worst), np.asarray(states, dtype=float).T.reshape(steps, model.n))
+    return NaturalRun(theta, gnorm, float(low), float(worst), np.asarray(states, dtype=float).T.reshape(steps, model.n), float(jump))
 
 
 # ---------------------------------------------------------------------------------------------

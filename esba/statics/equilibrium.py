@@ -50,10 +50,9 @@ from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Scene, SceneError, check_pressure
 from esba.model.stability import STABILITY, stability_verdict, stability_verdicts
 from esba.model.validity import Finding, assess
-from esba.paths.continuation import PathOptions, PathProblem, SpecialPoint
+from esba.paths.continuation import Natural, PathOptions, PathProblem, SpecialPoint
 from esba.paths.loading import Jump, Ramp, follow
 from esba.solvers.minimise import LINEAR_SOLVERS, minimise
-from esba.solvers.newton import FINAL, NEWTON, STEPS, run_ramp
 
 __all__ = [
     "SolverOptions",
@@ -161,8 +160,6 @@ class SolverOptions:
 
 DEFAULT_OPTIONS = SolverOptions()
 
-#: Points and Newton iterations of one fast ramp (:mod:`esba.solvers.newton`), for ``steps`` and ``iterations``.
-RAMP_STEPS, RAMP_ITERATIONS = STEPS, STEPS * NEWTON + FINAL
 
 
 # ---------------------------------------------------------------------------------------------
@@ -219,7 +216,7 @@ class Equilibrium:
     jumps : tuple of Jump
         The snap-throughs of the load history (:class:`esba.paths.loading.Jump`): the fold's lambda and
         the states before and after.
-    switches : tuple of SpecialPoint
+    branch_points : tuple of SpecialPoint
         Branch points the load history went through along a stable crossing branch (buckling).
     certificate : str
         What certified the returned state: IPOPT's status from the path's end, and how far it moved.
@@ -248,7 +245,7 @@ class Equilibrium:
     message: str = ""
     notes: tuple[str, ...] = ()
     jumps: tuple[Jump, ...] = ()
-    switches: tuple[SpecialPoint, ...] = ()
+    branch_points: tuple[SpecialPoint, ...] = ()
     certificate: str = ""
     validity: tuple[Finding, ...] = ()
 
@@ -307,7 +304,7 @@ class Equilibrium:
             "jumps": [j.to_dict() for j in self.jumps],
             "branch_points": [
                 {"lambda": b.lam, "total_angle_deg": b.total_angle_deg, "tip_mm": [float(b.tip[0]), float(b.tip[1])], "status": b.status}
-                for b in self.switches
+                for b in self.branch_points
             ],
             "certificate": self.certificate,
             "validity": [f.to_dict() for f in self.validity],
@@ -380,7 +377,7 @@ def evaluate(
     message: str = "",
     notes: Sequence[str] = (),
     jumps: Sequence[Jump] = (),
-    switches: Sequence[SpecialPoint] = (),
+    branch_points: Sequence[SpecialPoint] = (),
     certificate: str = "",
 ) -> Equilibrium:
     """An :class:`Equilibrium` for given angles: energy, tip, centre-line, stationarity and stability.
@@ -444,20 +441,119 @@ def evaluate(
         message=message,
         notes=tuple(notes),
         jumps=tuple(jumps),
-        switches=tuple(switches),
+        branch_points=tuple(branch_points),
         certificate=certificate,
         validity=assess(scene, theta, pressure, state["tip"]),
     )
 
 
-def _load_value(scene: Scene, pressure: float, name: str, lam: float) -> str:
-    """Where on a ramp of solve() lambda lies, in the scene's terms."""
+def _load_value(model: Model, pv_full: np.ndarray, pressure: float, name: str, lam: float) -> str:
+    """Where on a ramp of the load history lambda lies, in the scene's terms (its payloads' forces and
+    weight, from the full load's parameter vector)."""
     if name == "pressure":
         return f"P = {lam:.6g} MPa (unloaded)"
-    parts = [f"payload {k} = {p.force * lam:.6g} N" for k, p in enumerate(scene.payloads, start=1)]
-    if scene.gravity:
+    names = model.parameters
+    forces = [pv_full[i] for i, k in enumerate(names) if k.startswith("F") and k[1:].isdigit()]
+    parts = [f"payload {k} = {f * lam:.6g} N" for k, f in enumerate(forces, start=1)]
+    if "g" in names:
         parts.append(f"weight {100 * lam:.4g} %")
     return f"{100 * lam:.6g} % of the loads ({', '.join(parts)}) at P = {pressure:.6g} MPa"
+
+
+@dataclass(frozen=True, eq=False)
+class LoadHistory:
+    """What the quasi-static load history did: inflate (unless the unloaded state is known), then load.
+
+    Attributes
+    ----------
+    theta : ndarray
+        The state reached, rad.
+    ramps : tuple of (str, Ramp)
+        Each ramp (``pressure``, ``load``) and what it did (:class:`esba.paths.loading.Ramp`).
+    message : str
+        Why the history did not reach the full load (empty when it did).
+    """
+
+    theta: np.ndarray
+    ramps: tuple[tuple[str, Ramp], ...]
+    message: str = ""
+
+    @property
+    def jumps(self) -> tuple[Jump, ...]:
+        return tuple(j for _, r in self.ramps for j in r.jumps)
+
+    @property
+    def branch_points(self) -> tuple[SpecialPoint, ...]:
+        return tuple(sp for _, r in self.ramps for sp in r.branch_points)
+
+    def notes(self, model: Model, pv_full: np.ndarray, pressure: float) -> list[str]:
+        """One sentence per buckling and per snap-through on the way, in the scene's terms."""
+        out = []
+        for name, r in self.ramps:
+            for sp in r.branch_points:
+                out.append(
+                    f"the straight-through branch loses stability at a branch point at {_load_value(model, pv_full, pressure, name, sp.lam)}: "
+                    f"the state goes on along the stable crossing branch (buckling)"
+                )
+            for j in r.jumps:
+                out.append(j.describe(_load_value(model, pv_full, pressure, name, j.lam)))
+        return out
+
+    @property
+    def iterations(self) -> int:
+        return sum(r.corrector_iterations + r.ipopt_iterations for _, r in self.ramps)
+
+    @property
+    def points(self) -> int:
+        return sum(r.points + len(r.jumps) for _, r in self.ramps)
+
+
+def load_history(
+    model: Model,
+    pressure: float,
+    pv_full: np.ndarray,
+    unloaded: np.ndarray | None = None,
+    options: SolverOptions | None = None,
+) -> LoadHistory:
+    """The state an actuator reaches along its load history, on the continuation engine.
+
+    From the unloaded state at ``pressure`` (``unloaded`` when it is known, e.g. exact for a target
+    angle; else the pressure is raised from 0 at theta = 0), the payloads and weight are raised
+    together from 0 to ``pv_full``. Each ramp is :func:`esba.paths.loading.follow`: natural
+    continuation first when ``options.fast`` (compiled, O(n), accepted by the one rule), else and
+    otherwise pseudo-arclength continuation through its folds and branch points, snapping where the
+    stable branch ends. The batch (:mod:`esba.statics.batch`) hands its refused elements here.
+    """
+    options = DEFAULT_OPTIONS if options is None else options
+    n = model.n
+    natural = Natural() if options.fast else None
+    names = model.parameters
+    pv_unloaded = np.array([0.0 if (k.startswith("F") and k[1:].isdigit()) or k == "g" else v for k, v in zip(names, pv_full)])
+    ramps: list[tuple[str, Ramp]] = []
+    if unloaded is not None:
+        theta = np.asarray(unloaded, dtype=float)
+    else:
+        i = names.index("P")
+        p_zero = pv_unloaded.copy()
+        p_zero[i] = 0.0
+        dp = np.zeros(len(names))
+        dp[i] = 1.0  # U is linear in P
+        problem = PathProblem(model, p_zero, dp, "pressure", "MPa", (0.0, math.inf), 0.1, what="pressure")
+        r = follow(problem, np.zeros(n), 0.0, pressure, options.path, ipopt_tol=options.tol, natural=natural)
+        ramps.append(("pressure", r))
+        theta = r.theta
+        if not r.reached:
+            where = _load_value(model, pv_full, pressure, "pressure", r.lam)
+            return LoadHistory(theta, tuple(ramps), f"the pressure ramp from P = 0 stopped at {where}: {r.message}")
+    if np.any(pv_full != pv_unloaded):  # payloads of 0 N and no weight leave nothing to ramp
+        problem = PathProblem.homotopy(model, pv_unloaded, pv_full, name="load", what="payloads and weight")
+        r = follow(problem, theta, 0.0, 1.0, options.path, ipopt_tol=options.tol, natural=natural)
+        ramps.append(("load", r))
+        theta = r.theta
+        if not r.reached:
+            where = _load_value(model, pv_full, pressure, "load", r.lam)
+            return LoadHistory(theta, tuple(ramps), f"the load ramp from the unloaded state stopped at {where}: {r.message}")
+    return LoadHistory(theta, tuple(ramps))
 
 
 @single_threaded
@@ -503,7 +599,7 @@ def solve(
         unloaded state at the pressure (exact for a target angle, else the pressure raised from 0),
         then the payloads and weight raised together from 0. A snap-through on the way (the stable
         branch ends at a fold) is followed as the actuator would, and recorded in ``jumps`` and
-        ``notes``; so is buckling at a branch point (``switches``).
+        ``notes``; so is buckling at a branch point (``branch_points``).
     """
     options = _check_inputs(scene, pressure, options)
     if theta0 is not None:
@@ -520,44 +616,17 @@ def solve(
     full = scene.parameters(pressure)
     lbx = model.lower_bounds(full)
     pv_full = model.param_vector(full)
-    pv_unloaded = model.param_vector(scene.parameters(pressure, load_factor=0.0))
-    loaded = bool(np.any(pv_full != pv_unloaded))  # payloads of 0 N and no weight leave nothing to ramp
-
-    message = ""
-    ramps: list[tuple[str, Ramp]] = []
-    fast_ramps = 0
+    history = None
     if theta0 is not None:
         theta = theta0
     elif not options.continuation:
         theta = known_unloaded if known_unloaded is not None else np.zeros(n)
     else:
-        if known_unloaded is not None:
-            theta = known_unloaded
-        else:
-            p_zero = model.param_vector(scene.parameters(0.0, load_factor=0.0))
-            dp = model.param_vector(scene.parameters(1.0, load_factor=0.0)) - p_zero  # U is linear in P
-            fast = run_ramp(model, np.zeros(n), p_zero, dp, pressure) if options.fast else None
-            if fast is not None and fast.accepted(critical_tol=options.critical_tol):
-                theta, fast_ramps = fast.theta, fast_ramps + 1
-            else:
-                ramp = PathProblem(model, p_zero, dp, "pressure", "MPa", (0.0, math.inf), 0.1, what="pressure")
-                r = follow(ramp, np.zeros(n), 0.0, pressure, options.path, ipopt_tol=options.tol)
-                ramps.append(("pressure", r))
-                theta = r.theta
-                if not r.reached:
-                    message = f"the pressure ramp from P = 0 stopped at {_load_value(scene, pressure, 'pressure', r.lam)}: {r.message}"
-        if loaded and not message:
-            fast = run_ramp(model, theta, pv_unloaded, pv_full - pv_unloaded, 1.0) if options.fast else None
-            if fast is not None and fast.accepted(critical_tol=options.critical_tol):
-                theta, fast_ramps = fast.theta, fast_ramps + 1
-            else:
-                ramp = PathProblem.homotopy(model, pv_unloaded, pv_full, name="load", what="payloads and weight")
-                r = follow(ramp, theta, 0.0, 1.0, options.path, ipopt_tol=options.tol)
-                ramps.append(("load", r))
-                theta = r.theta
-                if not r.reached:
-                    message = f"the load ramp from the unloaded state stopped at {_load_value(scene, pressure, 'load', r.lam)}: {r.message}"
-
+        history = load_history(model, pressure, pv_full, known_unloaded, options)
+        theta = history.theta
+    message = history.message if history is not None else ""
+    loaded = bool(np.any(pv_full != model.param_vector(scene.parameters(pressure, load_factor=0.0))))
+    traced = (history is not None and history.ramps) or (known_unloaded is not None and theta0 is None and not loaded)
     final = minimise(
         model,
         theta,
@@ -567,28 +636,16 @@ def solve(
         max_iter=options.max_iter,
         linear_solver=options.linear_solver,
         polish_steps=4 if options.polish else 0,
-        warm=bool(ramps) or fast_ramps > 0 or (known_unloaded is not None and theta0 is None and not loaded),
+        warm=bool(traced),
     )
     moved = float(np.max(np.abs(final.theta - theta)))
-    if ramps or fast_ramps:
+    if history is not None and history.ramps:
         start_from = "the path's end"
     else:
         start_from = "the known unloaded state" if known_unloaded is not None and theta0 is None else "the start"
     certificate = f"IPOPT {final.status}: {final.iterations} iterations from {start_from}, which it moved by {moved:.2g} rad"
-    notes = []
-    jumps: list[Jump] = []
-    switches: list[SpecialPoint] = []
-    for name, r in ramps:
-        for sp in r.switches:
-            switches.append(sp)
-            notes.append(
-                f"the straight-through branch loses stability at a branch point at {_load_value(scene, pressure, name, sp.lam)}: "
-                f"the state goes on along the stable crossing branch (buckling)"
-            )
-        for j in r.jumps:
-            jumps.append(j)
-            notes.append(j.describe(_load_value(scene, pressure, name, j.lam)))
-    if (ramps or fast_ramps) and final.success and moved > 1e-6:
+    notes = history.notes(model, pv_full, pressure) if history is not None else []
+    if history is not None and history.ramps and final.success and moved > 1e-6:
         notes.append(f"IPOPT moved the path's end by {moved:.3g} rad: the certified state is not the one the path reached")
     if message:  # the load history failed: report the full-load solve from the last good state, not as an answer
         status, success = "Continuation_Failed", False
@@ -596,8 +653,8 @@ def solve(
         status, success = final.status, final.success
         if not success:
             message = f"IPOPT did not converge: {final.status}"
-    iterations = final.iterations + sum(r.corrector_iterations + r.ipopt_iterations for _, r in ramps) + fast_ramps * RAMP_ITERATIONS
-    steps = 1 + sum(r.points for _, r in ramps) + sum(len(r.jumps) for _, r in ramps) + fast_ramps * RAMP_STEPS
+    iterations = final.iterations + (history.iterations if history is not None else 0)
+    steps = 1 + (history.points if history is not None else 0)
     return evaluate(
         scene,
         final.theta,
@@ -610,7 +667,7 @@ def solve(
         solve_time_s=time.perf_counter() - t_start,
         message=message,
         notes=notes,
-        jumps=tuple(jumps),
-        switches=tuple(switches),
+        jumps=history.jumps if history is not None else (),
+        branch_points=history.branch_points if history is not None else (),
         certificate=certificate,
     )

@@ -130,10 +130,10 @@ def test_99_percent_stays_straight_101_percent_buckles():
     assert 3.1733 / f_cr == pytest.approx(0.99, abs=1e-4)
     straight = solve(column(4, 0.99 * f_cr))
     assert straight.ok and np.max(np.abs(straight.theta)) < 1e-9
-    assert straight.switches == () and straight.jumps == ()
+    assert straight.branch_points == () and straight.jumps == ()
     buckled = solve(column(4, 1.01 * f_cr))
     assert buckled.ok and np.max(np.abs(buckled.theta)) > 1e-3
-    (bp,) = buckled.switches
+    (bp,) = buckled.branch_points
     assert bp.kind == "branch point" and bp.lam == pytest.approx(1 / 1.01, rel=LOCATE_RTOL)
     assert any("branch point" in note for note in buckled.notes)
     assert buckled.jumps == ()  # it goes on along the stable side, no snap
@@ -448,7 +448,7 @@ def test_no_branch_point_is_invented_where_a_load_ramp_passes_near_the_cusp():
     for p in pressures:
         scene = Scene(pressure=float(p), payloads=(Payload(2.0, 90.0),))
         fast, reference = solve(scene), solve(scene, SolverOptions(fast=False))
-        assert fast.ok and reference.ok and fast.switches == () and reference.switches == () and reference.jumps == ()
+        assert fast.ok and reference.ok and fast.branch_points == () and reference.branch_points == () and reference.jumps == ()
         np.testing.assert_allclose(fast.theta, reference.theta, atol=1e-8)
         angles.append(fast.total_angle_deg)
     upper = np.array(angles) > 150.0

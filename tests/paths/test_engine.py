@@ -1,0 +1,91 @@
+"""The continuation engine: one entry, the algorithm a value (Natural, PALC), one result type, one
+acceptance rule; and the load history that solve() and the batch stand on."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from esba.model.scene import Payload, Scene
+from esba.paths.branch import Branch
+from esba.paths.continuation import PALC, Natural, PathError, PathOptions, continuation
+from esba.paths.loading import follow
+from esba.paths.problem import PathProblem
+from esba.solvers.newton import Acceptance
+from esba.statics.equilibrium import SolverOptions, solve
+
+
+@pytest.fixture(scope="module")
+def payload_problem():
+    unloaded = solve(Scene(pressure=0.1)).theta
+    return PathProblem.from_scene(Scene(pressure=0.1, payloads=(Payload(2.0),)), "payload"), unloaded
+
+
+def test_natural_and_palc_return_the_same_type_and_end(payload_problem):
+    problem, unloaded = payload_problem
+    nat = continuation(problem, unloaded, 0.0, to=2.0, algorithm=Natural())
+    palc = continuation(problem, unloaded, 0.0, to=2.0, algorithm=PALC())
+    assert isinstance(nat, Branch) and isinstance(palc, Branch)
+    assert nat.stopped == palc.stopped == "bound"
+    assert nat.lam[-1] == palc.lam[-1] == 2.0
+    np.testing.assert_allclose(nat.theta[-1], palc.theta[-1], atol=1e-9)
+    assert len(nat) == Natural().steps + 1 and (nat.morse == 0).all() and nat.stable.all()
+    # the eigenvalues of either, computed when asked for, are the Hessian's
+    g, h, _ = problem.ghl(nat.theta[-1], 2.0)
+    np.testing.assert_allclose(nat.eigenvalues[-1], np.linalg.eigvalsh(h), rtol=1e-10)
+
+
+def test_natural_is_refused_where_it_would_pass_a_fold():
+    """The 2 N horizontal tip payload: the pressure path folds at 0.17354 MPa. Natural continuation
+    from P = 0 to 0.2 MPa cannot pass it and is refused; PALC goes round it."""
+    scene = Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),))
+    problem = PathProblem.from_scene(scene, "pressure")
+    start = solve(scene).theta
+    nat = continuation(problem, start, 0.0, to=0.2, algorithm=Natural())
+    assert nat.stopped == "refused" and "natural continuation refused" in nat.stop_reason
+    palc = continuation(problem, start, 0.0, to=0.2)
+    assert [sp.kind for sp in palc.special][:1] == ["fold"]
+
+
+def test_a_natural_step_over_a_fold_onto_another_stable_branch_is_refused():
+    """Found with the C export: 4.95 N pushing up the axis at 0.866 L on P = 0.0058 MPa. A natural step
+    used to land on the far stable branch with every pivot positive and a contracting Newton iteration,
+    so the snap went unreported; its corrector moves the state 24 times as far as its predictor."""
+    scene = Scene(pressure=0.0058, payloads=(Payload(4.95, 180.0, 0.866),))
+    fast, reference = solve(scene), solve(scene, SolverOptions(fast=False))
+    assert len(reference.jumps) == 1 and len(fast.jumps) == 1
+    np.testing.assert_allclose(fast.theta, reference.theta, atol=1e-9)
+    assert fast.jumps[0].lam == pytest.approx(reference.jumps[0].lam, rel=1e-10)
+
+
+def test_follow_keeps_an_accepted_natural_ramp(payload_problem):
+    problem, unloaded = payload_problem
+    r = follow(problem, unloaded, 0.0, 2.0, natural=Natural())
+    assert r.reached and r.algorithm == "Natural" and len(r.pieces) == 1
+    slow = follow(problem, unloaded, 0.0, 2.0)
+    assert slow.algorithm == "PALC"
+    np.testing.assert_allclose(r.theta, slow.theta, atol=1e-9)
+
+
+def test_bad_algorithms_and_settings_are_refused(payload_problem):
+    problem, unloaded = payload_problem
+    with pytest.raises(PathError, match="algorithm="):
+        continuation(problem, unloaded, 0.0, to=1.0, algorithm="natural")
+    with pytest.raises(PathError, match="needs to="):
+        continuation(problem, unloaded, 0.0, algorithm=Natural())
+    with pytest.raises(PathError, match="steps=0"):
+        Natural(steps=0)
+    with pytest.raises(PathError, match="options="):
+        PALC(options="fast")
+    with pytest.raises(PathError, match="takes no"):
+        continuation(problem, unloaded, 0.0, to=1.0, algorithm=Natural(), milestones=[0.5])
+    with pytest.raises(Exception, match="jump="):
+        Acceptance(jump=0.0)
+
+
+def test_palc_accepts_its_options(payload_problem):
+    problem, unloaded = payload_problem
+    coarse = continuation(problem, unloaded, 0.0, to=2.0, algorithm=PALC(PathOptions(ds_max=0.5, ds=0.5)))
+    fine = continuation(problem, unloaded, 0.0, to=2.0, algorithm=PALC(PathOptions(ds_max=0.01)))
+    assert len(fine) > len(coarse)
+    np.testing.assert_allclose(fine.theta[-1], coarse.theta[-1], atol=1e-9)
