@@ -381,13 +381,10 @@ def batch_study(size: int = 10_000, segments: int = 3, naive_repeat: int = 5, ip
     size = len(vals["P"])
     out: dict = {"size": size, "segments": segments, "compiler": compiler()}
 
-    def scene_of(i: int) -> Scene:  # for the IPOPT fallback of elements the Newton path cannot solve
-        return Scene(pressure=float(vals["P"][i]), payloads=(Payload(float(vals["F1"][i]), 90.0),), segments=segments)
-
     if compiler() is not None:
         with tempfile.TemporaryDirectory(prefix="esba-bench-cc-") as tmp:  # a cold first call: compiles
-            first = solve_arrays(model, vals, options=BatchOptions(compile="always", cache=tmp), scene_of=scene_of)
-        warm = [solve_arrays(model, vals, options=BatchOptions(compile="always"), scene_of=scene_of) for _ in range(3)]
+            first = solve_arrays(model, vals, options=BatchOptions(compile="always", cache=tmp))
+        warm = [solve_arrays(model, vals, options=BatchOptions(compile="always")) for _ in range(3)]
         best = sorted(warm, key=lambda r: r.timings["total"])[1]
         out["compiled_first_us"] = first.per_equilibrium_us()
         out["compiled_first_compile_s"] = first.timings["compile"]
@@ -398,7 +395,7 @@ def batch_study(size: int = 10_000, segments: int = 3, naive_repeat: int = 5, ip
         out["counts"] = best.counts()
         out["backend"] = best.backend
         result = best
-    interp = solve_arrays(model, vals, options=BatchOptions(compile="never"), scene_of=scene_of)
+    interp = solve_arrays(model, vals, options=BatchOptions(compile="never"))
     out["interpreted_us"] = interp.per_equilibrium_us()
     if compiler() is None:
         out["counts"] = interp.counts()

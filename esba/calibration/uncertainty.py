@@ -349,7 +349,7 @@ def solve_samples(base: Scene, names: Sequence[str], values: np.ndarray, options
         rows = [s.parameters(0.0 if angle_mode else s.pressure) for s in scenes]
         arrays = {p: np.array([r[p] for r in rows]) for p in model.parameters}
         target = np.radians([s.target_angle_deg for s in scenes]) if angle_mode else None
-        r = solve_arrays(model, arrays, target_angle=target, options=options, scene_of=lambda j: scenes[j])
+        r = solve_arrays(model, arrays, target_angle=target, options=options)
         idx = np.asarray(valid)
         good = r.ok
         code[idx] = np.where(good, SAMPLE_OK, SAMPLE_NOT_OK)

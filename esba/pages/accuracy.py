@@ -65,23 +65,25 @@ def _fmt_s(s: float) -> str:
 
 
 def _batch_cost(b: dict) -> list[str]:
-    """Where the compiled batch's time per equilibrium goes: the fast path, its retry, and the
-    elements it hands to esba.statics.equilibrium.solve."""
+    """Where the compiled batch's time per equilibrium goes: natural continuation, its finer retry,
+    and the elements it hands to pseudo-arclength continuation of their load history."""
     if "compiled_us" not in b:
         return []
-    handed = b["counts"].get("ipopt", 0)
+    retried = b["counts"].get("newton-retry", 0)
+    handed = b["counts"].get("continuation", 0)
     line = (
-        f"- Where the {b['compiled_us']:.1f} µs go: the fast path {b['compiled_fast_path_us']:.1f} µs and its denser retry "
-        f"{b.get('compiled_retry_us', 0.0):.1f} µs per equilibrium of the batch"
+        f"- Where the {b['compiled_us']:.1f} µs go: natural continuation {b['compiled_fast_path_us']:.1f} µs and its finer "
+        f"retry {b.get('compiled_retry_us', 0.0):.1f} µs per equilibrium of the batch ({retried} elements retried, "
+        f"{100 * retried / b['size']:.2g} %: in this grid (pressures 0-0.2 MPa, horizontal tip payloads 0-2 N) they sit "
+        "at the edge of the bistable range of [paths.md](paths.md), where the 8-step ramp passes close to the cusp "
+        "and is refused by the acceptance rule, and the 64-step ramp, compiled as the first, is accepted)"
     )
     if handed:
         line += (
-            f"; the {handed} elements ({100 * handed / b['size']:.2g} %) the fast path refuses take "
-            f"{1e3 * b['compiled_fallback_s'] / handed:.1f} ms each in `esba.statics.equilibrium.solve`, "
-            f"{1e6 * b['compiled_fallback_s'] / b['size']:.1f} µs per equilibrium of the batch. Their load ramp "
-            "loses positive definiteness of the Hessian or stops contracting: in this grid (pressures 0-0.2 MPa, horizontal "
-            "tip payloads 0-2 N) they sit in or at the edge of the bistable range of [paths.md](paths.md), where the ramp "
-            "crosses a fold or passes close to its cusp, and `solve` follows the path through it and reports any jump"
+            f"; the {handed} elements ({100 * handed / b['size']:.2g} %) whose finer ramp is refused too take "
+            f"{1e3 * b['compiled_fallback_s'] / handed:.1f} ms each in pseudo-arclength continuation of their load history "
+            f"(`esba.statics.equilibrium.load_history`), {1e6 * b['compiled_fallback_s'] / b['size']:.1f} µs per equilibrium "
+            "of the batch: it goes round the fold, takes any jump and notes it"
         )
     return [line + "."]
 

@@ -65,6 +65,8 @@ __all__ = [
     "natural_expression",
     "newton_parts",
     "parts_function",
+    "correction_function",
+    "newton_correction",
     "bordered_function",
     "bordered_layout",
     "critical_function",
@@ -211,15 +213,55 @@ def newton_parts(model: Model) -> ca.Function:
     return model.derived("newton_parts", build, builder_files=(__file__, structured.__file__))
 
 
+def correction_function(gradient: ca.Function, hessian: ca.Function, name: str = "esba_newton_correction") -> ca.Function:
+    """(theta, p) -> g, the Newton step H^-1 g and the smallest relative pivot: a corrector's step,
+    without the parameter derivative (half the work of :func:`parts_function`)."""
+    n = gradient.size1_in(0)
+    npar = gradient.size1_in(1)
+    th = ca.SX.sym("theta", n)
+    p = ca.SX.sym("p", npar)
+    g = gradient(th, p)
+    h = hessian(th, p)
+    piv = pivots_sx(h)
+    rel = ca.mmin(piv) / (ca.mmax(ca.fabs(piv)) + 1e-300)
+    return ca.Function(name, [th, p], [g, solve_sx(h, g), rel], ["theta", "p"], ["g", "newton", "min_pivot"], {"cse": True})
+
+
+def newton_correction(model: Model) -> ca.Function:
+    """:func:`correction_function` of a generated model (its parameters as one vector)."""
+
+    def build() -> ca.Function:
+        n, npar = model.n, len(model.parameters)
+        th = ca.SX.sym("theta", n)
+        p = ca.SX.sym("p", npar)
+        args = ca.vertsplit(p) if npar else []
+        gradient = ca.Function("g", [th, p], [model["gradient"](th, *args)])
+        hessian = ca.Function("h", [th, p], [model["hessian"](th, *args)])
+        return correction_function(gradient, hessian)
+
+    return model.derived("newton_correction", build, builder_files=(__file__, structured.__file__))
+
+
 # ---------------------------------------------------------------------------------------------
 # natural-parameter continuation
 
 
-def natural_expression(parts: ca.Function, theta0, p0, dp, lam1, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL):
+def natural_expression(parts: ca.Function, theta0, p0, dp, lam1, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL, correction: ca.Function | None = None):
     """The natural ramp of lambda from 0 to ``lam1`` as CasADi expressions of its (MX) inputs:
     (theta, g, min_pivot, contraction, states, jump) at the end, ``states`` the n x steps matrix of
     the state reached at each step and ``jump`` the largest ratio, over the steps, of the distance
-    the corrector moved the state to the distance the predictor moved it (see :class:`Acceptance`)."""
+    the corrector moved the state to the distance the predictor moved it (see :class:`Acceptance`).
+
+    ``parts`` (:func:`parts_function`) gives each step's predictor; ``correction``
+    (:func:`correction_function`, default ``parts``) each Newton correction."""
+
+    def correct(theta, p):
+        if correction is None:
+            g, step, _, piv, _, _ = parts(theta, p, dp)
+        else:
+            g, step, piv = correction(theta, p)
+        return g, step, piv
+
     theta = theta0
     low = ca.MX(1.0)
     worst = ca.MX(0.0)
@@ -234,7 +276,7 @@ def natural_expression(parts: ca.Function, theta0, p0, dp, lam1, steps: int = ST
         theta = predicted
         first = None
         for j in range(newton):
-            _, step, _, piv, _, _ = parts(theta, p0 + lam * dp, dp)
+            _, step, piv = correct(theta, p0 + lam * dp)
             low = ca.fmin(low, piv)
             size = ca.mmax(ca.fabs(step))
             if j == 0:
@@ -247,10 +289,10 @@ def natural_expression(parts: ca.Function, theta0, p0, dp, lam1, steps: int = ST
         jump = ca.fmax(jump, ca.if_else(moved > TINY, moved / (along + 1e-300), 0.0))
         states.append(theta)
     for _ in range(final):
-        _, step, _, piv, _, _ = parts(theta, p0 + lam1 * dp, dp)
+        _, step, piv = correct(theta, p0 + lam1 * dp)
         low = ca.fmin(low, piv)
         theta = theta - step
-    g, _, _, piv, _, _ = parts(theta, p0 + lam1 * dp, dp)
+    g, _, piv = correct(theta, p0 + lam1 * dp)
     return theta, g, ca.fmin(low, piv), worst, ca.horzcat(*states), jump
 
 
@@ -263,7 +305,7 @@ def natural_function(model: Model, steps: int = STEPS, newton: int = NEWTON, fin
         p0 = ca.MX.sym("p0", npar)
         dp = ca.MX.sym("dp", npar)
         lam1 = ca.MX.sym("lam1")
-        outs = natural_expression(newton_parts(model), theta0, p0, dp, lam1, steps, newton, final)
+        outs = natural_expression(newton_parts(model), theta0, p0, dp, lam1, steps, newton, final, newton_correction(model))
         return ca.Function(
             "esba_natural", [theta0, p0, dp, lam1], list(outs), ["theta0", "p0", "dp", "lam1"], ["theta", "g", "min_pivot", "contraction", "states", "jump"]
         )

@@ -1,29 +1,34 @@
-"""Equilibria for many scenes at once: Newton continuation mapped over a batch, compiled to C.
+"""Equilibria for many scenes at once: the continuation engine mapped over a batch, compiled to C.
 
 :func:`esba.statics.equilibrium.solve` pays IPOPT's set-up and CasADi's per-call overhead (25-40 us a
 call) on every solve: a few ms each. A sweep of thousands of pressures, payloads or designs of
-one model is instead solved here as one CasADi ``Function`` mapped over the batch:
+one model is instead solved here on the same engine, mapped over the batch:
 
-1. **Fast path.** Each element follows the same physical load path as :func:`solve`: from the
-   unloaded state (exact for a target angle: theta_i = Theta / n with the closed-form pressure of
-   :func:`esba.statics.equilibrium.pressure_for_angle`; else a pressure ramp from theta = 0), then the
-   payloads and weight ramp in ``load_steps`` steps, with ``newton_steps`` Newton iterations on
-   the generated gradient and Hessian at each step and ``final_steps`` more at the full load.
-   Each Newton step is limited to ``max_step / n`` rad per segment and kept inside the model's
-   domain (the bounds of :meth:`esba.model.generated.Model.lower_bounds`). The whole path is one graph of
-   fixed size, mapped over a chunk of the batch and, when a C compiler is found, generated to C
-   by CasADi and compiled once (:mod:`esba.statics.compiled`: the shared library is cached, keyed by
-   the hash of the model file, the options and the graph's source, with a checksum that is
-   verified before the library is loaded: a damaged one is reported and rebuilt, see
-   :mod:`esba.infra.cache`). The settings are one frozen :class:`esba.statics.batch_options.BatchOptions`.
-2. **Verification.** Every element is checked the way :func:`solve` checks its answers, from the
-   gradient and Hessian evaluated at the final angles: finite, ``max |dU/dtheta| <=
+1. **Natural continuation, compiled.** Each element follows the same physical load history as
+   :func:`solve`: from the unloaded state (exact for a target angle: theta_i = Theta / n with the
+   closed-form pressure of :func:`esba.model.closed_form.unloaded_pressure`; else natural
+   continuation of the pressure from theta = 0), then natural continuation of the payloads and
+   weight from 0 (:func:`esba.solvers.newton.natural_expression`: a tangent predictor and Newton
+   corrections per step, each solve O(n) from the Hessian's structure). The whole history is one
+   graph of fixed size, mapped over a chunk of the batch and, when a C compiler is found,
+   generated to C by CasADi and compiled once (:mod:`esba.statics.compiled`: the shared library is
+   cached, keyed by the hash of the model file, the options and the graph's builders, with a
+   checksum verified before it is loaded). The settings are one frozen
+   :class:`esba.statics.batch_options.BatchOptions`.
+2. **Verification.** Every element is checked the way :func:`solve` checks its answers: the one
+   acceptance rule of the engine (:class:`esba.solvers.newton.Acceptance`: every Hessian met on
+   the ramps positive definite, every step contracting, no corrector going farther than its
+   predictor), and from the gradient and Hessian at the end: finite, ``max |dU/dtheta| <=
    stationarity_tol``, not on the domain boundary, and a stability verdict from the Hessian's
-   eigenvalues (:func:`esba.statics.equilibrium.stability_verdict`).
-3. **Retry, then IPOPT.** Elements that fail are retried with a denser continuation (``retry``),
-   and those that still fail are solved one by one with :func:`esba.statics.equilibrium.solve` when a
-   scene is available (``fallback``). Every element ends with ``success``, ``stability``,
-   ``ok`` and a ``message`` saying why it is not ok; no element is dropped and none is a silent NaN.
+   eigenvalues.
+3. **A finer ramp, then pseudo-arclength.** An element whose ramp is refused is solved again with
+   8 times the steps, compiled as the first (``retry``: where the path is only steep). One that is
+   still refused goes to the engine's pseudo-arclength continuation of the same load history
+   (:func:`esba.statics.equilibrium.load_history`, ``fallback``), which goes round a fold, locates
+   it, takes the jump and finds the stable state after it: the element is flagged as having
+   snapped, with the same notes as :func:`solve`. Every element ends with ``success``,
+   ``stability``, ``ok`` and a ``message`` saying why it is not ok; no element is dropped and none
+   is a silent NaN.
 
 Examples
 --------
@@ -41,15 +46,15 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from esba.infra.interrupts import interrupts_raised
 from esba.infra.threads import single_threaded
 from esba.model.generated import Model, domain_lower_bound, near_domain_bound
-from esba.model.scene import Scene, SceneError
-from esba.solvers.newton import CONTRACTION
+from esba.model.scene import Scene
+from esba.solvers.newton import Acceptance
 
 from .batch_options import (
     DEFAULT_BATCH_OPTIONS,
@@ -67,7 +72,7 @@ from .compiled import (
     parameter_indices,
     prepare,
 )
-from .equilibrium import EquilibriumError, solve, stability_verdicts
+from .equilibrium import SolverOptions, load_history, stability_verdicts
 
 __all__ = [
     "BatchOptions",
@@ -84,8 +89,9 @@ __all__ = [
     "METHODS",
 ]
 
-#: How an element's answer was found: the fast path, its denser retry, IPOPT, or not at all.
-METHODS = ("newton", "newton-retry", "ipopt", "none")
+#: How an element's answer was found: natural continuation, its finer retry, pseudo-arclength
+#: continuation of the load history (through folds), or not at all.
+METHODS = ("newton", "newton-retry", "continuation", "none")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -117,8 +123,10 @@ class BatchResult:
     messages : tuple of str
         Why each element is not ok (empty when it is).
     notes : tuple of tuple of str
-        What happened on the way (a jump or a buckling on the load path, noted by the path
-        solver that answered the element), per element.
+        What happened on the way (a jump or a buckling on the load path, noted by the
+        pseudo-arclength continuation that answered the element, as :func:`solve` notes it).
+    snapped : ndarray of bool, shape (N,)
+        The element's load history jumped at a fold (a snap-through) on the way.
     backend : str
         How the fast path ran: compiled (with the compiler and the cached library) or
         interpreted, and why.
@@ -139,6 +147,11 @@ class BatchResult:
     backend: str
     timings: dict = field(default_factory=dict)
     notes: tuple[tuple[str, ...], ...] = ()
+    snapped: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.snapped is None:
+            object.__setattr__(self, "snapped", np.zeros(len(self.pressure), dtype=bool))
 
     def __len__(self) -> int:
         return len(self.pressure)
@@ -190,6 +203,7 @@ def _concat(parts: Sequence[tuple[np.ndarray, BatchResult]], size: int) -> Batch
         "stability": np.empty(size, dtype=object),
         "success": np.zeros(size, dtype=bool),
         "method": np.empty(size, dtype=object),
+        "snapped": np.zeros(size, dtype=bool),
     }
     messages = [""] * size
     notes: list[tuple[str, ...]] = [()] * size
@@ -220,10 +234,13 @@ def _lower_bounds(model: Model, pv: np.ndarray) -> np.ndarray:
     return domain_lower_bound(model.n, L, r1, r2, d)
 
 
+_OUTPUTS = ("theta", "P", "grad", "hess", "tip", "min_pivot", "contraction", "jump", "theta_unloaded")
+
+
 def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, options: BatchOptions, bar, size_hint: int = 0) -> dict:
     (fun_big, fun_small), backend, build_s, compile_s = mapped_functions(model, options, angle_mode, max(pv.shape[1], size_hint))
     n, size = model.n, pv.shape[1]
-    outs = {k: [] for k in ("theta", "P", "grad", "hess", "tip", "min_pivot", "contraction")}
+    outs = {k: [] for k in _OUTPUTS}
     t0 = time.perf_counter()
     full = size - size % options.chunk
     small = min(options.chunk, TAIL_CHUNK)
@@ -252,6 +269,8 @@ def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, op
         "tip": data["tip"].T.reshape(size, 3),
         "min_pivot": data["min_pivot"].ravel(),
         "contraction": data["contraction"].ravel(),
+        "jump": data["jump"].ravel(),
+        "theta_unloaded": data["theta_unloaded"].T.reshape(size, n),
         "backend": backend,
         "build": build_s,
         "compile": compile_s,
@@ -259,8 +278,9 @@ def _run(model: Model, pv: np.ndarray, targets: np.ndarray, angle_mode: bool, op
     }
 
 
-def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: BatchOptions):
-    """success, stability, gradient norm, eigenvalues and messages of a fast-path run."""
+def _verify(model: Model, pv: np.ndarray, run: dict, options: BatchOptions):
+    """success, stability, gradient norm, eigenvalues and messages of a natural-continuation run."""
+    rule = Acceptance(tol=options.stationarity_tol, critical_tol=options.critical_tol)
     with np.errstate(invalid="ignore", over="ignore"):
         theta, grad, hess, P = run["theta"], run["grad"], run["hess"], run["P"]
         finite = np.all(np.isfinite(theta), axis=1) & np.all(np.isfinite(grad), axis=1) & np.all(np.isfinite(hess), axis=(1, 2))
@@ -273,35 +293,49 @@ def _verify(model: Model, pv: np.ndarray, run: dict, angle_mode: bool, options: 
         lb = _lower_bounds(model, pv)
         near = near_domain_bound(theta, lb[:, None], axis=1)
         pressure_ok = np.isfinite(P) & (P >= 0)
-        stationary = gnorm <= options.stationarity_tol
-        left = ~(run["min_pivot"] >= -options.unstable_tol)
-        slid = ~(run["contraction"] <= CONTRACTION)
-        success = finite & stationary & ~near & pressure_ok & ~left & ~slid
+        accepted = rule.accepted_arrays(gnorm, run["min_pivot"], run["contraction"], run["jump"], finite)
+        success = accepted & ~near & pressure_ok
     messages = [""] * len(P)
     for i in np.flatnonzero(~(success & (stability == "stable"))):
         if not pressure_ok[i]:
             messages[i] = (
                 f"target angle: would need a negative pressure ({P[i]:.4g} MPa)" if np.isfinite(P[i]) else "target angle: outside the model's domain for this actuator"
             )
-        elif not finite[i]:
-            messages[i] = "the Newton path left the model's domain (non-finite values)"
         elif near[i]:
             messages[i] = "the solve stopped on the model's domain boundary (Eq. 10): not an equilibrium"
-        elif left[i]:
-            messages[i] = (
-                f"the Hessian lost positive definiteness on the load ramp (smallest relative LDL^T pivot "
-                f"{run['min_pivot'][i]:.3g}): the stable branch ended at a fold or a branch point, for the path solver to locate"
-            )
-        elif slid[i]:
-            messages[i] = (
-                f"a load step's Newton iteration did not contract (ratio {run['contraction'][i]:.3g} > {CONTRACTION:g}; "
-                "infinite with one Newton step per load step): the step may have left its branch, for the path solver to decide"
-            )
-        elif not stationary[i]:
-            messages[i] = f"max |dU/dtheta| = {gnorm[i]:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}"
+        elif not accepted[i]:
+            why = rule.why_not(float(gnorm[i]), float(run["min_pivot"][i]), float(run["contraction"][i]), bool(finite[i]), float(run["jump"][i]))
+            messages[i] = f"natural continuation of the load history was refused: it {why}; for pseudo-arclength continuation to follow"
         else:
             messages[i] = f"the equilibrium is {stability[i]}: smallest Hessian eigenvalue {eig[i, 0]:.3g} N mm/rad^2 (largest {eig[i, -1]:.3g})"
     return success, stability, gnorm, eig, messages, pressure_ok
+
+
+def _continue(model: Model, pv_full: np.ndarray, pressure: float, unloaded: np.ndarray | None, options: BatchOptions):
+    """One refused element by pseudo-arclength continuation of its load history: (theta, success,
+    stability, gradient norm, eigenvalues, message, notes, snapped)."""
+    history = load_history(model, pressure, pv_full, unloaded, _PALC_ONLY)
+    theta = history.theta
+    state = model.state(theta, pv_full)
+    g, h = state["gradient"], state["hessian"]
+    finite = bool(np.all(np.isfinite(g)) and np.all(np.isfinite(h)))
+    gnorm = float(np.max(np.abs(g))) if finite else np.inf
+    eig = np.sort(np.linalg.eigvalsh(0.5 * (h + h.T))) if finite else np.full(model.n, np.nan)
+    stability = str(stability_verdicts(eig[None, :], options.critical_tol)[0])
+    success = finite and not history.message and gnorm <= options.stationarity_tol
+    message = history.message
+    if not message and not finite:
+        message = "the model's energy, gradient or Hessian is not finite at the result (overflow): not an equilibrium"
+    elif not message and gnorm > options.stationarity_tol:
+        message = f"max |dU/dtheta| = {gnorm:.3g} N mm/rad > stationarity_tol = {options.stationarity_tol:g}"
+    elif not message and stability != "stable":
+        message = f"the equilibrium is {stability}: smallest Hessian eigenvalue {eig[0]:.3g} N mm/rad^2 (largest {eig[-1]:.3g})"
+    notes = tuple(history.notes(model, pv_full, pressure))
+    return theta, state["tip"], success, stability, gnorm, eig, message, notes, bool(history.jumps)
+
+
+#: The load history of a refused element: pseudo-arclength continuation at once (natural was refused).
+_PALC_ONLY = SolverOptions(fast=False)
 
 
 @single_threaded
@@ -311,7 +345,6 @@ def solve_arrays(
     *,
     target_angle: float | Sequence[float] | np.ndarray | None = None,
     options: BatchOptions | None = None,
-    scene_of: Callable[[int], Scene] | None = None,
 ) -> BatchResult:
     """Equilibria of one model for a batch of parameter values.
 
@@ -326,9 +359,6 @@ def solve_arrays(
         The unloaded total angle (rad) whose closed-form pressure each element uses, as a scene's
         ``target_angle_deg``; without it the pressure ``P`` is given.
     options : BatchOptions, optional
-    scene_of : callable, optional
-        ``scene_of(i)`` returns the :class:`Scene` of element i, for the IPOPT fallback; without
-        it elements the fast path and its retry cannot solve are reported not ok.
 
     Returns
     -------
@@ -374,21 +404,22 @@ def solve_arrays(
         bar = tqdm(total=size, unit="eq", desc=f"esba batch n={model.n}", leave=False, disable=None)  # None: only on a terminal
     try:
         run = _run(model, pv, targets, angle_mode, options, bar)
-        success, stability, gnorm, eig, messages, pressure_ok = _verify(model, pv, run, angle_mode, options)
+        success, stability, gnorm, eig, messages, pressure_ok = _verify(model, pv, run, options)
         method = np.where(success & (stability == "stable"), "newton", "none").astype(object)
-        theta, tip, P = run["theta"], run["tip"], run["P"]
+        theta, tip, P, unloaded = run["theta"], run["tip"], run["P"], run["theta_unloaded"]
         notes: list[tuple[str, ...]] = [()] * len(P)
+        snapped = np.zeros(len(P), dtype=bool)
         timings = {"build": run["build"], "compile": run["compile"], "fast": run["fast"], "retry": 0.0, "fallback": 0.0}
 
-        # retry the failures (that have a pressure) with a denser continuation
+        # a finer ramp for the refused elements (that have a pressure), compiled as the first
         redo = np.where(~(success & (stability == "stable")) & pressure_ok)[0]
         if options.retry and len(redo):
-            dense = options.denser()
+            finer = options.denser()
             if bar is not None:
                 bar.reset(total=len(redo))
                 bar.set_description("esba batch retry")
-            r2 = _run(model, pv[:, redo], targets[redo], angle_mode, dense, bar, size_hint=size)  # compiled when the fast path is
-            s2, st2, g2, e2, m2, _ = _verify(model, pv[:, redo], r2, angle_mode, dense)
+            r2 = _run(model, pv[:, redo], targets[redo], angle_mode, finer, bar, size_hint=size)  # compiled when the fast path is
+            s2, st2, g2, e2, m2, _ = _verify(model, pv[:, redo], r2, finer)
             good = s2 & (st2 == "stable")
             for j, i in enumerate(redo):
                 if good[j] or not np.all(np.isfinite(theta[i])):
@@ -400,29 +431,22 @@ def solve_arrays(
             timings["build"] += r2["build"]
             timings["compile"] += r2["compile"]
 
-        # IPOPT along the load path for what is left
+        # pseudo-arclength continuation of the load history for what is left
         redo = np.where(~(success & (stability == "stable")) & pressure_ok)[0]
         if len(redo):
             t1 = time.perf_counter()
             if bar is not None:
                 bar.reset(total=len(redo))
-                bar.set_description("esba batch IPOPT fallback")
+                bar.set_description("esba batch continuation")
             for i in redo:
-                if not options.fallback or scene_of is None:
-                    why = "fallback=False" if not options.fallback else "no scene given"
-                    messages[i] = f"fast path: {messages[i]}; IPOPT fallback not run ({why})"
+                if not options.fallback:
+                    messages[i] = f"{messages[i]}; pseudo-arclength continuation not run (fallback=False)"
                     continue
-                try:
-                    eq = solve(scene_of(int(i)))
-                except (EquilibriumError, SceneError) as exc:  # SceneError: scales the solver cannot resolve
-                    messages[i] = str(exc)
-                    continue
-                ev = np.asarray(eq.eigenvalues, dtype=float)
-                theta[i], tip[i], P[i] = eq.theta, eq.tip, eq.pressure
-                gnorm[i], eig[i], success[i], stability[i] = eq.gradient_norm, ev, eq.success, eq.stability
-                messages[i] = eq.message
-                notes[i] = tuple(getattr(eq, "notes", ()))
-                method[i] = "ipopt"
+                known = unloaded[i] if angle_mode else None
+                theta[i], tip[i], success[i], stability[i], gnorm[i], eig[i], messages[i], notes[i], snapped[i] = _continue(
+                    model, pv[:, i].copy(), float(P[i]), known, options
+                )
+                method[i] = "continuation"
                 if bar is not None:
                     bar.update(1)
             timings["fallback"] = time.perf_counter() - t1
@@ -447,6 +471,7 @@ def solve_arrays(
         backend=run["backend"],
         timings=timings,
         notes=tuple(notes),
+        snapped=snapped,
     )
 
 
@@ -460,7 +485,7 @@ def solve_scenes(scenes: Sequence[Scene], options: BatchOptions | None = None) -
     All scenes must have the same segment count (the result's ``theta`` is one array); their
     effects may differ (each group gets its own model). The answers agree with
     :func:`esba.statics.equilibrium.solve` on each scene, which is also the fallback for elements the
-    Newton path cannot solve.
+    natural continuation cannot solve (its load history's pseudo-arclength continuation answers those).
 
     Raises
     ------
@@ -484,6 +509,6 @@ def solve_scenes(scenes: Sequence[Scene], options: BatchOptions | None = None) -
         rows = [scenes[i].parameters(0.0 if angle_mode else scenes[i].pressure) for i in idx]
         values = {k: np.array([r[k] for r in rows]) for k in model.parameters}
         target = np.radians([scenes[i].target_angle_deg for i in idx]) if angle_mode else None
-        r = solve_arrays(model, values, target_angle=target, options=options, scene_of=lambda j, idx=idx: scenes[idx[j]])
+        r = solve_arrays(model, values, target_angle=target, options=options)
         parts.append((np.asarray(idx), r))
     return _concat(parts, len(scenes))

@@ -91,37 +91,28 @@ class BatchOptions:
     chunk : int
         Elements per call of the mapped Function (the progress bar moves per chunk).
     pressure_steps, load_steps : int
-        Continuation steps of the pressure ramp (when the pressure is given) and of the payload
-        and weight ramp.
+        Steps of the natural continuation of the pressure (when the pressure is given; for a target
+        angle the unloaded state is exact) and of the payloads and weight.
     newton_steps : int
-        Newton iterations per continuation step.
+        Newton iterations per continuation step (at least 2 measure the contraction).
     final_steps : int
-        Newton iterations at the full load after the ramp.
-    max_step : float
-        Largest Newton step of one segment angle, times n (rad): the step is scaled down to
-        ``max_step / n``.
+        Newton iterations at the end of each ramp.
     retry : bool
-        Solve the elements that fail again with a denser continuation (4x the steps, 3 Newton
-        iterations each, 8 final, downhill).
+        Solve the elements whose ramp is refused again with a finer one (8x the steps, 3 Newton
+        iterations each, 8 at the end), compiled as the first.
     fallback : bool
-        Solve the elements that still fail with :func:`esba.statics.equilibrium.solve` (needs scenes).
+        Hand the elements whose finer ramp is refused too to the load history's pseudo-arclength
+        continuation (:func:`esba.statics.equilibrium.load_history`, O(n) compiled kernels): it
+        goes round folds, locates them, takes the snap and finds the stable state after it, and the
+        element is flagged as having snapped.
     stationarity_tol : float
         Largest accepted max |dU/dtheta_i|, N mm/rad (as :class:`esba.statics.equilibrium.SolverOptions`).
     critical_tol : float
-        Relative eigenvalue threshold of the stability verdict (as ``SolverOptions``).
-    downhill : bool
-        Reverse Newton steps that climb (where the Hessian is indefinite), so that an element does
-        not settle on a saddle between two stable branches. About a third slower; the retry uses it.
-    unstable_tol : float
-        An element whose Hessian, at any Newton iterate of its load ramp, has a negative LDL^T
-        pivot below ``-unstable_tol`` times the largest (Sylvester's law of inertia: a negative
-        eigenvalue) has left the stable branch it started on: a snap-through at a fold or a
-        buckling at a branch point. It is passed on to :func:`esba.statics.equilibrium.solve`, whose path
-        trace locates the special point and notes the jump, so that a jump is never taken silently.
-        So is an element a load step of which did not contract (its second Newton correction more
-        than a quarter of its first, Deuflhard's test, as :mod:`esba.solvers.newton`): a step that slid to
-        another branch without meeting an indefinite Hessian. The unloaded pressure ramp is not
-        checked: its uniform path is unique and stable.
+        Relative eigenvalue threshold of the stability verdict, and the smallest relative pivot the
+        acceptance rule takes as positive definite (:class:`esba.solvers.newton.Acceptance`: every
+        Hessian met on the ramp positive definite, every step contracting, no corrector moving the
+        state farther than its predictor: otherwise a fold or branch point may lie on the ramp, and
+        the element is handed on so that a jump is never taken silently).
     progress : bool
         Show a tqdm progress bar on stderr.
     cache : str or None
@@ -141,17 +132,14 @@ class BatchOptions:
     compile: str = "auto"
     compile_min: int = 500
     chunk: int = 1000
-    pressure_steps: int = 1
+    pressure_steps: int = 2
     load_steps: int = 8
     newton_steps: int = 2
     final_steps: int = 4
-    max_step: float = 1.5
     retry: bool = True
     fallback: bool = True
     stationarity_tol: float = DEFAULT_OPTIONS.stationarity_tol
     critical_tol: float = DEFAULT_OPTIONS.critical_tol
-    unstable_tol: float = DEFAULT_OPTIONS.critical_tol
-    downhill: bool = False
     progress: bool = False
     cache: str | None = None
 
@@ -163,35 +151,29 @@ class BatchOptions:
         for name in ("pressure_steps", "load_steps", "newton_steps"):
             _whole(name, getattr(self, name), 1, MAX_STEPS, "each step is unrolled into the mapped graph")
         _whole("final_steps", self.final_steps, 0, MAX_STEPS, "each step is unrolled into the mapped graph")
-        for name in ("max_step", "stationarity_tol", "critical_tol", "unstable_tol"):
+        for name in ("stationarity_tol", "critical_tol"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise BatchOptionsError(f"{name}={v!r}: expected a finite number > 0")
         if self.cache is not None and not isinstance(self.cache, (str, os.PathLike)):
             raise BatchOptionsError(f"cache={self.cache!r}: expected a folder path or None")
-        for name in ("retry", "fallback", "progress", "downhill"):
+        for name in ("retry", "fallback", "progress"):
             if not isinstance(getattr(self, name), bool):
                 raise BatchOptionsError(f"{name}={getattr(self, name)!r}: expected True or False")
 
     def denser(self) -> BatchOptions:
-        """The retry's settings: four times the continuation steps, 3 Newton iterations each, downhill.
+        """The retry's settings: 8 times the continuation steps, 3 Newton iterations each, 8 at the end.
 
         Its chunk is at most 64: retries are few.
         """
         return dataclasses.replace(
             self,
             chunk=min(self.chunk, 64),
-            pressure_steps=4 * self.pressure_steps,
-            load_steps=4 * self.load_steps,
+            pressure_steps=min(MAX_STEPS, 8 * self.pressure_steps),
+            load_steps=min(MAX_STEPS, 8 * self.load_steps),
             newton_steps=max(3, self.newton_steps),
             final_steps=max(8, self.final_steps),
-            downhill=True,
         )
-
-    def newton_iterations(self, angle_mode: bool, loaded: bool) -> int:
-        """Newton iterations of one element on the fast path."""
-        k = 0 if angle_mode else self.pressure_steps * self.newton_steps
-        return k + (self.load_steps * self.newton_steps if loaded else 0) + self.final_steps
 
 
 DEFAULT_BATCH_OPTIONS = BatchOptions()

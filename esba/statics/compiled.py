@@ -1,7 +1,7 @@
-"""The batch path's function (:mod:`esba.statics.batch`): the graph of one element's Newton continuation,
-mapped over a chunk, generated to C and compiled once (the shared library cached and checked
-before it is loaded), or run by CasADi's interpreter; :func:`decide_backend` decides which, once
-for a whole study.
+"""The batch path's function (:mod:`esba.statics.batch`): the graph of one element's load history on the
+continuation engine's natural continuation (O(n) per Newton step), mapped over a chunk, generated
+to C and compiled once (the shared library cached and checked before it is loaded), or run by
+CasADi's interpreter; :func:`decide_backend` decides which, once for a whole study.
 
 The cached library is keyed by the model file, the options that shape the graph and this
 module's source: a change to the graph builds a new library.
@@ -12,20 +12,18 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import logging
-import math
-import os
-import shutil
-import subprocess
-import tempfile
 import time
 from pathlib import Path
-from typing import Sequence
 
 import casadi as ca
 
 from esba.infra import cache
-from esba.model.generated import Model, domain_lower_bound
-from esba.solvers.newton import TINY as CONTRACTION_TINY
+from esba.model import closed_form, structured
+from esba.model.closed_form import load_parameter, unloaded_pressure
+from esba.model.generated import Model
+from esba.solvers import newton
+from esba.solvers.native import compile_library, compiler
+from esba.solvers.newton import natural_expression, newton_correction, newton_parts
 
 from .batch_options import (
     AUTO_COMPILE_MAX_N,
@@ -37,152 +35,80 @@ from .batch_options import (
 
 __all__ = ["compiler", "compile_library", "decide_backend", "prepare", "mapped_functions", "parameter_indices"]
 
-#: Up to this n the Newton step solves H dx = -g symbolically (SX, O(n^3) instructions);
-#: above it, with CasADi's QR linear solver inside the graph.
-SX_SOLVE_MAX_N = 8
-
-
 # ---------------------------------------------------------------------------------------------
-# the graph
+# the graph: one element's load history on the engine's natural continuation
 
 
 def parameter_indices(model: Model) -> dict[str, list[int]]:
     names = model.parameters
     return {
         "P": [names.index("P")] if "P" in names else [],
-        "loads": [i for i, p in enumerate(names) if (p.startswith("F") and p[1:].isdigit()) or p == "g"],
+        "loads": [i for i, p in enumerate(names) if load_parameter(p)],
         "geometry": [names.index(k) for k in ("L", "r1", "r2", "d")],
     }
 
 
-def _lower_bound_sym(p, idx: dict, n: int):
-    """Eq. (10)'s domain (:func:`esba.model.generated.domain_lower_bound`) on symbolic parameters."""
-    L, r1, r2, d = (p[i] for i in idx["geometry"])
-    return domain_lower_bound(n, L, r1, r2, d, maximum=ca.fmax)
-
-
-def _scaled(p, idx: dict, pressure_factor, load_factor, pressure=None):
+def _with(p, idx: dict, pressure=None, load_factor=1.0):
+    """The parameter vector ``p`` with the pressure replaced and the loads scaled (MX)."""
     parts = ca.vertsplit(p)
     for i in idx["P"]:
-        parts[i] = (parts[i] if pressure is None else pressure) * pressure_factor
+        parts[i] = parts[i] if pressure is None else pressure
     for i in idx["loads"]:
         parts[i] = parts[i] * load_factor
     return ca.vertcat(*parts)
 
 
-_PIVOTS: dict[int, ca.Function] = {}
-
-
-def _pivot_function(n: int) -> ca.Function:
-    """H -> the smallest LDL^T pivot of H divided by the largest magnitude (SX, cached per n).
-
-    By Sylvester's law of inertia the pivots have the signs of the eigenvalues: the result is < 0
-    exactly when H has a negative eigenvalue.
-    """
-    fun = _PIVOTS.get(n)
-    if fun is None:
-        h = ca.SX.sym("H", n, n)
-        d, _, _ = ca.ldl(0.5 * (h + h.T), False)
-        fun = ca.Function("esba_min_pivot", [h], [ca.mmin(d) / (ca.mmax(ca.fabs(d)) + 1e-300)], ["H"], ["min_pivot"], {"cse": True})
-        _PIVOTS[n] = fun
-    return fun
-
-
-def _newton_step(model: Model, max_step: float, downhill: bool = False) -> ca.Function:
-    """theta -> theta + s dx with H dx = -g, s = min(1, (max_step/n) / max|dx|), kept in the domain;
-    also the relative smallest LDL^T pivot of H at theta (< 0: H is indefinite there).
-
-    With ``downhill`` a step that climbs (g . dx > 0, H indefinite along it) is reversed, so the
-    iteration does not settle on a saddle between two stable branches.
-    """
-    n, npar = model.n, len(model.parameters)
-    idx = parameter_indices(model)
-    sym = ca.SX if n <= SX_SOLVE_MAX_N else ca.MX
-    th = sym.sym("theta", n)
-    p = sym.sym("p", npar)
-    args = ca.vertsplit(p)
-    g = model["gradient"](th, *args)
-    h = model["hessian"](th, *args)
-    dx = -ca.solve(h, g) if sym is ca.SX else -ca.solve(h, g, "qr")
-    if downhill:
-        dx = dx * (1.0 - 2.0 * (ca.dot(g, dx) > 0))
-    scale = ca.fmin(1.0, (max_step / n) / (ca.mmax(ca.fabs(dx)) + 1e-300))
-    new = ca.fmax(th + scale * dx, _lower_bound_sym(p, idx, n))
-    opts = {"cse": True} if sym is ca.SX else {}
-    pivot = _pivot_function(n)(h)
-    return ca.Function("esba_newton_step", [th, p], [new, pivot], ["theta", "p"], ["theta_new", "min_pivot"], opts)
-
-
 def _element_function(model: Model, options: BatchOptions, angle_mode: bool) -> ca.Function:
-    """One element's load path: (p, target) -> theta, P, grad, hess, tip, and the smallest relative
-    LDL^T pivot of the Hessian over the Newton iterates of the load ramp (< 0: it left the stable branch)."""
+    """One element's load history: (p, target) -> theta, P, grad, hess, tip, and the one acceptance
+    rule's measures over both ramps (smallest relative pivot, worst contraction, worst jump), and the
+    unloaded state (where a refused element's continuation starts).
+
+    The unloaded state is exact for a target angle (theta_i = Theta / n at the closed-form pressure,
+    :func:`esba.model.closed_form.unloaded_pressure`), else natural continuation of the pressure from
+    theta = 0; then natural continuation of the loads from 0 to 1 (:func:`esba.solvers.newton.natural_expression`,
+    O(n) per Newton step), the same engine and the same acceptance as :func:`esba.statics.equilibrium.solve`.
+    """
     n, npar = model.n, len(model.parameters)
     idx = parameter_indices(model)
-    step = _newton_step(model, options.max_step, options.downhill)
-    free_step = _newton_step(model, 1e6, options.downhill)  # the unloaded problem is nearly quadratic: no limit
+    parts, correction = newton_parts(model), newton_correction(model)
     th = ca.SX.sym("theta", n)
     ps = ca.SX.sym("p", npar)
-    gh = ca.Function(
-        "esba_grad_hess", [th, ps], [model["gradient"](th, *ca.vertsplit(ps)), model["hessian"](th, *ca.vertsplit(ps))], {"cse": True}
-    )
+    gh = ca.Function("esba_grad_hess", [th, ps], [model["gradient"](th, *ca.vertsplit(ps)), model["hessian"](th, *ca.vertsplit(ps))], {"cse": True})
     p = ca.MX.sym("p", npar)
     target = ca.MX.sym("target")
     loaded = bool(idx["loads"])
+    one = ca.MX(1.0)
+    zero = ca.MX(0.0)
     if angle_mode:
-        # closed form of pressure_for_angle: the uniform shape, U linear in P
-        x = ca.repmat(target / n, n, 1)
-        g0 = gh(x, _scaled(p, idx, 0.0, 0.0))[0]
-        g1 = gh(x, _scaled(p, idx, 1.0, 0.0, pressure=1.0))[0] - g0
-        pressure = -ca.dot(g0, g1) / ca.dot(g1, g1)
-        p_full = _scaled(p, idx, 1.0, 1.0, pressure=pressure)
+        pressure = unloaded_pressure(model, target, dict(zip(model.parameters, ca.vertsplit(p))))
+        theta_u = ca.repmat(target / n, n, 1)
+        low, worst, jump = one, zero, zero
     else:
-        pressure = p[idx["P"][0]] if idx["P"] else ca.MX(0.0)
-        p_full = p
-        x = ca.MX.zeros(n)
-        for k in range(1, options.pressure_steps + 1):
-            pk = _scaled(p_full, idx, k / options.pressure_steps, 0.0)
-            for _ in range(options.newton_steps):
-                x = free_step(x, pk)[0]
-    pivot = ca.MX(1.0)
-    # continuity of the load ramp: each step's second Newton correction against its first (Deuflhard's
-    # contraction, as esba.solvers.newton): a step that slid to another branch without meeting an indefinite
-    # Hessian does not contract. With one Newton step per load step it cannot be measured: infinite.
-    contraction = ca.MX(0.0) if options.newton_steps >= 2 or not loaded else ca.MX(math.inf)
+        pressure = p[idx["P"][0]] if idx["P"] else zero
+        p_zero = _with(p, idx, pressure=0.0, load_factor=0.0)
+        dp = ca.DM.zeros(npar)
+        if idx["P"]:
+            dp[idx["P"][0]] = 1.0
+        theta_u, _, low, worst, _, jump = natural_expression(parts, ca.MX.zeros(n), p_zero, dp, pressure, options.pressure_steps, options.newton_steps, 1, correction)
+    p_full = _with(p, idx, pressure=pressure)
+    theta = theta_u
     if loaded:
-        for k in range(1, options.load_steps + 1):
-            pk = _scaled(p_full, idx, 1.0, k / options.load_steps)
-            sizes = []
-            for _ in range(options.newton_steps):
-                before = x
-                x, piv = step(x, pk)
-                pivot = ca.fmin(pivot, piv)
-                sizes.append(ca.mmax(ca.fabs(x - before)))
-            if len(sizes) >= 2:
-                contraction = ca.fmax(contraction, ca.if_else(sizes[0] > CONTRACTION_TINY, sizes[1] / (sizes[0] + 1e-300), 0.0))
-    for _ in range(options.final_steps):
-        x, piv = step(x, p_full)
-        pivot = ca.fmin(pivot, piv)
-    g, h = gh(x, p_full)
-    tip = model["kinematics"](x, p[idx["geometry"][0]])[0]
+        p_unloaded = _with(p, idx, pressure=pressure, load_factor=0.0)
+        theta, _, low2, worst2, _, jump2 = natural_expression(parts, theta_u, p_unloaded, p_full - p_unloaded, 1.0, options.load_steps, options.newton_steps, options.final_steps, correction)
+        low, worst, jump = ca.fmin(low, low2), ca.fmax(worst, worst2), ca.fmax(jump, jump2)
+    g, h = gh(theta, p_full)
+    tip = model["kinematics"](theta, p[idx["geometry"][0]])[0]
     return ca.Function(
         "esba_batch_element",
         [p, target],
-        [x, pressure, g, ca.vec(h), tip, pivot, contraction],
+        [theta, pressure, g, ca.vec(h), tip, low, worst, jump, theta_u],
         ["p", "target"],
-        ["theta", "P", "grad", "hess", "tip", "min_pivot", "contraction"],
+        ["theta", "P", "grad", "hess", "tip", "min_pivot", "contraction", "jump", "theta_unloaded"],
     )
 
 
 # ---------------------------------------------------------------------------------------------
 # compiling
-
-
-def compiler() -> str | None:
-    """The C compiler used for the fast path (``$CC``, else ``gcc``, else ``cc``), or None."""
-    for name in (os.environ.get("CC"), "gcc", "cc"):
-        if name and shutil.which(name):
-            return shutil.which(name)
-    return None
 
 
 def _compiled_dir(options: BatchOptions) -> Path:
@@ -191,7 +117,7 @@ def _compiled_dir(options: BatchOptions) -> Path:
     return cache.root() / "compiled"
 
 
-_log = logging.getLogger("esba.statics.batch")
+_log = logging.getLogger("esba.statics.compiled")
 
 
 def _usable_library(lib: Path) -> bool:
@@ -214,12 +140,11 @@ def _key(model: Model, options: BatchOptions, angle_mode: bool) -> str:
     h = hashlib.sha256()
     h.update(model.path.read_bytes())
     h.update(Path(__file__).read_bytes())
-    settings = (options.chunk, TAIL_CHUNK, options.pressure_steps, options.load_steps, options.newton_steps, options.final_steps, options.max_step, options.downhill, angle_mode, ca.__version__)  # unstable_tol is checked in Python
+    settings = (options.chunk, TAIL_CHUNK, options.pressure_steps, options.load_steps, options.newton_steps, options.final_steps, angle_mode, ca.__version__)
+    for path in (newton.__file__, structured.__file__, closed_form.__file__):  # the graph's builders
+        h.update(Path(path).read_bytes())
     h.update(repr(settings).encode())
     return h.hexdigest()[:20]
-
-
-_FUNCTIONS: dict[tuple, ca.Function] = {}
 
 
 def _backend(model: Model, options: BatchOptions, angle_mode: bool, size: int, key: str | None = None) -> tuple[bool, Path, str | None, str]:
@@ -288,17 +213,15 @@ def mapped_functions(model: Model, options: BatchOptions, angle_mode: bool, size
     """
     key = _key(model, options, angle_mode)
     compiled, lib, cc, backend = _backend(model, options, angle_mode, size, key)
-    cached = _FUNCTIONS.get((key, compiled, str(lib)))
-    if cached is not None:
-        return cached, backend, 0.0, 0.0
-    t0 = time.perf_counter()
-    element = _element_function(model, options, angle_mode)
-    build_s = time.perf_counter() - t0
-    compile_s = 0.0
-    small = min(options.chunk, TAIL_CHUNK)
-    if not compiled:
-        funs = (element.map(options.chunk, "thread", 2), element.map(small, "thread", 2))
-    else:
+    timings = {"build": 0.0, "compile": 0.0}
+
+    def build() -> tuple[ca.Function, ca.Function]:
+        t0 = time.perf_counter()
+        element = _element_function(model, options, angle_mode)
+        timings["build"] = time.perf_counter() - t0
+        small = min(options.chunk, TAIL_CHUNK)
+        if not compiled:
+            return element.map(options.chunk, "thread", 2), element.map(small, "thread", 2)
         mapped = (
             element.map(f"esba_batch_{key}", "serial", options.chunk, [], []),
             element.map(f"esba_batch_{key}_tail", "serial", small, [], []),
@@ -307,26 +230,9 @@ def mapped_functions(model: Model, options: BatchOptions, angle_mode: bool, size
             cache.usable_root(lib.parent)
             t1 = time.perf_counter()
             compile_library(mapped, lib, cc)
-            compile_s = time.perf_counter() - t1
-        funs = tuple(ca.external(f.name(), str(lib)) for f in mapped)
-    _FUNCTIONS[(key, compiled, str(lib))] = funs
+            timings["compile"] = time.perf_counter() - t1
+        return tuple(ca.external(f.name(), str(lib)) for f in mapped)
+
+    funs = model.derived("batch", build, settings=(key, compiled, str(lib)), persist=False)
+    build_s, compile_s = timings["build"], timings["compile"]
     return funs, backend, build_s, compile_s
-
-
-def compile_library(funs: Sequence[ca.Function], lib: Path, cc: str) -> None:
-    """Generate C for ``funs`` and compile them into the shared library ``lib`` (atomically)."""
-    lib.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="esba-cg-") as tmp:
-        name = lib.stem
-        cg = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-        for fun in funs:
-            cg.add(fun)
-        cg.generate(tmp + os.sep)
-        src = Path(tmp) / f"{name}.c"
-        out = Path(tmp) / lib.name
-        proc = subprocess.run([cc, "-O2", "-shared", "-fPIC", str(src), "-o", str(out), "-lm"], capture_output=True, text=True)
-        if proc.returncode != 0:
-            raise RuntimeError(f"compiling the batch solver failed ({cc}): {proc.stderr.strip()[:2000]}")
-        cache.install(lib, out)
-
-

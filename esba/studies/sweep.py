@@ -362,7 +362,7 @@ def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions |
             values["F1"] = cols["payload"][feasible]
             values["Omega1"] = np.radians(cols["payload_angle"][feasible])
         target = math.radians(base.target_angle_deg) if plan.angle_mode else None
-        batch = solve_arrays(model, values, target_angle=target, options=options, scene_of=lambda j: plan.scene_of(cols, int(feasible[j])))
+        batch = solve_arrays(model, values, target_angle=target, options=options)
         theta[feasible] = batch.theta
         tip[feasible] = batch.tip
         pres[feasible] = batch.pressure

@@ -59,7 +59,7 @@ def test_batch_agrees_with_ipopt_solve():
     _compare(scenes, r)
 
 
-def test_retry_and_ipopt_fallback_agree_too():
+def test_retry_and_continuation_agree_too():
     # a deliberately starved fast path: one load step, one Newton iteration, nothing after
     starved = BatchOptions(compile="never", load_steps=1, newton_steps=1, final_steps=0)
     scenes = _scenes()[4:12]
@@ -67,7 +67,7 @@ def test_retry_and_ipopt_fallback_agree_too():
     assert "newton-retry" in set(r.method)
     _compare(scenes, r)
     r = solve_scenes(scenes, BatchOptions(compile="never", load_steps=1, newton_steps=1, final_steps=0, retry=False))
-    assert "ipopt" in set(r.method)
+    assert "continuation" in set(r.method)
     _compare(scenes, r)
 
 
@@ -79,14 +79,14 @@ def test_unsolved_elements_say_why_and_are_never_silent():
         if r.ok[i]:
             assert r.messages[i] == "" and np.all(np.isfinite(r.theta[i]))
         else:
-            assert "IPOPT fallback not run (fallback=False)" in r.messages[i]
+            assert "pseudo-arclength continuation not run (fallback=False)" in r.messages[i]
             assert r.method[i] == "none"
-    # without scenes there is nothing to fall back to, and the message says so
+    # arrays of parameters need no scenes: pseudo-arclength continuation answers what natural cannot
     m = load_model(3)
     v = dict(L=135.0, r1=8.0, r2=3.0, d=4.0, rho=math.radians(10), E=0.54, P=0.2, F1=[0.0, 3.0], Omega1=math.pi / 2, s1=1.0)
     r = solve_arrays(m, v, options=BatchOptions(compile="never", load_steps=1, newton_steps=1, final_steps=0, retry=False))
-    assert not r.ok[1]
-    assert all("no scene given" in msg for msg, ok in zip(r.messages, r.ok) if not ok)
+    assert r.ok.all() and r.method[1] == "continuation"
+    np.testing.assert_allclose(r.theta[1], solve(Scene(pressure=0.2, payloads=(Payload(3.0),))).theta, atol=BATCH_THETA_ATOL)
 
 
 def test_mixed_effects_keep_their_order():
@@ -129,14 +129,14 @@ def test_progress_bar_and_counts(capsys):
 def test_a_snap_through_is_never_taken_silently():
     """A straight actuator pushed along its axis (10 N at 180 deg, P = 1e-3 MPa) snaps sideways at ~3 N.
 
-    The Newton path meets a Hessian that is not positive definite on its load ramp and hands the
-    element on; IPOPT's finer continuation follows the snap and notes it, as solve() does.
+    Natural continuation meets a Hessian that is not positive definite on its load ramp and hands the
+    element on; pseudo-arclength continuation follows the snap and notes it, as solve() does.
     """
     scenes = [Scene(pressure=1e-3, payloads=(Payload(f, 180.0),)) for f in (1.0, 10.0)]
     r = solve_scenes(scenes, INTERPRETED)
-    assert r.method.tolist() == ["newton", "ipopt"]
-    assert r.ok.all()
-    assert r.notes[0] == () and any("jump" in note for note in r.notes[1])
+    assert r.method.tolist() == ["newton", "continuation"]
+    assert r.ok.all() and r.snapped.tolist() == [False, True]
+    assert r.notes[0] == () and r.notes[1] == tuple(solve(scenes[1]).notes) and any("jump" in note for note in r.notes[1])
     _compare(scenes, r)
 
 
@@ -147,8 +147,8 @@ def test_bad_batches_are_refused():
         solve_scenes([Scene(segments=2), Scene(segments=3)])
     with pytest.raises(BatchOptionsError, match="chunk=0"):
         BatchOptions(chunk=0)
-    with pytest.raises(BatchOptionsError, match="max_step"):
-        BatchOptions(max_step=-1.0)
+    with pytest.raises(BatchOptionsError, match="critical_tol"):
+        BatchOptions(critical_tol=-1.0)
     m = load_model(3)
     with pytest.raises(KeyError, match="needs parameters"):
         solve_arrays(m, {"L": 135.0})
@@ -175,11 +175,31 @@ def test_bench_accuracy_quick_writes_the_page(tmp_path, capsys):
 
 def test_a_snap_the_retry_would_cross_with_positive_pivots_is_handed_on():
     """Found in review: 10 N at 170 deg on P = 0.03 MPa snaps at 24.5 % of the load. The denser retry
-    used to cross that fold with every Hessian positive definite; its load steps do not contract
-    there, so the element goes on to the path solver, which notes the jump."""
+    used to cross that fold with every Hessian positive definite; the acceptance rule refuses it
+    (its load steps do not contract there, or its corrector goes farther than its predictor), so the
+    element goes on to pseudo-arclength continuation, which notes the jump."""
     scene = Scene(pressure=0.03, payloads=(Payload(10.0, 170.0),))
     r = solve_scenes([scene], INTERPRETED)
     ref = solve(scene)
-    assert ref.jumps and r.method.tolist() == ["ipopt"]
+    assert ref.jumps and r.method.tolist() == ["continuation"] and r.snapped.tolist() == [True]
     assert r.notes[0] == tuple(ref.notes) and any("snap-through" in note for note in r.notes[0])
     np.testing.assert_allclose(r.theta[0], ref.theta, atol=BATCH_THETA_ATOL)
+
+
+def test_every_element_that_took_the_harder_way_gives_solves_answer():
+    """The bench's grid near the cusp (0.168-0.170 MPa, 1.64-2 N horizontal) and points inside the
+    bistable window, where the load history snaps (inflate, then load: 2 N at 0.170-0.173 MPa jumps
+    to the curled state), and a buckling-like snap (10 N at 170 deg on 0.03 MPa). Natural
+    continuation is refused near the fold; the finer ramp or pseudo-arclength continuation answers,
+    compiled engine or not, and each agrees with solve(), snaps and notes included."""
+    scenes = [Scene(pressure=p, payloads=(Payload(f, 90.0),)) for p in (0.1685, 0.169, 0.1695, 0.171, 0.1725) for f in (1.64, 1.8, 2.0)]
+    scenes.append(Scene(pressure=0.03, payloads=(Payload(10.0, 170.0),)))
+    r = solve_scenes(scenes, INTERPRETED)
+    harder = [i for i in range(len(scenes)) if r.method[i] != "newton"]
+    assert {"continuation"} <= set(r.method[harder]) and r.snapped.any()
+    for i in harder:
+        ref = solve(scenes[i])
+        assert r.ok[i] and ref.ok
+        np.testing.assert_allclose(r.theta[i], ref.theta, atol=BATCH_THETA_ATOL)
+        assert r.snapped[i] == bool(ref.jumps)
+        assert r.notes[i] == tuple(ref.notes)
