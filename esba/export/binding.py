@@ -113,7 +113,7 @@ class Library:
 
     def __init__(self, path: str | Path, spec: ExportSpec):
         self.spec = spec
-        self.path = Path(path)
+        self.path = Path(path).resolve()
         self.lib = ctypes.CDLL(str(self.path))
         self.types = structures(spec)
         self.real = ctypes.c_double if spec.precision == "double" else ctypes.c_float

@@ -63,8 +63,9 @@ TEMPLATES = Path(__file__).resolve().parent / "templates"
 #: (1.2e-7): the gradient of energies of O(100) N mm carries round-off of about 1e-5 N mm/rad, so
 #: angles are good to about 1e-6 rad and a step below 2e-5 rad is round-off.
 TOLERANCES = {
-    "double": {"CRITICAL_TOL": CRITICAL_TOL, "STEP_TOL": 1e-11, "TINY": 1e-10, "H_MIN": 1e-10, "SNAP_PAST": 1e-7, "ANGLE_TOL": 1e-10, "SINGULAR_TOL": 1e-10},
-    "float": {"CRITICAL_TOL": 1e-5, "STEP_TOL": 2e-5, "TINY": 1e-4, "H_MIN": 1e-5, "SNAP_PAST": 1e-4, "ANGLE_TOL": 1e-5, "SINGULAR_TOL": 1e-5},
+    "double": {"CRITICAL_TOL": CRITICAL_TOL, "STEP_TOL": 1e-11, "TINY": 1e-8, "JUMP_FLOOR": 1e-6, "H_MIN": 1e-10, "SNAP_PAST": 1e-7, "ANGLE_TOL": 1e-10, "BISECT_TOL": 1e-7, "HOLD_TOL": 1e-6,
+               "SINGULAR_TOL": 1e-10},
+    "float": {"CRITICAL_TOL": 1e-5, "STEP_TOL": 2e-5, "TINY": 1e-4, "JUMP_FLOOR": 1e-3, "H_MIN": 1e-5, "SNAP_PAST": 1e-4, "ANGLE_TOL": 1e-5, "BISECT_TOL": 1e-4, "HOLD_TOL": 1e-4, "SINGULAR_TOL": 1e-5},
 }
 
 #: The actuator parameters of the C struct (in the order of ``Actuator.parameters``).

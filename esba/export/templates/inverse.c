@@ -1,6 +1,7 @@
 /* ---------------------------------------------------------------- the pressure for a total angle */
 
 #define IDX_P {{IDX_P}} /* the pressure's place in the parameter vector */
+#define HOLD_TOL RC({{HOLD_TOL}})
 
 /* Newton on the bordered system dU/dtheta(theta, P) = 0, sum(theta) = angle from (theta, *pressure),
  * in place. U is linear in P, so dg/dP is exact from the tangent along w->unit. Each step costs two
@@ -60,11 +61,13 @@ static int angle_step(WORK *w, REAL *theta, REAL *pressure, REAL a0, REAL a1) {
     return 1;
 }
 
-/* A converged point of the branch that the answer may be: stable, 0 <= P <= pmax. */
+/* A converged point of the branch that the answer may be: held (stable with a margin: its smallest
+ * pivot above HOLD_TOL of the largest, so that the nearest reachable state located next to a fold is
+ * still clearly stable, not critical), 0 <= P <= pmax. */
 static int admissible(WORK *w, const REAL *theta, REAL pressure, REAL pmax) {
     w->p[IDX_P] = pressure;
     if (!eval_newton(w, theta, w->p) || !factor(w, RC(0.0))) return 0;
-    return w->rel > CRITICAL_TOL && pressure >= 0 && pressure <= pmax;
+    return w->rel > HOLD_TOL && pressure >= 0 && pressure <= pmax;
 }
 
 int {{NAME}}_pressure_for_angle(int n, const {{NAME}}_params *a, const {{NAME}}_loads *l, REAL total, REAL pmax, const {{NAME}}_state *from,
@@ -123,7 +126,7 @@ int {{NAME}}_pressure_for_angle(int n, const {{NAME}}_params *a, const {{NAME}}_
                 in_a = next;
                 out_a = angle;
             }
-            for (b = 0; b < MAX_BISECT && FABS(out_a - in_a) > ANGLE_TOL; ++b) {
+            for (b = 0; b < MAX_BISECT && FABS(out_a - in_a) > BISECT_TOL; ++b) {
                 REAL mid = RC(0.5) * (in_a + out_a), mid_p = in_p;
                 copy(w->t, w->v, N);
                 if (!angle_step(w, w->t, &mid_p, in_a, mid)) break;

@@ -134,7 +134,8 @@ int {{NAME}}_equilibrium(int n, const {{NAME}}_params *params, const {{NAME}}_lo
  * followed in the total angle from the equilibrium at P = 0 (from == NULL) or from from (with
  * from->loads' pressure and loads' payloads). A target that no stable state of the branch meets
  * (past a fold, below P = 0, above max_pressure) gives ESBA_UNREACHABLE and the nearest reachable
- * state. */
+ * state; a state whose Hessian's smallest pivot is within {{HOLD_TOL}} of the largest counts as at
+ * the fold, not held. */
 int {{NAME}}_pressure_for_angle(int n, const {{NAME}}_params *params, const {{NAME}}_loads *loads,
                                 {{NAME}}_real total_angle, {{NAME}}_real max_pressure,
                                 const {{NAME}}_state *from, {{NAME}}_result *out, {{NAME}}_work *work);

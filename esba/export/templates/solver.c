@@ -21,7 +21,7 @@
 #define CRITICAL_TOL RC({{CRITICAL_TOL}})
 /* Newton has converged when its step is below this (rad): round-off of the gradient beyond it. */
 #define STEP_TOL RC({{STEP_TOL}})
-/* Newton steps below this (rad) are round-off: their ratio says nothing (esba.solvers.newton.TINY). */
+/* Newton steps below this (rad) are round-off, amplified near a singular Hessian: their ratio says nothing. */
 #define TINY RC({{TINY}})
 /* Largest ratio of a step's second Newton correction to its first (Deuflhard's test that the
  * predictor was inside the corrector's region of convergence: esba.solvers.newton.CONTRACTION). */
@@ -40,17 +40,26 @@
 #define MAX_DTHETA RC(0.5)
 /* A load step's predictor moves the state by at most MAX_PREDICT (rad, in sqrt(n) |dtheta|, about
  * the change of the total angle: the arclength measure and largest step of esba.paths), and the corrector may move
- * it from there by at most CORRECTOR_RATIO of that: a corrector that goes further has left the
- * branch (past a fold it lands on another one), and the step is halved. */
+ * it from there by at most CORRECTOR_RATIO of that plus JUMP_FLOOR (round-off, amplified where the
+ * Hessian nears singular): a corrector that goes further has left the branch (past a fold it
+ * lands on another one), and the step is halved. */
 #define MAX_PREDICT RC(0.25)
 #define CORRECTOR_RATIO RC(0.5)
+#define JUMP_FLOOR RC({{JUMP_FLOOR}})
+/* Where the branch ends, a tangent below this (rad per unit load factor, in sqrt(n) |t|) means no
+ * direction of motion: a symmetric branch point, not a fold (where the tangent grows without bound). */
+#define BRANCH_POINT_TANGENT RC(1.0)
 /* Where the landing state of a snap is sought: this far past the fold (load factor), after a
  * kick of SNAP_KICK / sqrt(n) rad along the critical mode (esba.paths.loading). */
 #define SNAP_PAST RC({{SNAP_PAST}})
 #define SNAP_KICK RC(0.05)
-/* pressure_for_angle: largest step of the total angle (rad), bisection tolerance (rad). */
+/* pressure_for_angle: largest step of the total angle (rad); the smallest before the walk stops
+ * (the branch turns back in the angle); how close to its end (a fold, P = 0, the largest pressure)
+ * the nearest reachable state is located, on the stable side (rad of total angle: at a fold the
+ * Hessian's smallest eigenvalue is then still clearly positive). */
 #define ANGLE_STEP RC(0.25)
 #define ANGLE_TOL RC({{ANGLE_TOL}})
+#define BISECT_TOL RC({{BISECT_TOL}})
 /* Relative distance kept from the edge of the model's domain (esba.model.generated.DOMAIN_MARGIN). */
 #define DOMAIN_MARGIN RC(1e-6)
 #define PI RC(3.14159265358979323846)
@@ -351,17 +360,20 @@ static int tangent(WORK *w, const REAL *theta) {
 
 /* The stable branch ended at (theta, *lam): the actuator snaps. The state it lands in is sought
  * just past the fold, from theta kicked along the critical mode (the direction it was moving in:
- * towards the unstable side, where the energy falls once the fold is passed); a kick that falls
- * back is made four times larger, twice. At a symmetric branch point (no direction of motion)
- * both sides are tried and the nearer landing state is taken. Returns 1 with theta, *lam moved. */
+ * towards the unstable side, where the energy falls once the fold is passed) by the minimiser; a
+ * kick it cannot start from is made four times larger, twice. At a symmetric branch point (no
+ * direction of motion) both sides are tried and the nearer landing state is taken: when it is no
+ * farther than the first kick, a stable branch goes on from the branch point (a straight actuator
+ * buckling) and there was no jump. Past a fold any landing state is a jump, however small (near a
+ * cusp). Returns 1 with theta, *lam moved past the fold. */
 static int snap(WORK *w, REAL *theta, REAL *lam, int ramp_id, {{NAME}}_result *out) {
     REAL past = *lam + SNAP_PAST > 1 ? RC(1.0) : *lam + SNAP_PAST;
     REAL norm, eps0 = SNAP_KICK / SQRT(RC(N)), best_d = RC(-1.0);
     int k, s, signs = 1, tries;
     at_lambda(w, *lam);
     if (!tangent(w, theta)) return 0;
-    norm = max_abs(w->t, N);
-    if (!(norm > TINY)) {
+    norm = SQRT(RC(N)) * norm2(w->t);
+    if (!(norm > BRANCH_POINT_TANGENT)) {
         /* no direction of motion: a branch point; start the inverse iteration from a ramp */
         for (k = 0; k < N; ++k) w->t[k] = RC(1.0) + RC(k) / RC(N);
         signs = 2;
@@ -375,6 +387,7 @@ static int snap(WORK *w, REAL *theta, REAL *lam, int ramp_id, {{NAME}}_result *o
         if (!(norm > 0) || !isfinite(norm)) return 0;
         for (k = 0; k < N; ++k) w->v[k] /= norm;
     }
+    copy(w->keep, theta, N);
     at_lambda(w, past);
     for (s = 0; s < signs; ++s) {
         REAL eps = eps0, sign = s == 0 ? RC(1.0) : RC(-1.0);
@@ -383,7 +396,7 @@ static int snap(WORK *w, REAL *theta, REAL *lam, int ramp_id, {{NAME}}_result *o
             for (k = 0; k < N; ++k) {
                 if (w->y[k] <= w->lb) w->y[k] = RC(0.5) * (theta[k] + w->lb);
             }
-            if (minimise(w, w->y, w->p) && distance(w->y, theta) > eps) {
+            if (minimise(w, w->y, w->p)) {
                 REAL d = distance(w->y, theta);
                 if (best_d < 0 || d < best_d) {
                     best_d = d;
@@ -394,15 +407,16 @@ static int snap(WORK *w, REAL *theta, REAL *lam, int ramp_id, {{NAME}}_result *o
         }
     }
     if (best_d < 0) return 0;
+    copy(theta, w->best, N);
+    *lam = past;
+    if (signs == 2 && best_d <= eps0) return 1; /* no jump: a branch point where a stable branch goes on (buckling) */
     if (out->snaps == 0) {
         out->snap_ramp = ramp_id;
         out->snap_at = *lam;
-        out->snap_from = sum(theta);
+        out->snap_from = sum(w->keep);
         out->snap_to = sum(w->best);
     }
     out->snaps++;
-    copy(theta, w->best, N);
-    *lam = past;
     return 1;
 }
 
@@ -449,7 +463,7 @@ static int ramp(WORK *w, REAL *theta, int ramp_id, {{NAME}}_result *out) {
         copy(w->y, w->trial, N);
         at_lambda(w, target);
         accepted = newton(w, w->trial, w->p, MAX_NEWTON, &contraction, &low) && low > CRITICAL_TOL && contraction <= CONTRACTION &&
-                   SQRT(RC(N)) * distance(w->trial, w->y) <= CORRECTOR_RATIO * predicted && max_diff(w->trial, theta) <= MAX_DTHETA;
+                   SQRT(RC(N)) * distance(w->trial, w->y) <= CORRECTOR_RATIO * predicted + JUMP_FLOOR && max_diff(w->trial, theta) <= MAX_DTHETA;
         if (accepted && eval_newton(w, w->trial, w->p) && factor(w, RC(0.0)) && w->rel > CRITICAL_TOL) {
             copy(theta, w->trial, N);
             lam = target;
