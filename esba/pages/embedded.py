@@ -18,7 +18,9 @@ from esba.infra import outputs
 __all__ = ["CONTROL_LOOP", "embedded_page", "write_page"]
 
 #: A minimal control loop on an export of n = 3 (``esba export c --segments 3 --out ctrl``).
-CONTROL_LOOP = r"""#include "esba_n3_air_axial_radial_fibres_payload1_paper.h"
+CONTROL_LOOP = r"""#include <stddef.h>
+
+#include "esba_n3_air_axial_radial_fibres_payload1_paper.h"
 
 #define ESBA(x) esba_n3_air_axial_radial_fibres_payload1_paper_##x
 #define N 3
