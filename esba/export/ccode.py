@@ -36,6 +36,7 @@ from __future__ import annotations
 import hashlib
 import json
 import re
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -241,8 +242,6 @@ def casadi_code(spec: ExportSpec, model: Model | None = None) -> tuple[str, dict
         "iw": max(1, max(f.sz_iw() for f in funs.values())),
         "w": max(1, max(f.sz_w() for f in funs.values())),
     }
-    import tempfile
-
     with tempfile.TemporaryDirectory(prefix="esba-export-") as tmp:
         cg = ca.CodeGenerator(
             f"{spec.name}_cg.c",
