@@ -11,7 +11,8 @@ use, so that ``import esba`` (and ``esba --help``) imports neither NumPy nor Cas
 
 The packages, from the bottom up (each imports only from those below it; see
 ``docs/architecture.md``): :mod:`esba.infra`, :mod:`esba.model`, :mod:`esba.solvers`,
-:mod:`esba.paths`, :mod:`esba.statics`, :mod:`esba.analysis`, :mod:`esba.design` and
+:mod:`esba.paths`, :mod:`esba.statics`, :mod:`esba.analysis` and :mod:`esba.export` (a model as
+dependency-free C), :mod:`esba.design` and
 :mod:`esba.calibration`, :mod:`esba.studies`, :mod:`esba.figures`, :mod:`esba.bench`,
 :mod:`esba.pages`, :mod:`esba.cli`.
 """

@@ -63,3 +63,17 @@ FIT_EXACT_REL = 1e-6
 #: the fit's implicit-function-theorem Jacobian against central differences of solves (step 1e-5 relative):
 #: truncation ~1e-10, solve round-off ~1e-12 / 1e-5
 FIT_JACOBIAN_RTOL = 1e-5
+
+#: the exported C (issue 19) against Python's solve(): both run Newton to round-off on the same
+#: generated gradient (measured <= 3e-15 rad), so 1e-9 rad (the issue's figure) leaves a margin
+EXPORT_THETA_ATOL = 1e-9
+#: the exported inverse against pressure_for_target (esba pressure --total-angle): the NLP stops at
+#: IPOPT's tol = 1e-10 (measured pressure differences <= 8e-10 MPa, angles <= 1e-9 rad); the C runs
+#: the bordered Newton to round-off
+EXPORT_INVERSE_PRESSURE_ATOL = 1e-8
+EXPORT_INVERSE_THETA_ATOL = 1e-8
+#: the single-precision export against Python (double): float's epsilon 1.2e-7 times the
+#: conditioning of the equilibria (Hessians of O(10-1000) N mm/rad^2, energies of O(100) N mm)
+#: gives angles to about 2e-6 rad (measured <= 1.6e-6); the inverse's pressure to about 5e-8 MPa
+EXPORT_FLOAT_THETA_ATOL = 1e-5
+EXPORT_FLOAT_PRESSURE_ATOL = 1e-6

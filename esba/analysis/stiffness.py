@@ -440,7 +440,8 @@ def pressure_for_target(
     sol = solver(x0=x0, lbx=np.concatenate([lb_theta, [0.0]]), ubx=np.concatenate([np.full(n, np.inf), [max_pressure]]), lbg=0.0, ubg=0.0)
     stats = solver.stats()
     z = np.asarray(sol["x"], dtype=float).ravel()
-    pressure = float(z[-1])
+    # IPOPT relaxes its bounds by about 1e-8 (bound_relax_factor): a pressure on a bound comes back just outside it
+    pressure = min(max(float(z[-1]), 0.0), max_pressure)
     theta_nlp = z[:-1]
     # the NLP only asks for stationarity: confirm a stable equilibrium there ...
     eq = solve(scene, options, pressure=pressure, theta0=theta_nlp)

@@ -244,6 +244,36 @@ def _cmd_bench_scaling(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+#: The segment counts of ``esba bench embedded`` (``esba.bench.embedded.EMBEDDED_NS``, written out so that
+#: building the parser does not import CasADi; a test checks they agree).
+_EMBEDDED_NS = (3, 8, 16)
+
+
+def _cmd_bench_embedded(args: argparse.Namespace) -> int:
+    if args.no_write:
+        refuse(args, ["out"], "with --no-write")
+    page = None
+    if not args.no_write:
+        page = outputs.check_file(outputs.default_page("embedded.md") if args.out is None else args.out, "--out", (".md",))
+    ns = tuple(sorted(set(args.segments))) if args.segments else _EMBEDDED_NS
+    from esba.bench import embedded as bench_embedded
+
+    data = bench_embedded.embedded_benchmark(ns, repeat=args.repeat, progress=_bench_progress(args, "  {}"))
+    if page is not None:
+        from esba.pages.embedded import write_page
+
+        command = "esba bench embedded"
+        if ns != _EMBEDDED_NS:
+            command += "".join(f" --segments {n}" for n in ns)
+        if args.repeat != 11:
+            command += f" --repeat {args.repeat}"
+        if args.out is not None:
+            command += f" --out {args.out}"
+        data["page"] = str(write_page(page, data, command))
+    print_result(args, data, lambda d: bench_embedded.embedded_table(d) + (f"\nwrote {d['page']}" if "page" in d else ""))
+    return EXIT_OK
+
+
 def add_bench(sub) -> None:
     p = sub.add_parser("bench", help="benchmarks: tables of medians over repeated runs")
     bsub = p.add_subparsers(dest="bench", parser_class=Parser, required=True)
@@ -287,6 +317,13 @@ def add_bench(sub) -> None:
     sc.add_argument("--markdown", type=output_file_arg(".md"), metavar="FILE", help="also write the page (docs/scaling.md)")
     sc.add_argument("--json", action="store_true")
     sc.set_defaults(func=_cmd_bench_scaling)
+    em = bsub.add_parser("embedded", help="the exported C (esba export c) at n = 3, 8, 16: us per equilibrium and inverse against Python, code size, stack, Cortex-M4, float vs double (docs/embedded.md; a few minutes)")
+    em.add_argument("--segments", "-n", type=count_arg("segments", 1, 64, "each n is exported and compiled"), action="append", metavar="N", help="segment counts (repeatable; default 3, 8 and 16)")
+    em.add_argument("--repeat", type=count_arg("repeat", 1, _MAX_REPEAT), default=11, help="calls per timing, median reported (default 11, at most 100)")
+    em.add_argument("--out", default=None, metavar="FILE.md", help="page to write (default docs/embedded.md in a checkout, else ./embedded.md)")
+    em.add_argument("--no-write", action="store_true", help="print only; write no page")
+    em.add_argument("--json", action="store_true")
+    em.set_defaults(func=_cmd_bench_embedded)
     b = bsub.add_parser("batch", help="us per equilibrium of the batch path against IPOPT and naive BFGS")
     b.add_argument("--size", type=count_arg("size", 1, _MAX_SIZE), default=10_000, help="batch size (default 10000; bounded by the memory it takes)")
     b.add_argument("--segments", "-n", type=segments_arg, default=3, help="segment count (default 3)")

@@ -144,6 +144,18 @@ CLI = [
     (["bench", "generation", "--repeat", "0"], "repeat=0: expected a whole number from 1 to 100"),
     (["bench", "generation", "--repeat", "1000000"], "repeat=1000000"),
     (["figures", "--only", "fig9"], "--only: unknown figure 'fig9'"),
+    (["export", "c", "--segments", "0", "--out", "x"], "segments=0: expected a whole number from 1 to 256"),
+    (["export", "c", "--segments", "257", "--out", "x"], "segments=257: expected a whole number from 1 to 256"),
+    (["export", "c", "--segments", "3", "--effects", "air,bogus", "--out", "x"], "--effects: unknown effect 'bogus'"),
+    (["export", "c", "--segments", "3", "--variant", "typo", "--out", "x"], "invalid choice: 'typo'"),
+    (["export", "c", "--out", "x"], "the following arguments are required: --segments"),
+    (["export", "c", "--segments", "3"], "the following arguments are required: --out"),
+    (["export", "java", "--segments", "3"], "invalid choice: 'java'"),
+    (["export"], "the following arguments are required: {c}"),
+    (["bench", "embedded", "--repeat", "0"], "repeat=0: expected a whole number from 1 to 100"),
+    (["bench", "embedded", "--segments", "65"], "segments=65: expected a whole number from 1 to 64"),
+    (["bench", "embedded", "--no-write", "--out", "x.md"], "--out is not used with --no-write"),
+    (["bench", "embedded", "--out", "x.txt"], "'.txt'; expected a file ending in .md"),
     ([], "name a command"),
     (["bogus"], "invalid choice: 'bogus'"),
 ]
@@ -227,6 +239,8 @@ OUTPUTS = [
     ["bench", "accuracy", "--quick", "--figure", "{path}/a.png"],
     ["bench", "generation", "--max-n", "2", "--markdown", "{path}/p.md"],
     ["generate", "--segments", "2", "--out", "{path}/gen"],
+    ["export", "c", "--segments", "2", "--out", "{path}/ctrl"],
+    ["bench", "embedded", "--segments", "3", "--out", "{path}/e.md"],
 ]
 WHERE = {"missing": ("missing", "does not exist"), "file-in-the-way": ("file", "is a file"), "no-permission": ("ro", "cannot ")}
 

@@ -30,6 +30,7 @@ FLOORS = {
     "paths": 3,
     "statics": 4,
     "analysis": 5,
+    "export": 5,
     "design": 6,
     "calibration": 6,
     "studies": 7,
