@@ -296,15 +296,13 @@ class SensitivityOptions:
 # ---------------------------------------------------------------------------------------------
 # the CasADi functions (one set per model and pressure mode)
 
-_FUNCTIONS: dict[tuple, ca.Function] = {}
-
-
 def _functions(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...]) -> ca.Function:
-    """(theta, p, fixed, v) -> G, dG/dtheta, dG/dp, tip, dtip/dtheta, dtip/dp, d(v'Hv)/dtheta, d(v'Hv)/dp."""
-    key = (str(model.path), names, fixed_names)
-    fun = _FUNCTIONS.get(key)
-    if fun is not None:
-        return fun
+    """(theta, p, fixed, v) -> G, dG/dtheta, dG/dp, tip, dtip/dtheta, dtip/dp, d(v'Hv)/dtheta, d(v'Hv)/dp
+    (in the model's registry, per set of parameter names)."""
+    return model.derived("sensitivity", lambda: _build(model, names, fixed_names), settings=(names, fixed_names), persist=False)
+
+
+def _build(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...]) -> ca.Function:
     n = model.n
     th = ca.SX.sym("theta", n)
     p = ca.SX.sym("p", len(names))
@@ -339,7 +337,6 @@ def _functions(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...
         ["theta", "p", "fixed", "v"],
         ["G", "H", "G_p", "tip", "tip_theta", "tip_p", "curv_theta", "curv_p"],
     )
-    _FUNCTIONS[key] = fun
     return fun
 
 

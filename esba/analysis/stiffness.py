@@ -36,6 +36,7 @@ from esba.infra import checks
 from esba.infra.threads import single_threaded
 from esba.model.generated import Model
 from esba.model.scene import Payload, Scene, SceneError, check_pressure
+from esba.solvers.eqnlp import EquilibriumNLP, model_gradient
 from esba.statics.equilibrium import (
     DEFAULT_OPTIONS,
     Equilibrium,
@@ -63,19 +64,16 @@ PAPER_FORCES: tuple[float, ...] = (0.5, 1.0, 2.0)
 #: The most payloads one stiffness call solves for (one equilibrium each).
 MAX_FORCES = 1_000
 
-_JACOBIANS: dict[str, ca.Function] = {}
-
-
 def tip_jacobian(model: Model, theta: Sequence[float], L: float) -> np.ndarray:
     """J = d[x, y]_tip / d theta, shape (2, n), mm/rad (CasADi AD of the generated kinematics)."""
-    key = str(model.path)
-    fun = _JACOBIANS.get(key)
-    if fun is None:
+
+    def build() -> ca.Function:
         th = ca.SX.sym("theta", model.n)
         length = ca.SX.sym("L")
         tip = model["kinematics"](th, length)[0]
-        fun = ca.Function("tip_jacobian", [th, length], [ca.jacobian(tip[:2], th)], ["theta", "L"], ["J"])
-        _JACOBIANS[key] = fun
+        return ca.Function("tip_jacobian", [th, length], [ca.jacobian(tip[:2], th)], ["theta", "L"], ["J"])
+
+    fun = model.derived("tip_jacobian", build, builder_files=(__file__,))
     return np.asarray(fun(np.asarray(theta, dtype=float), float(L)), dtype=float).reshape(2, model.n)
 
 
@@ -388,12 +386,13 @@ def pressure_for_target(
             raise SceneError(f"{name}={value!r}: expected a number > 0")
     options = DEFAULT_OPTIONS if options is None else options
     model = scene.model()
-    n, names = model.n, model.parameters
-    theta = ca.SX.sym("theta", n)
-    P = ca.SX.sym("P")
+    n = model.n
     values = scene.parameters(0.0)
-    args = [P if name == "P" else values[name] for name in names]
-    grad = model["gradient"](theta, *args)
+    # the equilibrium-constrained NLP over (theta, P), built as the design and the fit build theirs
+    b = EquilibriumNLP("esba_pressure_target")
+    theta = b.variable("theta", n, lb=model.lower_bounds(values))
+    P = b.variable("P", lb=0.0, ub=max_pressure)
+    b.equilibrium(model_gradient(model, theta, dict(values, P=P)), "target")
     if total_angle_deg is not None:
         target_value = float(total_angle_deg)
         if not math.isfinite(target_value):
@@ -417,16 +416,10 @@ def pressure_for_target(
         objective = ca.sumsqr(miss_vec)
         target = {"tip_mm": [None if v is None else float(v) for v in tip_mm]}
         residual_fun = ca.Function("residual", [theta], [ca.norm_2(miss_vec)])
-    nlp = {"x": ca.vertcat(theta, P), "f": objective, "g": grad}
-    solver = ca.nlpsol(
-        "esba_pressure_target",
-        "ipopt",
-        nlp,
+    nlp = b.build(
+        objective,
         {
-            "print_time": False,
             "calc_lam_p": False,
-            "ipopt.print_level": 0,
-            "ipopt.sb": "yes",
             "show_eval_warnings": False,
             "ipopt.tol": options.tol,
             "ipopt.max_iter": max(options.max_iter, 500),
@@ -435,11 +428,8 @@ def pressure_for_target(
     )
     # start: the scene's own pressure setting and its equilibrium there
     start = solve(scene, options)
-    lb_theta = model.lower_bounds(values)
-    x0 = np.concatenate([start.theta, [start.pressure]])
-    sol = solver(x0=x0, lbx=np.concatenate([lb_theta, [0.0]]), ubx=np.concatenate([np.full(n, np.inf), [max_pressure]]), lbg=0.0, ubg=0.0)
-    stats = solver.stats()
-    z = np.asarray(sol["x"], dtype=float).ravel()
+    sol = nlp.solve(nlp.x0(theta=start.theta, P=start.pressure))
+    z = sol.x
     # IPOPT relaxes its bounds by about 1e-8 (bound_relax_factor): a pressure on a bound comes back just outside it
     pressure = min(max(float(z[-1]), 0.0), max_pressure)
     theta_nlp = z[:-1]
@@ -450,8 +440,8 @@ def pressure_for_target(
     on_path = bool(path.ok and float(np.max(np.abs(path.theta - eq.theta))) < 1e-6)
     residual = float(residual_fun(eq.theta))
     messages = []
-    if not stats.get("success", False):
-        messages.append(f"IPOPT: {stats.get('return_status')}")
+    if not sol.success:
+        messages.append(f"IPOPT: {sol.status}")
     if not eq.ok:
         messages.append(eq.message or f"the equilibrium at {pressure:.6g} MPa is not ok ({eq.status})")
     elif float(np.max(np.abs(eq.theta - theta_nlp))) > 1e-6:

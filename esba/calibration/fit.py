@@ -290,7 +290,7 @@ def _layout_key(data: MeasurementSet, free: tuple[str, ...], options: FitOptions
     return (data.base.actuator, rows, free, options.tol, options.max_iter, options.linear_solver)
 
 
-def _nlp(data: MeasurementSet, free: tuple[str, ...], options: FitOptions) -> _FitNLP:
+def _fit_nlp(data: MeasurementSet, free: tuple[str, ...], options: FitOptions) -> _FitNLP:
     key = _layout_key(data, free, options)
     cached = _NLPS.get(key)
     if cached is not None:
@@ -592,7 +592,7 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
             raise MeasurementError(f"{m.where}: the row cannot be solved at the starting parameters ({m.scene.describe()}): {why}")
         starts.append((theta_l, theta_u))
     t0 = time.perf_counter()
-    nlp = _nlp(data, free, options)
+    nlp = _fit_nlp(data, free, options)
     x0 = {"z": start / scale}
     for i, (tl, tu) in enumerate(starts):
         x0[f"theta_l{i}"] = tl

@@ -28,48 +28,62 @@ import casadi as ca
 import numpy as np
 
 from derive.effects import EffectSet
+from esba.model.closed_form import unloaded_pressure
 from esba.model.generated import Model, load_model
-from esba.solvers.newton import CONTRACTION, natural_expression, parts_function
+from esba.solvers.newton import Acceptance, natural_expression, newton_correction, newton_parts
 
 from .problem import DEFAULT_DESIGN_OPTIONS, DesignOptions, DesignProblem
 
 __all__ = ["Evaluation", "evaluate", "free_angle", "term_curvatures"]
 
 # ---------------------------------------------------------------------------------------------
-# symbolic pieces shared by the evaluator and the NLP
+# the design problem's model: a design (r2, d), its pressure and payload -> the model's parameters
 
 
-class _Pieces:
-    """The generated model with the fixed parameters bound: CasADi Functions of (theta, r2, d, P, F)."""
+class DesignModel:
+    """The generated model of a design problem with its fixed parameters bound: every parameter
+    vector is a function of the design (r2, d), the pressure P and the payload F (numbers or CasADi
+    expressions), and the evaluator, the NLP and the checks ask the model's own Functions."""
 
     def __init__(self, problem: DesignProblem):
         self.problem = problem
         self.model: Model = load_model(problem.segments, EffectSet.parse("air,axial,radial,fibres,payload"), problem.variant)
-        n = self.n = problem.segments
+        self.n = problem.segments
         a = problem.actuator
         self.L, self.r1 = a.L, a.r1
-        fixed = {"L": a.L, "r1": a.r1, "rho": math.radians(a.rho_deg), "E": a.E, "Omega1": math.radians(problem.payload_angle_deg), "s1": 1.0}
-        th = ca.SX.sym("theta", n)
-        r2, d, P, F = (ca.SX.sym(s) for s in ("r2", "d", "P", "F"))
-        values = dict(fixed, r2=r2, d=d, P=P, F1=F)
-        args = [values[name] for name in self.model.parameters]
-        grad = self.model["gradient"](th, *args)
-        hess = self.model["hessian"](th, *args)
-        names = ["theta", "r2", "d", "P", "F"]
-        self.grad = ca.Function("gradient_u", [th, r2, d, P, F], [grad], names, ["grad"])
-        self.hess = ca.Function("hessian_u", [th, r2, d, P, F], [hess], names, ["hess"])
-        tip = self.model["kinematics"](th, a.L)[0]
-        self.tip = ca.Function("tip", [th], [tip[:2]], ["theta"], ["tip"])
+        self.fixed = {"L": a.L, "r1": a.r1, "rho": math.radians(a.rho_deg), "E": a.E, "Omega1": math.radians(problem.payload_angle_deg), "s1": 1.0}
         om = math.radians(problem.payload_angle_deg)
         self.u = np.array([math.cos(om), -math.sin(om)])  # unit vector of the payload, Eq. (14)
-        # closed-form pressure of the uniform unloaded shape of total angle Theta (U linear in P)
-        Theta = ca.SX.sym("Theta")
-        uni = ca.repmat(Theta / n, n, 1)
-        g0 = self.grad(uni, r2, d, 0.0, 0.0)
-        g1 = self.grad(uni, r2, d, 1.0, 0.0) - g0
-        self.pressure_closed = ca.Function(
-            "pressure_closed", [Theta, r2, d], [-ca.dot(g0, g1) / ca.dot(g1, g1)], ["Theta", "r2", "d"], ["P"]
-        )
+
+    def values(self, r2, d, P, F) -> dict:
+        """Every model parameter by name."""
+        return dict(self.fixed, r2=r2, d=d, P=P, F1=F)
+
+    def params(self, r2, d, P, F):
+        """The model's parameter vector (a CasADi column when any argument is symbolic)."""
+        v = self.values(r2, d, P, F)
+        return ca.vertcat(*[v[k] for k in self.model.parameters])
+
+    def grad(self, theta, r2, d, P, F):
+        """dU/dtheta of the design's model."""
+        v = self.values(r2, d, P, F)
+        return self.model["gradient"](theta, *[v[k] for k in self.model.parameters])
+
+    def hess(self, theta, r2, d, P, F):
+        """d2U/dtheta2 of the design's model."""
+        v = self.values(r2, d, P, F)
+        return self.model["hessian"](theta, *[v[k] for k in self.model.parameters])
+
+    def tip(self, theta):
+        """Tip [x, y] (mm): numbers for numbers, an expression for symbols."""
+        if isinstance(theta, (ca.SX, ca.MX)):
+            return self.model["kinematics"](theta, self.L)[0][:2]
+        return self.model.tips(np.asarray(theta, dtype=float)[None, :], self.L)[0, :2]
+
+    def pressure_closed(self, Theta, r2, d):
+        """The closed-form pressure of the uniform unloaded shape of total angle Theta
+        (:func:`esba.model.closed_form.unloaded_pressure`)."""
+        return unloaded_pressure(self.model, Theta, self.values(r2, d, 0.0, 0.0))
 
     def stiffness_expr(self, theta_s, theta_l):
         """K = 1000 F / delta (N/m), delta = tip displacement along the payload (mm)."""
@@ -77,64 +91,58 @@ class _Pieces:
         return 1000.0 * self.problem.payload_n / delta
 
 
-_PIECES: dict[tuple, _Pieces] = {}
-
-
-def _pieces_key(problem: DesignProblem) -> tuple:
+def design_model_key(problem: DesignProblem) -> tuple:
     a = problem.actuator
     return (problem.segments, problem.variant, a.L, a.r1, a.rho_deg, a.E, problem.payload_n, problem.payload_angle_deg)
 
 
-def _pieces(problem: DesignProblem) -> _Pieces:
-    key = _pieces_key(problem)
-    p = _PIECES.get(key)
-    if p is None:
-        p = _PIECES[key] = _Pieces(problem)
-    return p
+def design_model(problem: DesignProblem) -> DesignModel:
+    """The :class:`DesignModel` of ``problem`` (one per problem's fixed values, in the model's registry)."""
+    model = load_model(problem.segments, EffectSet.parse("air,axial,radial,fibres,payload"), problem.variant)
+    return model.derived("design_model", lambda: DesignModel(problem), settings=design_model_key(problem), persist=False)
 
 
 # ---------------------------------------------------------------------------------------------
-# the batched evaluator (PSO, IPOPT's starts, the figures)
+# the batched evaluator (PSO, IPOPT's starts, the figures): the engine's natural continuation
 
 
 class _Evaluator:
-    """One design -> start pressure, loaded state (Newton along the payload ramp), mapped over designs."""
+    """One design -> start pressure, loaded state (natural continuation of the payload), mapped over designs."""
 
     def __init__(self, problem: DesignProblem, options: DesignOptions):
-        pc = _pieces(problem)
+        pc = design_model(problem)
         self.pieces, self.problem, self.options = pc, problem, options
-        n = pc.n
-        th = ca.SX.sym("theta", n)
-        z = ca.SX.sym("z", 4)  # r2, d, P, F
-        G = ca.Function("G", [th, z], [pc.grad(th, z[0], z[1], z[2], z[3])], ["theta", "z"], ["g"])
-        H = ca.Function("H", [th, z], [pc.hess(th, z[0], z[1], z[2], z[3])], ["theta", "z"], ["h"])
-        self._parts = parts_function(G, H, "design_ramp_parts")
+        self.rule = Acceptance(tol=options.equilibrium_tol, critical_tol=options.critical_tol)
         self.single = self._single(options.load_steps)
         self._dense: ca.Function | None = None  # the retry's ramp, four times the steps, built when needed
         self._maps: dict[int, ca.Function] = {}
         self._dense_maps: dict[int, ca.Function] = {}
+        r2, d, Theta = (ca.SX.sym(k) for k in ("r2", "d", "Theta"))
+        self._pressure = ca.Function("pressure_closed", [Theta, r2, d], [pc.pressure_closed(Theta, r2, d)], ["Theta", "r2", "d"], ["P"])
         self._pmaps: dict[int, ca.Function] = {}
 
     def _single(self, steps: int) -> ca.Function:
-        """One design -> P, loaded theta, K, residual, loaded Hessian, smallest pivot, worst contraction."""
+        """One design -> P, loaded theta, K, residual, loaded Hessian, smallest pivot, worst contraction, worst jump."""
         pc, n, F = self.pieces, self.pieces.n, self.problem.payload_n
+        model = pc.model
         x = ca.MX.sym("x", 2)
         r2, d = x[0], x[1]
         start = math.radians(self.problem.start_angle_deg)
         P = pc.pressure_closed(start, r2, d)
         theta_s = ca.DM.ones(n) * (start / n)
-        # the payload ramp from the unloaded state: stable all the way, or reported failed (esba.solvers.newton)
-        theta, g, low, contraction, _, _ = natural_expression(
-            self._parts, ca.MX(theta_s), ca.vertcat(r2, d, P, 0.0), ca.vertcat(0.0, 0.0, 0.0, F), 1.0, steps, self.options.newton_steps, 2
+        p0 = pc.params(r2, d, P, 0.0)
+        # the payload ramp from the unloaded state on the engine: accepted by the one rule, or refused
+        theta, g, low, contraction, _, jump = natural_expression(
+            newton_parts(model), ca.MX(theta_s), p0, pc.params(r2, d, P, F) - p0, 1.0, steps, self.options.newton_steps, 2, newton_correction(model)
         )
         K = pc.stiffness_expr(theta_s, theta)
         hess = pc.hess(theta, r2, d, P, F)
         return ca.Function(
             "design_eval",
             [x],
-            [P, theta, K, ca.norm_inf(g), ca.reshape(hess, n * n, 1), low, contraction],
+            [P, theta, K, ca.norm_inf(g), ca.reshape(hess, n * n, 1), low, contraction, jump],
             ["x"],
-            ["P", "theta_l", "K", "residual", "hess_l", "min_pivot", "contraction"],
+            ["P", "theta_l", "K", "residual", "hess_l", "min_pivot", "contraction", "jump"],
         )
 
     def _map(self, cache: dict, fun: ca.Function, size: int) -> ca.Function:
@@ -146,18 +154,18 @@ class _Evaluator:
     def pressure(self, Theta: np.ndarray, r2: np.ndarray, d: np.ndarray) -> np.ndarray:
         """Closed-form pressure (MPa) of the uniform unloaded shape of total angle Theta (rad), batched."""
         Theta, r2, d = np.broadcast_arrays(*(np.asarray(v, dtype=float).ravel() for v in (Theta, r2, d)))
-        f = self._map(self._pmaps, self.pieces.pressure_closed, Theta.size)
+        f = self._map(self._pmaps, self._pressure, Theta.size)
         return np.asarray(f(Theta.reshape(1, -1), r2.reshape(1, -1), d.reshape(1, -1)), dtype=float).ravel()
 
     def _run(self, fun: ca.Function, cache: dict, r2: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, ...]:
         N, n = r2.size, self.pieces.n
         f = self._map(cache, fun, N)
-        P, theta, K, res, hess, low, contraction = (np.asarray(v, dtype=float) for v in f(np.vstack([r2, d])))
+        P, theta, K, res, hess, low, contraction, jump = (np.asarray(v, dtype=float) for v in f(np.vstack([r2, d])))
         H = hess.T.reshape(N, n, n)
-        ok = np.isfinite(res.ravel()) & (res.ravel() <= self.options.equilibrium_tol) & np.all(np.isfinite(H), axis=(1, 2))
-        # the ramp stayed on the stable branch it started on: no Hessian met was indefinite (no fold or
-        # branch point passed) and every step's Newton iteration contracted (esba.solvers.newton)
-        ok &= (low.ravel() > self.options.critical_tol) & (contraction.ravel() <= CONTRACTION)
+        finite = np.all(np.isfinite(H), axis=(1, 2))
+        # the one acceptance rule: stationary, every Hessian met positive definite (no fold or
+        # branch point passed), every step contracting, no corrector going farther than its predictor
+        ok = self.rule.accepted_arrays(res.ravel(), low.ravel(), contraction.ravel(), jump.ravel(), finite)
         min_eig = np.full(N, np.nan)
         if np.any(ok):
             ev = np.linalg.eigvalsh(0.5 * (H[ok] + np.transpose(H[ok], (0, 2, 1))))
@@ -170,7 +178,7 @@ class _Evaluator:
         d = np.asarray(d, dtype=float).ravel()
         P, theta, K, ok = self._run(self.single, self._maps, r2, d)
         redo = np.flatnonzero(~ok)
-        if len(redo):  # a denser ramp for the designs the first could not follow (huge bends, thin walls)
+        if len(redo):  # a finer ramp for the designs the first could not follow (huge bends, thin walls)
             if self._dense is None:
                 self._dense = self._single(4 * self.options.load_steps)
             P2, theta2, K2, ok2 = self._run(self._dense, self._dense_maps, r2[redo], d[redo])
@@ -179,16 +187,10 @@ class _Evaluator:
         return {"pressure": P, "theta_l": theta, "stiffness": K, "ok": ok}
 
 
-_EVALUATORS: dict[tuple, _Evaluator] = {}
-
-
-def _evaluator(problem: DesignProblem, options: DesignOptions) -> _Evaluator:
-    key = (_pieces_key(problem), problem.start_angle_deg, options.load_steps, options.newton_steps, options.equilibrium_tol,
+def evaluator(problem: DesignProblem, options: DesignOptions) -> _Evaluator:
+    key = (design_model_key(problem), problem.start_angle_deg, options.load_steps, options.newton_steps, options.equilibrium_tol,
            options.critical_tol, options.threads)
-    e = _EVALUATORS.get(key)
-    if e is None:
-        e = _EVALUATORS[key] = _Evaluator(problem, options)
-    return e
+    return design_model(problem).model.derived("design_evaluator", lambda: _Evaluator(problem, options), settings=key, persist=False)
 
 
 def free_angle(
@@ -207,7 +209,7 @@ def free_angle(
     [90.0]
     """
     options = DEFAULT_DESIGN_OPTIONS if options is None else options
-    ev = _evaluator(problem, options)
+    ev = evaluator(problem, options)
     r2 = np.asarray(r2, dtype=float).ravel()
     d = np.asarray(d, dtype=float).ravel()
     N = r2.size
@@ -271,7 +273,7 @@ def evaluate(problem: DesignProblem, r2: Sequence[float], d: Sequence[float], op
     options = DEFAULT_DESIGN_OPTIONS if options is None else options
     r2 = np.asarray(r2, dtype=float).ravel()
     d = np.asarray(d, dtype=float).ravel()
-    ev = _evaluator(problem, options)
+    ev = evaluator(problem, options)
     out = ev(r2, d)
     free = target = None
     if problem.objective == "angle":
@@ -290,7 +292,7 @@ def evaluate(problem: DesignProblem, r2: Sequence[float], d: Sequence[float], op
     )
 
 
-def _objective_of(problem: DesignProblem, e: Evaluation) -> np.ndarray:
+def objective_of(problem: DesignProblem, e: Evaluation) -> np.ndarray:
     """The objective J of evaluated designs, in its units (nan where undefined)."""
     if problem.objective == "stiffness":
         return e.stiffness
@@ -299,7 +301,7 @@ def _objective_of(problem: DesignProblem, e: Evaluation) -> np.ndarray:
     return np.where(e.ok, e.target_pressure, np.nan)
 
 
-def _violation_of(problem: DesignProblem, e: Evaluation) -> np.ndarray:
+def violation_of(problem: DesignProblem, e: Evaluation) -> np.ndarray:
     """Relative violation of the nonlinear constraints (0 = feasible; inf = evaluation failed)."""
     v = np.zeros(e.r2.size)
     if problem.min_stiffness is not None and problem.objective != "stiffness":
@@ -308,11 +310,11 @@ def _violation_of(problem: DesignProblem, e: Evaluation) -> np.ndarray:
         v += np.maximum(0.0, (e.pressure - problem.max_pressure) / problem.max_pressure)
         if e.target_pressure is not None:
             v += np.maximum(0.0, (e.target_pressure - problem.max_pressure) / problem.max_pressure)
-    J = _objective_of(problem, e)
+    J = objective_of(problem, e)
     return np.where(np.isfinite(J) & e.ok, v, np.inf)
 
 
-def _uniform_state(n: int, angle_deg: float) -> np.ndarray:
+def uniform_state(n: int, angle_deg: float) -> np.ndarray:
     """theta_i = Theta / n: the unloaded equilibrium of total angle Theta (rad)."""
     return np.full(n, math.radians(angle_deg) / n)
 
@@ -334,15 +336,13 @@ def term_curvatures(problem: DesignProblem, r2: float, d: float) -> dict[str, fl
     >>> sorted(c), round(c["air"], 9)
     (['air', 'axial', 'fibres', 'payload1', 'radial'], 0.0)
     """
-    pc = _pieces(problem)
+    pc = design_model(problem)
     m = pc.model
     n = pc.n
     th = ca.SX.sym("theta", n)
-    theta = _uniform_state(pc.n, problem.start_angle_deg)
+    theta = uniform_state(pc.n, problem.start_angle_deg)
     P = float(pc.pressure_closed(math.radians(problem.start_angle_deg), r2, d))
-    a = problem.actuator
-    values = {"L": a.L, "r1": a.r1, "r2": r2, "d": d, "rho": math.radians(a.rho_deg), "E": a.E, "P": P,
-              "F1": problem.payload_n, "Omega1": math.radians(problem.payload_angle_deg), "s1": 1.0}
+    values = pc.values(r2, d, P, problem.payload_n)
     terms = m["energy"](th, *[values[k] for k in m.parameters])[1]
     out = {}
     for k, name in enumerate(m.terms):

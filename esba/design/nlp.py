@@ -34,8 +34,8 @@ import numpy as np
 
 from esba.solvers.eqnlp import ActiveConstraint, EquilibriumNLP
 
-from .evaluate import Evaluation, _pieces
-from .problem import _OBJECTIVE_SCALING, _START_FRACTIONS, DesignOptions, DesignProblem
+from .evaluate import Evaluation, design_model
+from .problem import OBJECTIVE_SCALING, START_FRACTIONS, DesignOptions, DesignProblem
 
 __all__ = ["ActiveConstraint"]  # (from esba.solvers.eqnlp, the builder this NLP is made with)
 
@@ -49,7 +49,7 @@ class _NLP:
 
     def __init__(self, problem: DesignProblem, options: DesignOptions):
         t0 = time.perf_counter()
-        pc = _pieces(problem)
+        pc = design_model(problem)
         self.problem, self.options, self.pieces = problem, options, pc
         n, r1, L = pc.n, pc.r1, pc.L
         F = problem.payload_n
@@ -93,7 +93,7 @@ class _NLP:
             J = P_t
         else:
             J = K
-        sign, scale = _OBJECTIVE_SCALING[problem.objective]
+        sign, scale = OBJECTIVE_SCALING[problem.objective]
         self.sign, self.scale = sign, scale
         self.built = b.build(
             sign * J / scale,
@@ -108,7 +108,6 @@ class _NLP:
         )
         self.slices, self.solver = self.built.slices, self.built.solver
         self.lbx, self.ubx, self.lbg, self.ubg = self.built.lbx, self.built.ubx, self.built.lbg, self.built.ubg
-        self.K_fun = ca.Function("K", [self.built.nlp["x"]], [K], ["x"], ["K"])
         self.build_time = time.perf_counter() - t0
 
     def x0(self, e: Evaluation, i: int, extra: dict) -> np.ndarray:
@@ -129,27 +128,28 @@ class _NLP:
         return self.built.active(z, g, lam_g, lam_x, self.options.active_tol, -self.sign * self.scale)
 
 
-_NLPS: dict[tuple, _NLP] = {}
-
-
-def _nlp(problem: DesignProblem, options: DesignOptions) -> tuple[_NLP, float]:
+def design_nlp(problem: DesignProblem, options: DesignOptions) -> tuple[_NLP, float]:
+    """The NLP of ``problem`` (built once, in the model's registry) and the seconds this call spent building it."""
     key = (problem, options.tol, options.max_iter, options.linear_solver, options.r2_min, options.max_free_angle_deg)
-    nlp = _NLPS.get(key)
-    if nlp is not None:
-        return nlp, 0.0
-    nlp = _NLPS[key] = _NLP(problem, options)
-    return nlp, nlp.build_time
+    built = []
+
+    def build() -> _NLP:
+        built.append(True)
+        return _NLP(problem, options)
+
+    nlp = design_model(problem).model.derived("design_nlp", build, settings=key, persist=False)
+    return nlp, nlp.build_time if built else 0.0
 
 
-def _start_designs(problem: DesignProblem, options: DesignOptions) -> tuple[np.ndarray, np.ndarray]:
+def start_designs(problem: DesignProblem, options: DesignOptions) -> tuple[np.ndarray, np.ndarray]:
     room = problem.actuator.r1 - problem.wall
-    fr = np.array(_START_FRACTIONS[: options.starts])
+    fr = np.array(START_FRACTIONS[: options.starts])
     r2 = np.maximum(fr[:, 0] * room, options.r2_min * 2)
     d = fr[:, 1] * room
     return r2, d
 
 
-def _extra_start(problem: DesignProblem, e: Evaluation, i: int, n: int) -> dict:
+def extra_start(problem: DesignProblem, e: Evaluation, i: int, n: int) -> dict:
     if problem.objective == "angle":
         a = e.free_angle_deg[i]
         return {"theta_f": np.full(n, math.radians(a if np.isfinite(a) else problem.start_angle_deg) / n)}
@@ -158,7 +158,7 @@ def _extra_start(problem: DesignProblem, e: Evaluation, i: int, n: int) -> dict:
     return {}
 
 
-def _extra_states(problem: DesignProblem, nlp: _NLP, z: np.ndarray) -> dict:
+def extra_states(problem: DesignProblem, nlp: _NLP, z: np.ndarray) -> dict:
     if problem.objective == "angle":
         return {"free": (z[nlp.slices["theta_f"]], problem.max_pressure)}
     if problem.objective == "pressure":

@@ -44,16 +44,16 @@ from esba.statics.equilibrium import SolverOptions, solve, stability_verdict
 
 from .evaluate import (
     Evaluation,
-    _evaluator,
-    _objective_of,
-    _pieces,
-    _uniform_state,
-    _violation_of,
+    design_model,
     evaluate,
+    evaluator,
     free_angle,
+    objective_of,
     term_curvatures,
+    uniform_state,
+    violation_of,
 )
-from .nlp import ActiveConstraint, _extra_start, _extra_states, _nlp, _start_designs
+from .nlp import ActiveConstraint, design_nlp, extra_start, extra_states, start_designs
 from .problem import (
     DEFAULT_DESIGN_OPTIONS,
     GEOMETRY_EPS,
@@ -247,8 +247,8 @@ def _checked(
     pso: PSOResult | None = None,
 ) -> DesignResult:
     """Stability of every state, the load path, K recomputed: the result as reported."""
-    pc = _pieces(problem)
-    states = {"start": _uniform_state(pc.n, problem.start_angle_deg), "loaded": np.asarray(theta_loaded, dtype=float)}
+    pc = design_model(problem)
+    states = {"start": uniform_state(pc.n, problem.start_angle_deg), "loaded": np.asarray(theta_loaded, dtype=float)}
     pressures = {"start": pressure, "loaded": pressure}
     forces = {"start": 0.0, "loaded": problem.payload_n}
     for name, (theta, p) in extra.items():
@@ -376,19 +376,19 @@ def optimise_ipopt(problem: DesignProblem | None = None, options: DesignOptions 
         if stiffest.stiffness_n_per_m < problem.min_stiffness:
             return _infeasible_stiffness("ipopt", problem, stiffest)
         extra_r2, extra_d = [stiffest.r2_mm], [stiffest.d_mm]
-    nlp, setup = _nlp(problem, options)
+    nlp, setup = design_nlp(problem, options)
     t_eval = time.perf_counter()
-    _evaluator(problem, options)
+    evaluator(problem, options)
     setup += time.perf_counter() - t_eval
     t0 = time.perf_counter()
-    r2s, ds = _start_designs(problem, options)
+    r2s, ds = start_designs(problem, options)
     r2s, ds = np.r_[r2s, extra_r2], np.r_[ds, extra_d]
     e = evaluate(problem, r2s, ds, options)
     best, statuses, iterations, starts = None, [], 0, 0
     for i in range(r2s.size):
         if not e.ok[i]:
             continue
-        z0 = nlp.x0(e, i, _extra_start(problem, e, i, nlp.pieces.n))
+        z0 = nlp.x0(e, i, extra_start(problem, e, i, nlp.pieces.n))
         sol = nlp.solver(x0=z0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
         stats = nlp.solver.stats()
         starts += 1
@@ -431,7 +431,7 @@ def optimise_ipopt(problem: DesignProblem | None = None, options: DesignOptions 
         float(z[nlp.slices["d"]][0]),
         float(z[nlp.slices["P"]][0]),
         z[nlp.slices["theta_l"]],
-        _extra_states(problem, nlp, z),
+        extra_states(problem, nlp, z),
         status="optimal",
         message="",
         active=active,
@@ -492,14 +492,14 @@ def optimise_pso(
     options = DEFAULT_DESIGN_OPTIONS if options is None else options
     pso_options = PSOOptions() if pso_options is None else pso_options
     t_setup = time.perf_counter()
-    _evaluator(problem, options)
+    evaluator(problem, options)
     setup = time.perf_counter() - t_setup
     sign = -1.0 if problem.objective in ("stiffness", "angle") else 1.0
 
     def swarm(X: np.ndarray):
         e = evaluate(problem, X[:, 0], X[:, 1], options)
-        J = _objective_of(problem, e)
-        return sign * J, _violation_of(problem, e)
+        J = objective_of(problem, e)
+        return sign * J, violation_of(problem, e)
 
     room = problem.actuator.r1 - problem.wall
     t0 = time.perf_counter()
@@ -522,7 +522,7 @@ def optimise_pso(
     elif problem.objective == "stiffness" and problem.min_stiffness is not None and e.stiffness[0] < problem.min_stiffness:
         status, best_reachable = "infeasible", float(e.stiffness[0])
         message = f"K >= {problem.min_stiffness:g} N/m is above the stiffest design found (K = {best_reachable:.4g} N/m)"
-    pc = _pieces(problem)
+    pc = design_model(problem)
     extra = {}
     if problem.objective == "angle" and np.isfinite(e.free_angle_deg[0]):
         extra["free"] = (np.full(pc.n, math.radians(float(e.free_angle_deg[0])) / pc.n), problem.max_pressure)

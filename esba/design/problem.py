@@ -32,7 +32,7 @@ GEOMETRY_EPS = 1e-3
 
 _OBJECTIVE_UNITS = {"stiffness": "N/m", "angle": "deg", "pressure": "MPa"}
 #: Each objective as (sign, scale): IPOPT minimises sign * J / scale.
-_OBJECTIVE_SCALING = {"stiffness": (-1.0, 10.0), "angle": (-1.0, 90.0), "pressure": (1.0, 0.1)}
+OBJECTIVE_SCALING = {"stiffness": (-1.0, 10.0), "angle": (-1.0, 90.0), "pressure": (1.0, 0.1)}
 
 
 class DesignError(InputError):
@@ -256,8 +256,8 @@ class DesignOptions:
         _whole("max_iter", self.max_iter, 1, 100_000, "an optimum takes tens of iterations; IPOPT counts in a 32-bit int")
         if self.linear_solver not in ("mumps", "spral"):
             raise DesignError(f"linear_solver={self.linear_solver!r}: allowed are mumps, spral")
-        if isinstance(self.starts, bool) or not isinstance(self.starts, int) or not 1 <= self.starts <= len(_START_FRACTIONS):
-            raise DesignError(f"starts={self.starts!r}: expected a whole number from 1 to {len(_START_FRACTIONS)}")
+        if isinstance(self.starts, bool) or not isinstance(self.starts, int) or not 1 <= self.starts <= len(START_FRACTIONS):
+            raise DesignError(f"starts={self.starts!r}: expected a whole number from 1 to {len(START_FRACTIONS)}")
         _whole("load_steps", self.load_steps, 1, 1_000, "each step is unrolled into the mapped evaluator")
         _whole("newton_steps", self.newton_steps, 2, 1_000, "each step is unrolled into the mapped evaluator")
         _whole("threads", self.threads, 1, 256)
@@ -266,6 +266,6 @@ class DesignOptions:
 
 
 #: Starting designs of IPOPT as fractions (r2, d) of the room r1 - wall, spread over the triangle.
-_START_FRACTIONS = ((0.25, 0.05), (0.2, 0.5), (0.35, 0.6), (0.55, 0.05), (0.1, 0.8), (0.8, 0.05), (0.45, 0.3), (0.65, 0.25))
+START_FRACTIONS = ((0.25, 0.05), (0.2, 0.5), (0.35, 0.6), (0.55, 0.05), (0.1, 0.8), (0.8, 0.05), (0.45, 0.3), (0.65, 0.25))
 
 DEFAULT_DESIGN_OPTIONS = DesignOptions()

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from esba.infra import outputs
 
-from .ccode import ExportSpec, TEMPLATES, fill, render_source
+from .ccode import TEMPLATES, ExportSpec, fill, render_source
 from .reference import reference_equilibrium
 
 __all__ = ["Export", "export_c", "EXAMPLE", "STATUS_TABLE", "example_line", "format_line", "default_command"]

@@ -126,11 +126,11 @@ def test_newton_finds_an_unstable_equilibrium_and_says_so(exports):
 @pytest.mark.parametrize("force", [4.0, 6.0, 10.0])
 def test_a_straight_actuator_buckles_without_a_jump(exports, force):
     """P = 0 and a push straight up the axis: the straight state loses stability at a branch point and
-    the load history goes on along the stable bent branch (solve()'s "switch"), not a snap."""
+    the load history goes on along the stable bent branch (solve()'s branch_points), not a snap."""
     _, lib = exports(3)
     scene = Scene(pressure=0.0, payloads=(Payload(force, 180.0),))
     py = solve(scene)
-    assert py.ok and len(py.switches) == 1 and not py.jumps
+    assert py.ok and len(py.branch_points) == 1 and not py.jumps
     c = lib.equilibrium(params_of(scene.parameters(0.0)), loads_of(0.0, [(force, math.pi, 1.0)]))
     assert c.status_name == "ok" and c.snaps == 0
     assert np.max(np.abs(c.theta - py.theta)) < EXPORT_THETA_ATOL
