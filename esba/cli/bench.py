@@ -155,7 +155,7 @@ def _cmd_bench_path(args: argparse.Namespace) -> int:
     if args.markdown:
         outputs.check_file(args.markdown, "--markdown", (".md",))
     rows = bench_path.path_benchmark(repeat=args.repeat, progress=_bench_progress(args, "  n = {} done"))
-    data = {"rows": [dict(r.__dict__, points_per_s=r.points_per_s, floor_s=r.floor_s) for r in rows]}
+    data = {"rows": [dict(r.__dict__, folds=list(r.folds), points_per_s=r.points_per_s, point_us=r.point_us) for r in rows]}
     print_result(args, data, lambda d: bench_path.path_table(rows))
     _bench_section(args, "path", bench_path.path_section(rows))
     return EXIT_OK
