@@ -250,6 +250,15 @@ class PathProblem:
             raise PathError(f"scene={scene!r}: expected a Scene")
         base, k = _split_name(parameter)
         kind = PARAMETERS[base]
+        # what the scene cannot follow is refused before any model is loaded (or generated)
+        npayloads = len(scene.payloads)
+        if base in ("payload", "omega", "at") and k > npayloads:
+            have = f"{npayloads} payload{'s' if npayloads != 1 else ''}"
+            raise PathError(f"parameter={parameter!r}: the scene has {have}; add one (--payload N) to follow its {kind.what}")
+        if base == "M" and not scene.gravity:
+            raise PathError("parameter='M': the mass only acts with gravity (--gravity)")
+        if base == "load" and not (scene.payloads or scene.gravity):
+            raise PathError("parameter='load': the scene has no payload and no gravity to scale")
         if pressure is None:
             if scene.pressure is not None:
                 pressure = scene.pressure
@@ -259,15 +268,7 @@ class PathProblem:
         values = scene.parameters(pressure)
         names = model.parameters
         a = scene.actuator
-        npayloads = len(scene.payloads)
-        if base in ("payload", "omega", "at") and k > npayloads:
-            have = f"{npayloads} payload{'s' if npayloads != 1 else ''}"
-            raise PathError(f"parameter={parameter!r}: the scene has {have}; add one (--payload N) to follow its {kind.what}")
-        if base == "M" and not scene.gravity:
-            raise PathError("parameter='M': the mass only acts with gravity (--gravity)")
         if base == "load":
-            if not (scene.payloads or scene.gravity):
-                raise PathError("parameter='load': the scene has no payload and no gravity to scale")
             unloaded = model.param_vector(scene.parameters(pressure, load_factor=0.0))
             full = model.param_vector(values)
             return cls(
