@@ -26,7 +26,6 @@ import sympy as sp
 
 from . import symbols as S
 from .effects import check_variant
-from .kinematics import chord
 
 #: A symbolic segment count, for derivations that hold for every n.
 n_sym = sp.Symbol("n", positive=True, integer=True)
@@ -307,8 +306,3 @@ def separable(effects_names: tuple[str, ...], n: int, variant: str, t=S.t) -> di
     if "fibres" in effects_names:
         out["fibres"] = fibres(variant, t)
     return out
-
-
-def chord_template(n: int, sigma, t=S.t) -> sp.Matrix:
-    """The local chord of a segment (see :func:`derive.kinematics.chord`)."""
-    return chord(t, sigma, n)
