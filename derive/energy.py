@@ -31,8 +31,8 @@ from .effects import check_variant
 n_sym = sp.Symbol("n", positive=True, integer=True)
 #: The radius change of the chamber of one segment, Eq. (9)-(10).
 Delta_r2 = sp.Symbol("Delta_r2", real=True)
-#: The tension components of one fibre and its number of turns, Eq. (16).
-eta_r, eta_a, N_turns = sp.symbols("eta_r eta_a N", real=True)
+#: The radial tension of one fibre, Eq. (16).
+eta_r = sp.Symbol("eta_r", real=True)
 #: The total bending angle theta_TOL, Eq. (17).
 theta_TOL = sp.Symbol("theta_TOL", real=True)
 
