@@ -31,7 +31,7 @@ from .timing import median_time
 
 __all__ = ["PathBenchRow", "path_benchmark", "path_table", "path_section", "PATH_NS"]
 
-#: Segment counts of the benchmark (the issue's).
+#: Segment counts of the benchmark.
 PATH_NS = (3, 32)
 #: The naive BFGS is timed up to this n (it takes minutes beyond).
 NAIVE_MAX_N = 8

@@ -71,24 +71,24 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
         if not args.json:
             print(f"  {msg}", file=sys.stderr)
 
-    study = acc.accuracy_study(ns, ref_n, repeat=args.repeat, progress=say)
-    say(f"tolerance study (n = {fixed_n})")
-    tol = acc.tolerance_study(fixed_n, repeat=args.repeat)
-    say(f"effect study (n = {fixed_n})")
-    eff = acc.effect_study(fixed_n, repeat=args.repeat)
+    accuracy = acc.accuracy_benchmark(ns, ref_n, repeat=args.repeat, progress=say)
+    say(f"tolerance benchmark (n = {fixed_n})")
+    tol = acc.tolerance_benchmark(fixed_n, repeat=args.repeat)
+    say(f"effect benchmark (n = {fixed_n})")
+    eff = acc.effect_benchmark(fixed_n, repeat=args.repeat)
     for rows in (tol, eff):
         for r in rows:
             r["n"] = fixed_n
     say("naive BFGS against esba")
-    naive = acc.naive_study(naive_ns, repeat=args.repeat)
+    naive = acc.naive_benchmark(naive_ns, repeat=args.repeat)
     say(f"batch of {size}")
-    batch = acc.batch_study(size)
+    batch = acc.batch_benchmark(size)
     data = {
-        "reference": study.reference,
-        "rows": [r.__dict__ for r in study.rows],
-        "costs": {n: c.__dict__ for n, c in study.costs.items()},
+        "reference": accuracy.reference,
+        "rows": [r.__dict__ for r in accuracy.rows],
+        "costs": {n: c.__dict__ for n, c in accuracy.costs.items()},
         "reach": {
-            case: {f"{mm:g} mm": (None if (r := study.first_n_below(case, mm)) is None else r.n) for mm in (1.0, 0.1)} for case in study.reference
+            case: {f"{mm:g} mm": (None if (r := accuracy.first_n_below(case, mm)) is None else r.n) for mm in (1.0, 0.1)} for case in accuracy.reference
         },
         "tolerance": tol,
         "effects": eff,
@@ -101,12 +101,12 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
             command += f" --max-n {max_n} --reference-n {reference_n} --fixed-n {fixed_n} --repeat {args.repeat}"
         from esba.pages.accuracy import write_page
 
-        doc, fig = write_page(study, tol, eff, naive, batch, command, doc=doc, fig_path=fig)
+        doc, fig = write_page(accuracy, tol, eff, naive, batch, command, doc=doc, fig_path=fig)
         data["page"], data["figure"] = str(doc), str(fig)
 
     def table(d: dict) -> str:
         lines = [f"{'case':>10} {'n':>4} {'error mm':>9} {'n vs n+1':>9} {'solve ms':>9}"]
-        for r in study.rows:
+        for r in accuracy.rows:
             lines.append(f"{r.case:>10} {r.n:>4} {r.error_mm:9.3g} {r.next_mm:9.3g} {1e3 * r.solve_s:9.2f}")
         lines += [f"{case}: reaches {reach}" for case, reach in d["reach"].items()]
         lines.append(f"batch: {batch.get('compiled_us', batch['interpreted_us']):.1f} us per equilibrium; naive {batch['naive_us']:.0f} us; IPOPT {batch['ipopt_us']:.0f} us")
@@ -166,7 +166,7 @@ def _cmd_bench_batch(args: argparse.Namespace) -> int:
     from esba.statics.batch import check_size
 
     check_size(args.size, args.segments, "--size", UsageError)
-    data = acc.batch_study(args.size, args.segments)
+    data = acc.batch_benchmark(args.size, args.segments)
 
     def table(d: dict) -> str:
         rows = [("batch size", f"{d['size']} equilibria, n = {d['segments']} (pressures 0-0.2 MPa x horizontal tip payloads 0-2 N)")]
@@ -222,7 +222,7 @@ def _cmd_bench_scaling(args: argparse.Namespace) -> int:
 
     workers = tuple(args.workers) if args.workers else bench_scaling.DEFAULTS["workers"]
     try:
-        data = bench_scaling.scaling_study(points=args.points, segments=args.segments, repeat=args.repeat, chunk=args.chunk,
+        data = bench_scaling.scaling_benchmark(points=args.points, segments=args.segments, repeat=args.repeat, chunk=args.chunk,
                                            workers=workers, scheduler=args.scheduler, timeout=args.connect_timeout or 10.0, progress=say)
     except DistributedError as exc:
         raise UsageError(str(exc)) from None
@@ -256,9 +256,9 @@ def add_bench(sub) -> None:
     g.set_defaults(func=_cmd_bench_generation)
 
     a = bsub.add_parser("accuracy", help="tip error against n, tolerance, effects, naive vs esba, batch (about 4 minutes); writes the accuracy page")
-    a.add_argument("--max-n", type=segments_arg, default=None, help="largest n of the study (default 128)")
+    a.add_argument("--max-n", type=segments_arg, default=None, help="largest n of the benchmark (default 128)")
     a.add_argument("--reference-n", type=segments_arg, default=None, help="finest n; the reference extrapolates from n/4, n/2, n (default 256)")
-    a.add_argument("--fixed-n", type=segments_arg, default=None, help="n of the tolerance and effect studies (default 16)")
+    a.add_argument("--fixed-n", type=segments_arg, default=None, help="n of the tolerance and effect benchmarks (default 16)")
     a.add_argument("--repeat", type=count_arg("repeat", 1, _MAX_REPEAT), default=5, help="solves per timing, median reported (default 5, at most 100)")
     a.add_argument("--quick", action="store_true", help="a small smoke run (n <= 4, reference n = 16, batch of 1000)")
     a.add_argument("--out", default=None, metavar="FILE", help="page to write (default docs/accuracy-vs-time.md in a checkout, else ./accuracy-vs-time.md)")

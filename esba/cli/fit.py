@@ -1,4 +1,4 @@
-"""``esba fit`` and ``esba experiments`` (issue 10): parameters from measurements, the paper's EXP
+"""``esba fit`` and ``esba experiments``: parameters from measurements, the paper's EXP
 and FEM values against the model."""
 
 from __future__ import annotations
@@ -172,19 +172,19 @@ def _cmd_experiments(args: argparse.Namespace) -> int:
             return EXIT_FAILED
         print("experiments page is up to date")
         return EXIT_OK
-    from esba.calibration.experiments import run_study
+    from esba.calibration.experiments import compare_with_paper
 
-    study = run_study()
+    comparison = compare_with_paper()
     data = {
         "columns": [
             {"name": c.name, "nominal": [p.to_dict() for p in c.nominal], "fit_e": c.fit_e.to_dict(), "fit_both": c.fit_both.to_dict()}
-            for c in study.columns
+            for c in comparison.columns
         ],
-        "modulus": study.modulus_agreement.to_dict(),
+        "modulus": comparison.modulus_agreement.to_dict(),
     }
     if args.write_doc:
         try:
-            path, _ = experiments_page.write_page(args.write_doc, study)
+            path, _ = experiments_page.write_page(args.write_doc, comparison)
         except OSError as exc:
             raise UsageError(f"--write-doc {args.write_doc!r}: cannot write: {exc}") from None
         data["page"] = str(path)

@@ -1,4 +1,4 @@
-"""Figures of the parameter study and the design optimisation (the paper's Figs. 13 and 14).
+"""Figures of the parameter sweep and the design optimisation (the paper's Figs. 13 and 14).
 
 * :func:`figure_13a`: the free bending angle over the (r2, d) triangle at 0.2 MPa (Fig. 13a);
 * :func:`figure_13b`: the secant stiffness over the triangle (each design at its own 90 degree

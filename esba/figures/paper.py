@@ -18,7 +18,7 @@ fig11     secant stiffness against payload (0.5, 1, 2 N    :func:`horizontal_pay
           and a fine curve), n = 3
 ========  ==============================================  =================================
 
-The design figures of the parameter study (``fig13a``, ``fig13b``, ``fig14``) live in
+The design figures of the parameter sweep (``fig13a``, ``fig13b``, ``fig14``) live in
 :mod:`esba.figures.design`; :func:`registry` lists them when that module is installed and
 imports it only when one of them is drawn.
 
@@ -442,7 +442,7 @@ FIGURES: dict[str, Callable[[str | Path], Path]] = {
     "fig11": figure_11,
 }
 
-#: The parameter-study figures: registry name -> function name in :mod:`esba.figures.design`.
+#: The parameter-sweep figures: registry name -> function name in :mod:`esba.figures.design`.
 DESIGN_FIGURES: dict[str, str] = {"fig13a": "figure_13a", "fig13b": "figure_13b", "fig14": "figure_14"}
 _DESIGN_MODULE = "esba.figures.design"
 

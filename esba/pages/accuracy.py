@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from esba.bench.accuracy import AccuracyStudy
+from esba.bench.accuracy import AccuracyBenchmark
 from esba.infra.outputs import default_page, figures_dir
 
 __all__ = ["figure", "render_page", "write_page", "CASE_LABELS"]
@@ -23,7 +23,7 @@ CASE_LABELS = {
 SWEEP_FIGURES = {"fig12": "docs/figures/sweep-fig12.png", "pressure": "docs/figures/sweep-pressure-payload.png"}
 
 
-def figure(study: AccuracyStudy):
+def figure(study: AccuracyBenchmark):
     """Tip error against n (true and n-vs-(n+1)) and against solve time."""
     from esba.figures.scenes import new_figure
 
@@ -86,7 +86,7 @@ def _batch_cost(b: dict) -> list[str]:
     return [line + "."]
 
 
-def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict], naive: list[dict], batch: dict, command: str, figure_rel: str) -> str:
+def render_page(study: AccuracyBenchmark, tolerance: list[dict], effects: list[dict], naive: list[dict], batch: dict, command: str, figure_rel: str) -> str:
     """The Markdown of ``docs/accuracy-vs-time.md``."""
     lines = [
         "# What accuracy costs in time",

@@ -1,4 +1,4 @@
-"""The page ``docs/experiments.md`` and its figure, written from :func:`esba.calibration.experiments.run_study`.
+"""The page ``docs/experiments.md`` and its figure, written from :func:`esba.calibration.experiments.compare_with_paper`.
 
 Presentation only: every number comes from the study object; nothing here computes a model.
 ``esba experiments --write-doc docs/experiments.md`` writes the page and
@@ -23,8 +23,8 @@ from esba.calibration.experiments import (
     SD_TIP,
     Column,
     Fold,
-    Study,
-    run_study,
+    PaperComparison,
+    compare_with_paper,
 )
 from esba.calibration.fit import FitResult, Prediction
 from esba.figures.fit import Series, measured_vs_predicted, save_figure
@@ -67,7 +67,7 @@ def _estimate(r: FitResult, name: str) -> str:
     return f"{r.estimate[j]:.4f} ± {se:.4f} {unit}, 95 % [{lo:.4f}, {hi:.4f}]"
 
 
-def _comparison(study: Study) -> list[str]:
+def _comparison(study: PaperComparison) -> list[str]:
     exp, fem = study.columns
     by = {c.name: {(p.row, p.quantity): p for p in c.nominal} for c in study.columns}
     lines = [
@@ -137,7 +137,7 @@ def _fold_block(col: Column, fold: Fold, title: str) -> list[str]:
     return lines
 
 
-def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
+def render(study: PaperComparison, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
     """The Markdown of the page."""
     exp, fem = study.columns
     L: list[str] = []
@@ -291,7 +291,7 @@ def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
     return "\n".join(L)
 
 
-def figure(study: Study):
+def figure(study: PaperComparison):
     """Measured against predicted for both columns, at E = 0.54 MPa and fitted."""
     series = []
     styles = {"EXP": ("o", "C0"), "FEM": ("^", "C1")}
@@ -304,21 +304,21 @@ def figure(study: Study):
     return measured_vs_predicted(series, title="The paper's EXP and FEM values against esba (n = 3)")
 
 
-def write_page(path: str | Path | None = None, study: Study | None = None) -> tuple[Path, Study]:
+def write_page(path: str | Path | None = None, study: PaperComparison | None = None) -> tuple[Path, PaperComparison]:
     """Run the study (unless given) and write the page and its figure; return (page path, study)."""
     path = Path(path) if path else DOC_PATH
-    study = run_study() if study is None else study
+    study = compare_with_paper() if study is None else study
     path.parent.mkdir(parents=True, exist_ok=True)
     save_figure(figure(study), path.parent / "figures" / FIGURE_NAME)
     path.write_text(render(study), encoding="utf-8")
     return path, study
 
 
-def check_page(path: str | Path | None = None, study: Study | None = None) -> bool:
+def check_page(path: str | Path | None = None, study: PaperComparison | None = None) -> bool:
     """True when the page is missing or differs from what :func:`write_page` would write."""
     path = Path(path) if path else DOC_PATH
     if not path.exists():
         return True
-    study = run_study() if study is None else study
+    study = compare_with_paper() if study is None else study
     return path.read_text(encoding="utf-8") != render(study)
 

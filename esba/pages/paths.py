@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from esba.analysis.path_analysis import PathStudy, column_buckling_load, study
-from esba.figures.paths import save_figure, study_figure
+from esba.analysis.path_analysis import PathAnalysis, analyse, column_buckling_load
+from esba.figures.paths import path_figure, save_figure
 from esba.model.scene import Payload, Scene
 from esba.paths.continuation import (
     PathOptions,
@@ -48,9 +48,9 @@ OPTIONS = PathOptions(ds_max=0.1)
 
 @dataclass(frozen=True, eq=False)
 class PathsData:
-    pressure: PathStudy
-    direction: PathStudy
-    column: PathStudy
+    pressure: PathAnalysis
+    direction: PathAnalysis
+    column: PathAnalysis
     by_payload: list[dict[str, Any]]
     cusp_n: float | None
     history_mpa: float | None
@@ -87,9 +87,9 @@ def paths_data(progress=None) -> PathsData:
     from esba.statics.equilibrium import solve
 
     say("pressure under 2 N")
-    p_study = study(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", 0.3, options=OPTIONS)
+    p_run = analyse(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", 0.3, options=OPTIONS)
     say("payload direction at the 90 degree pressure")
-    d_study = study(Scene(payloads=(Payload(2.0, 90.0),)), "omega", 150.0, options=OPTIONS)
+    d_run = analyse(Scene(payloads=(Payload(2.0, 90.0),)), "omega", 150.0, options=OPTIONS)
     say("bistable range against the payload")
     by_payload = [{"payload_n": f, "folds_mpa": _pressure_folds(f)} for f in PAYLOADS]
     without = [r["payload_n"] for r in by_payload if len(r["folds_mpa"]) < 2]
@@ -98,13 +98,13 @@ def paths_data(progress=None) -> PathsData:
     if without and with_folds and max(without) < min(with_folds):
         cusp = _bisect(max(without), min(with_folds), lambda f: len(_pressure_folds(f)) == 2, 1e-3)
     say("which state solve()'s history reaches in the bistable range")
-    upper, lower = (f.lam for f in p_study.main.folds[:2]) if len(p_study.main.folds) >= 2 else (None, None)
+    upper, lower = (f.lam for f in p_run.main.folds[:2]) if len(p_run.main.folds) >= 2 else (None, None)
     history_p = None
     if upper is not None:
 
         def reaches_upper(p: float) -> bool:
             r = solve(Scene(pressure=p, payloads=(Payload(2.0, 90.0),)))
-            return r.total_angle_deg > p_study.main.folds[0].total_angle_deg
+            return r.total_angle_deg > p_run.main.folds[0].total_angle_deg
 
         if reaches_upper(upper) and not reaches_upper(lower):
             history_p = _bisect(lower, upper, reaches_upper, 1e-5)
@@ -135,8 +135,8 @@ def paths_data(progress=None) -> PathsData:
                 )
         buckling.append(row)
     say("column, n = 4, for the figure")
-    c_study = study(Scene(pressure=0.0, payloads=(Payload(1.0, 180.0),), segments=4), "payload", 6.4, options=OPTIONS)
-    return PathsData(p_study, d_study, c_study, by_payload, cusp, history_p, by_segments, buckling)
+    c_run = analyse(Scene(pressure=0.0, payloads=(Payload(1.0, 180.0),), segments=4), "payload", 6.4, options=OPTIONS)
+    return PathsData(p_run, d_run, c_run, by_payload, cusp, history_p, by_segments, buckling)
 
 
 def _fold_row(label: str, folds: list[float]) -> str:
@@ -154,9 +154,9 @@ def write_page(path: str | Path, data: PathsData, command: str, figures: str | P
     path = Path(path)
     fig_dir = Path(figures) if figures is not None else path.parent / "figures"
     names = {"pressure": "path-pressure-2N.png", "direction": "path-omega-2N.png", "column": "path-column-n4.png"}
-    save_figure(study_figure(data.pressure), fig_dir / names["pressure"])
-    save_figure(study_figure(data.direction), fig_dir / names["direction"])
-    save_figure(study_figure(data.column), fig_dir / names["column"])
+    save_figure(path_figure(data.pressure), fig_dir / names["pressure"])
+    save_figure(path_figure(data.direction), fig_dir / names["direction"])
+    save_figure(path_figure(data.column), fig_dir / names["column"])
     rel = {k: Path(v).name for k, v in names.items()}
     try:
         fig_rel = fig_dir.resolve().relative_to(path.parent.resolve())

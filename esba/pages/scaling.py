@@ -1,5 +1,5 @@
 """``docs/scaling.md``: the page of ``esba bench scaling`` (presentation only; the measurements are
-:func:`esba.bench.scaling.scaling_study`).
+:func:`esba.bench.scaling.scaling_benchmark`).
 
 Examples
 --------
@@ -62,7 +62,7 @@ def _rate(v: float | None) -> str:
 
 
 def scaling_page(data: dict[str, Any], command: str) -> str:
-    """The Markdown of ``docs/scaling.md`` from :func:`esba.bench.scaling.scaling_study`."""
+    """The Markdown of ``docs/scaling.md`` from :func:`esba.bench.scaling.scaling_benchmark`."""
     st = data["setup"]
     rows = data["rows"]
     base = rows[0]["per_second"]

@@ -1,4 +1,4 @@
-"""The command line: esba path (issue 8): special points, branch files, the figure, bad input."""
+"""The command line: esba path: special points, branch files, the figure, bad input."""
 
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ from esba.pages.validation import DOC_PATH
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
-#: The JSON keys the issue asks of `esba solve --json`.
+#: The JSON keys `esba solve --json` promises.
 SOLVE_KEYS = {"theta_deg", "total_angle_deg", "tip_mm", "pressure_mpa", "stable", "status", "effects", "segments", "variant", "solve_time_s"}
 
 

@@ -1,4 +1,4 @@
-"""The fast paths (issue 9) give the answers of the reference paths: the O(n) structured solves against
+"""The fast paths give the answers of the reference paths: the O(n) structured solves against
 dense LAPACK, the compiled ramp against the adaptive path trace, the NumPy centre-line against the
 generated Function, the combined state call against the single ones, and the BLAS thread setting is
 restored after each call.
@@ -130,7 +130,7 @@ def test_blas_threads_are_restored_after_a_solve():
 
 
 def test_help_imports_no_numerics():
-    """``esba --help`` and every ``esba CMD --help`` start without CasADi, NumPy or SymPy (issue 9)."""
+    """``esba --help`` and every ``esba CMD --help`` start without CasADi, NumPy or SymPy."""
     import subprocess
     import sys
 

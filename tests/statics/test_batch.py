@@ -1,4 +1,4 @@
-"""The batch solver (issue 5): same answers as esba.statics.equilibrium.solve, every element accounted for.
+"""The batch solver: same answers as esba.statics.equilibrium.solve, every element accounted for.
 
 Speed is measured by ``esba bench batch``, not here.
 """

@@ -2,7 +2,7 @@
 
 Each returns a finite, stability-flagged equilibrium or a clear error; none gives NaN or a silent
 wrong answer. The batch path (:mod:`esba.statics.batch`) is checked against :func:`esba.statics.equilibrium.solve`
-on the same scenes. n = 128 and the 10 N load paths in every direction are slow studies.
+on the same scenes. n = 128 and the 10 N load paths in every direction are slow tests.
 """
 
 from __future__ import annotations
