@@ -7,7 +7,8 @@ the naive SciPy script (BFGS with numeric gradients, warm-started at each value)
 in reasonable time, and the compiled limit: the trace's evaluations times one evaluation of the
 same generated g, H and dg/dlambda compiled to C (no Python, no linear algebra).
 
-``esba bench path`` prints the table and writes the ``path`` section of ``docs/performance.md``.
+``esba bench path`` prints the table and writes the ``path`` section of ``docs/performance.md``
+(:mod:`esba.pages.performance` renders both).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from esba.statics.equilibrium import solve
 from .accuracy import naive_solve
 from .timing import median_time
 
-__all__ = ["PathBenchRow", "path_benchmark", "path_table", "path_section", "PATH_NS"]
+__all__ = ["PathBenchRow", "path_benchmark", "PATH_NS"]
 
 #: Segment counts of the benchmark.
 PATH_NS = (3, 32)
@@ -121,52 +122,3 @@ def path_benchmark(ns: Sequence[int] = PATH_NS, repeat: int = 5, naive_max_n: in
         if progress is not None:
             progress(n)
     return rows
-
-
-def path_table(rows: Sequence[PathBenchRow]) -> str:
-    """The benchmark as a fixed-width table."""
-    head = f"{'n':>4} {'points':>6} {'folds':>5} {'evals':>6} {'trace ms':>9} {'points/s':>9} {'IPOPT ramp ms':>14} {'ratio':>6} {'naive ms':>9} {'ratio':>6} {'C floor ms':>11}"
-    lines = [head, "-" * len(head)]
-    for r in rows:
-        naive = "-" if r.naive_s is None else f"{1e3 * r.naive_s:9.1f}"
-        naive_ratio = "-" if r.naive_s is None else f"{r.naive_s / r.trace_s:6.1f}"
-        floor = "-" if r.floor_s is None else f"{1e3 * r.floor_s:11.3f}"
-        lines.append(
-            f"{r.n:>4} {r.points:>6} {r.folds:>5} {r.evaluations:>6} {1e3 * r.trace_s:9.2f} {r.points_per_s:9.0f} "
-            f"{1e3 * r.ipopt_s:14.2f} {r.ipopt_s / r.trace_s:6.1f} {naive:>9} {naive_ratio:>6} {floor:>11}"
-        )
-    lines += [
-        "",
-        "trace: esba.paths.continuation.trace of the 2 N horizontal-payload pressure path 0 -> 0.3 MPa (both folds located)",
-        "IPOPT ramp: one warm-started IPOPT solve at each lambda of the traced path (the load ramp before path following);",
-        "  it cannot follow the unstable middle branch and snaps across it instead",
-        "naive: SciPy BFGS with numeric gradients, warm-started at each lambda (ratio = other / trace, same run)",
-        "C floor: the trace's evaluations of g, H, dg/dlambda times one evaluation compiled to C",
-    ]
-    return "\n".join(lines)
-
-
-def path_section(rows: Sequence[PathBenchRow]) -> str:
-    """The ``path`` section of docs/performance.md."""
-    import platform
-
-    r3 = rows[0]
-    return "\n".join(
-        [
-            "## Path following",
-            "",
-            "The time to trace the Table 1 actuator's branch under a 2 N horizontal tip payload as the pressure",
-            "goes from 0 to 0.3 MPa (through the bistable range, both folds located to 1e-8), against what it",
-            "replaces. Medians over repeated runs on a shared 2-core machine; the ratios come from one run.",
-            "",
-            f"Machine: {platform.machine()}, Python {platform.python_version()}, CasADi {ca.__version__}.",
-            "",
-            "```",
-            path_table(rows),
-            "```",
-            "",
-            f"At n = {r3.n} a trace point costs {1e6 * r3.trace_s / r3.points:.0f} us, of which the generated model's",
-            f"evaluations, compiled, would take {'-' if r3.floor_s is None else f'{1e6 * r3.floor_s / r3.points:.1f}'} us:",
-            "the rest is the call from Python into CasADi and the small dense linear algebra of the corrector.",
-        ]
-    )

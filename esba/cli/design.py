@@ -69,7 +69,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         optimise_ipopt,
         optimise_pso,
     )
-    from esba.pages.design import write_doc
+    from esba.pages.design import PAGE, DesignSettings
     from esba.solvers.pso import PSOOptions, PSOOptionsError
 
     if args.write_doc:
@@ -89,7 +89,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         )
         options = DesignOptions(starts=4 if args.starts is None else args.starts)
         if args.write_doc:
-            path, _ = write_doc(page, segments=args.segments, options=options, pso_options=pso_options)
+            path = PAGE.write(page, DesignSettings(args.segments, options, pso_options)).path
             print_result(args, {"page": str(path)}, lambda d: f"wrote {d['page']}")
             return EXIT_OK
         problem = DesignProblem(

@@ -73,14 +73,13 @@ def _path_write_doc(args: argparse.Namespace) -> int:
     if given:
         raise UsageError(f"--write-doc runs its own path cases of the Table 1 actuator: give no {', '.join(given)} with it")
     outputs.check_file(args.write_doc, "--write-doc", (".md",))
-    from esba.pages.paths import paths_data, write_page
+    from esba.pages.paths import PAGE, PathsSettings
 
     def say(msg):
         if not args.json:
             print(f"  {msg}", file=sys.stderr)
 
-    data = paths_data(progress=say)
-    page = write_page(args.write_doc, data, f"esba path --write-doc {args.write_doc}")
+    page = PAGE.write(args.write_doc, PathsSettings(f"esba path --write-doc {args.write_doc}"), progress=say).path
     print_result(args, {"page": str(page.resolve())}, lambda d: f"wrote {d['page']}")
     return EXIT_OK
 

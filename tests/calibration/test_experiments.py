@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import pytest
 
 from esba.calibration.experiments import COLUMNS, PAPER, UNLOADED, compare_with_paper, paper_data
 from esba.cli import EXIT_FAILED, EXIT_OK, main
-from esba.pages.experiments import DOC_COMMAND, DOC_PATH, check_page, render
+from esba.pages.experiments import DOC_COMMAND, PAGE, render
+
+DOC_PATH = Path(__file__).resolve().parents[2] / "docs" / "experiments.md"
 
 
 @pytest.fixture(scope="module")
@@ -78,23 +81,20 @@ def test_modulus_tolerance_first_order_agrees_with_monte_carlo(comparison):
 def test_committed_page_is_fresh_and_names_its_command(comparison):
     text = DOC_PATH.read_text(encoding="utf-8")
     assert DOC_COMMAND in text and "figures/experiments.png" in text
-    assert not check_page(DOC_PATH, comparison), f"docs/experiments.md is stale: run `{DOC_COMMAND}`"
+    assert PAGE.check(DOC_PATH, data=comparison).ok, f"docs/experiments.md is stale: run `{DOC_COMMAND}`"
     assert render(comparison) == text
 
 
 def test_cli_writes_and_checks_the_page(tmp_path, capsys, comparison, monkeypatch):
-    import esba.calibration.experiments as ex
+    import esba.pages.experiments as ep
 
-    monkeypatch.setattr(ex, "compare_with_paper", lambda *a, **k: comparison)  # the comparison is deterministic; run it once
+    monkeypatch.setattr(ep, "compare_with_paper", lambda *a, **k: comparison)  # the comparison is deterministic; run it once
     page = tmp_path / "docs" / "experiments.md"
     page.parent.mkdir()  # an output's folder must exist (esba.infra.outputs): esba creates only figures/ beside the page
     assert main(["experiments", "--write-doc", str(page), "--json"]) == EXIT_OK
     d = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert [c["name"] for c in d["columns"]] == list(COLUMNS) and d["page"] == str(page)
     assert page.exists() and (tmp_path / "docs" / "figures" / "experiments.png").stat().st_size > 10_000
-    import esba.pages.experiments as ep
-
-    monkeypatch.setattr(ep, "compare_with_paper", lambda *a, **k: comparison)
     assert main(["experiments", "--check", str(page)]) == EXIT_OK
     page.write_text("stale\n", encoding="utf-8")
     assert main(["experiments", "--check", str(page)]) == EXIT_FAILED
