@@ -95,7 +95,7 @@ def add_docs(sub) -> None:
         "docs",
         help="check the docs pages against a fresh computation (times aside), or write them again",
         description=(
-            "Every docs page, by name: " + ", ".join(_FAST) + " (seconds to a minute each); and the benchmarks "
+            "Every docs page, by name: " + ", ".join(_FAST) + " (seconds each); and the benchmarks "
             + ", ".join(_SLOW) + " (minutes each: their check reruns the benchmark once). Without --check or --write, list them."
         ),
     )

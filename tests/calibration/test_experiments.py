@@ -6,11 +6,13 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from esba.calibration.experiments import COLUMNS, PAPER, UNLOADED, compare_with_paper, paper_data
 from esba.cli import EXIT_FAILED, EXIT_OK, main
 from esba.pages.experiments import DOC_COMMAND, PAGE, render
+from tests.figures import drawn
 
 DOC_PATH = Path(__file__).resolve().parents[2] / "docs" / "experiments.md"
 
@@ -89,12 +91,24 @@ def test_cli_writes_and_checks_the_page(tmp_path, capsys, comparison, monkeypatc
     import esba.pages.experiments as ep
 
     monkeypatch.setattr(ep, "compare_with_paper", lambda *a, **k: comparison)  # the comparison is deterministic; run it once
+    saved = drawn.record_saved(monkeypatch)
     page = tmp_path / "docs" / "experiments.md"
     page.parent.mkdir()  # an output's folder must exist (esba.infra.outputs): esba creates only figures/ beside the page
     assert main(["experiments", "--write-doc", str(page), "--json"]) == EXIT_OK
     d = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert [c["name"] for c in d["columns"]] == list(COLUMNS) and d["page"] == str(page)
-    assert page.exists() and (tmp_path / "docs" / "figures" / "experiments.png").stat().st_size > 10_000
+    figure = tmp_path / "docs" / "figures" / "experiments.png"
+    assert page.exists() and figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the figure: per panel, each column's measured values against the model at 0.54 MPa and fitted
+    axes = saved[figure.resolve()].axes
+    assert [ax.get_xlabel() for ax in axes] == ["measured total angle (deg)", "measured tip position (x and y) (mm)", "measured secant stiffness (N/m)"]
+    for ax, quantities in zip(axes, (("total_angle",), ("tip_x", "tip_y"), ("stiffness",))):
+        series = drawn.errorbars(ax)
+        assert len(series) == 4
+        for col in comparison.columns:
+            for label, preds in ((f"{col.name}, E = 0.54 MPa", col.nominal), (next(k for k in series if k.startswith(f"{col.name}, fitted")), col.fitted)):
+                shown = [[p.measured, p.predicted] for p in preds if p.quantity in quantities and p.ok and math.isfinite(p.predicted)]
+                np.testing.assert_allclose(series[label], shown)
     assert main(["experiments", "--check", str(page)]) == EXIT_OK
     page.write_text("stale\n", encoding="utf-8")
     assert main(["experiments", "--check", str(page)]) == EXIT_FAILED

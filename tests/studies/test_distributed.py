@@ -777,3 +777,9 @@ def test_bench_scaling_writes_its_page(capsys, tmp_path):
     for heading in ("## Throughput against the worker count", "## What the chunk size does", "## The overhead of one chunk", "dask-jobqueue"):
         assert heading in text
     assert "nan" not in text.lower() and "**no**" not in text
+    # a second run of the benchmark finds the page up to date, times aside (rates, load averages, versions)
+    from esba.pages.scaling import PAGE, ScalingSettings
+
+    settings = ScalingSettings(points=400, segments=2, repeat=1, command=f"esba bench scaling --points 400 --segments 2 --repeat 1 --markdown {page}")
+    check = PAGE.check(page, settings)
+    assert check.ok, check.describe()
