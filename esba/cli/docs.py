@@ -68,21 +68,27 @@ def _cmd_docs(args: argparse.Namespace) -> int:
             t0 = time.perf_counter()
             w = p.write(folder / p.file, progress=_progress(args, name))
             written.append({"page": name, "path": str(w.path), "figures": [str(f) for f in w.figures], "seconds": time.perf_counter() - t0})
-        print_result(args, {"written": written}, lambda d: "\n".join(f"wrote {w['path']}" + "".join(f"\nwrote {f}" for f in w["figures"]) for w in d["written"]))
+            if not args.json:  # each page as soon as it is written
+                print("\n".join(f"wrote {f}" for f in (w.path, *w.figures)), flush=True)
+        if args.json:
+            print_result(args, {"written": written}, lambda d: "")
         return EXIT_OK
     checks = []
+    width = max(len(name) for name in names)
+
+    def line(c: dict) -> str:
+        return f"{c['page']:<{width}}  {c['status']:<10}  {c['path']}" + (f": {c['detail']}" if c["detail"] else "")
+
     for name in names:
         p = page(name)
         t0 = time.perf_counter()
-        c = p.check(folder / p.file, progress=_progress(args, name))
-        checks.append(dict(c.to_dict(), seconds=time.perf_counter() - t0))
+        c = dict(p.check(folder / p.file, progress=_progress(args, name)).to_dict(), seconds=time.perf_counter() - t0)
+        checks.append(c)
+        if not args.json:  # each page as soon as it is checked: a benchmark's check takes minutes
+            print(line(c), flush=True)
     bad = [c for c in checks if c["status"] != "up to date"]
-
-    def table(d: dict) -> str:
-        width = max(len(c["page"]) for c in d["checks"])
-        return "\n".join(f"{c['page']:<{width}}  {c['status']:<10}  {c['path']}" + (f": {c['detail']}" if c["detail"] else "") for c in d["checks"])
-
-    print_result(args, {"checks": checks, "ok": not bad}, table)
+    if args.json:
+        print_result(args, {"checks": checks, "ok": not bad}, lambda d: "")
     if bad:
         named = "; ".join(f"{c['page']} is {c['status']}" for c in bad)
         print(f"esba: {named}: run `esba docs --write {' '.join(c['page'] for c in bad)}` and commit the pages", file=sys.stderr)

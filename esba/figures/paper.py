@@ -61,7 +61,6 @@ from .scenes import draw_payloads, draw_shape, new_figure, save_figure, setup_fr
 
 __all__ = [
     "FigureError",
-    "DEFAULT_OUT",
     "FIBRE_ANGLES_DEG",
     "PressureAngleCurve",
     "pressure_angle_curves",
@@ -77,10 +76,6 @@ __all__ = [
     "check_names",
     "write_all",
 ]
-
-#: The repository's figures folder (``esba figures`` writes there when run inside a checkout; see
-#: :mod:`esba.infra.outputs` for the default elsewhere).
-DEFAULT_OUT = Path(__file__).resolve().parents[2] / "docs" / "figures"
 
 #: Fibre winding angles of Fig. 7b, degrees (10 is Table 1's).
 FIBRE_ANGLES_DEG: tuple[float, ...] = (5.0, 10.0, 15.0, 20.0)
