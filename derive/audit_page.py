@@ -1,35 +1,37 @@
 """The page ``docs/derivations.md``: the verdicts of :mod:`derive.audit` rendered with the printed
-and derived forms, their steps and the checks of the paper's tables (``esba audit`` writes it;
-``esba audit --check`` fails when the committed page is stale)."""
+and derived forms, their steps and the checks of the paper's tables.
+
+This module only renders (:func:`render_entries`; :func:`render` for the audit as it stands).
+Writing and checking the page is the runtime's page protocol (:mod:`esba.pages.derivations`):
+``esba audit`` writes it, ``esba audit --check`` and ``esba docs --check derivations`` fail when the
+committed page is stale.
+"""
 
 from __future__ import annotations
 
 import re
 from functools import lru_cache
-from pathlib import Path
 from typing import Sequence
 
 import sympy as sp
 
 from . import symbols as S
-from .audit import IDENTICAL, PAPER_TABLES, THETA_I, AuditEntry, entries, table_checks, verdicts
+from .audit import IDENTICAL, PAPER_TABLES, THETA_I, AuditEntry, TableCheck, entries, table_checks
 
-#: The page ``esba audit`` writes (the repository's docs/derivations.md).
-DOC_PATH = Path(__file__).resolve().parent.parent / "docs" / "derivations.md"
+__all__ = ["render", "render_entries"]
 
 
-def _render_tables() -> str:
+def _render_tables(checks: Sequence[TableCheck]) -> str:
     t3 = PAPER_TABLES["Table 3"]
     out = ["## The paper's tables", "",
            "For the EXP and FEM columns of the results tables the first row (θ_EXP / θ_FEM) and the θ_TOL row are the same measured "
            "total angle: Table 2 prints it twice. Checks:", ""]
-    out += [f"- {c.title}: {'holds' if c.holds else '**fails**'}." for c in table_checks()]
+    out += [f"- {c.title}: {'holds' if c.holds else '**fails**'}." for c in checks]
     out += ["",
             f"**Table 3 has a copy error**: its first row repeats Table 2's horizontal case ({t3['first row'][0]:g}°, "
             f"{t3['first row'][1]:g}°), while its θ_TOL row gives the vertical case ({t3['theta_TOL'][0]:g}°, {t3['theta_TOL'][1]:g}°); the "
             "first row should read the same as θ_TOL. `docs/experiments.md` uses the vertical values.", ""]
     return "\n".join(out)
-
 
 
 def _tex(e: sp.Basic) -> str:
@@ -100,51 +102,16 @@ def _render_entry(e: AuditEntry) -> str:
     return "\n".join(out)
 
 
-@lru_cache(maxsize=None)
-def render() -> str:
-    """The Markdown of the derivations page (deterministic: no dates, no versions)."""
-    items = entries()
+def render_entries(items: Sequence[AuditEntry], checks: Sequence[TableCheck]) -> str:
+    """The Markdown of the derivations page from the audit's entries and table checks
+    (deterministic: no dates, no versions)."""
     parts = [_INTRO, "## Summary", "", _summary(items), ""]
     parts += [_render_entry(e) for e in items]
-    parts.append(_render_tables())
+    parts.append(_render_tables(checks))
     return "\n".join(parts).rstrip("\n") + "\n"
 
 
-def default_page() -> Path:
-    """:data:`DOC_PATH` when run inside the checkout that holds this package, else ./derivations.md.
-
-    An installed package never writes into its own folder (``esba.infra.outputs`` applies the same rule
-    to the runtime's pages).
-    """
-    root = DOC_PATH.parent.parent
-    here = Path.cwd().resolve()
-    inside = here == root or root in here.parents
-    return DOC_PATH if (root / "pyproject.toml").is_file() and inside else Path.cwd() / DOC_PATH.name
-
-
-def write_page(out: str | Path | None = None) -> tuple[Path, dict[str, AuditEntry]]:
-    """Write the derivations page.
-
-    Parameters
-    ----------
-    out : path, optional
-        where to write it (default :func:`default_page`; its folder must exist).
-
-    Returns
-    -------
-    path : Path
-        the page written.
-    verdicts : dict
-        the audit entries by key; each has a ``verdict``.
-    """
-    path = Path(out) if out is not None else default_page()
-    path.write_text(render(), encoding="utf-8")
-    return path, verdicts()
-
-
-def check_page(out: str | Path | None = None) -> bool:
-    """True when the page on disk (default :func:`default_page`) is missing or differs from :func:`render`."""
-    path = Path(out) if out is not None else default_page()
-    if not path.is_file():
-        return True
-    return path.read_text(encoding="utf-8") != render()
+@lru_cache(maxsize=None)
+def render() -> str:
+    """The Markdown of the derivations page for :func:`derive.audit.entries` (computed once per process)."""
+    return render_entries(entries(), table_checks())

@@ -26,14 +26,13 @@ import sympy as sp
 
 from . import symbols as S
 from .effects import check_variant
-from .kinematics import chord
 
 #: A symbolic segment count, for derivations that hold for every n.
 n_sym = sp.Symbol("n", positive=True, integer=True)
 #: The radius change of the chamber of one segment, Eq. (9)-(10).
 Delta_r2 = sp.Symbol("Delta_r2", real=True)
-#: The tension components of one fibre and its number of turns, Eq. (16).
-eta_r, eta_a, N_turns = sp.symbols("eta_r eta_a N", real=True)
+#: The radial tension of one fibre, Eq. (16).
+eta_r = sp.Symbol("eta_r", real=True)
 #: The total bending angle theta_TOL, Eq. (17).
 theta_TOL = sp.Symbol("theta_TOL", real=True)
 
@@ -307,8 +306,3 @@ def separable(effects_names: tuple[str, ...], n: int, variant: str, t=S.t) -> di
     if "fibres" in effects_names:
         out["fibres"] = fibres(variant, t)
     return out
-
-
-def chord_template(n: int, sigma, t=S.t) -> sp.Matrix:
-    """The local chord of a segment (see :func:`derive.kinematics.chord`)."""
-    return chord(t, sigma, n)

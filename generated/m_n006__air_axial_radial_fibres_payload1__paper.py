@@ -3,7 +3,7 @@
 Segments n = 6; effects: air,axial,radial,fibres,payload; variant: paper.
 Regenerate with:
     esba generate --segments 6 --effects air,axial,radial,fibres,payload --variant paper
-(or `esba generate --refresh` for every committed model). Derivation source sha256: ed33acb379e8674a.
+(or `esba generate --refresh` for every committed model). Derivation source sha256: a0b4f0e9c6229ade.
 
 Straight-line program: 941 assignments, 1009 lines.
 CasADi Functions (SX instructions / nodes):

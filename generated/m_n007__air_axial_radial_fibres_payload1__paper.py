@@ -3,7 +3,7 @@
 Segments n = 7; effects: air,axial,radial,fibres,payload; variant: paper.
 Regenerate with:
     esba generate --segments 7 --effects air,axial,radial,fibres,payload --variant paper
-(or `esba generate --refresh` for every committed model). Derivation source sha256: ed33acb379e8674a.
+(or `esba generate --refresh` for every committed model). Derivation source sha256: a0b4f0e9c6229ade.
 
 Straight-line program: 1104 assignments, 1172 lines.
 CasADi Functions (SX instructions / nodes):

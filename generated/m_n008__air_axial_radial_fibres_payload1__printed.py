@@ -3,7 +3,7 @@
 Segments n = 8; effects: air,axial,radial,fibres,payload; variant: printed.
 Regenerate with:
     esba generate --segments 8 --effects air,axial,radial,fibres,payload --variant printed
-(or `esba generate --refresh` for every committed model). Derivation source sha256: ed33acb379e8674a.
+(or `esba generate --refresh` for every committed model). Derivation source sha256: a0b4f0e9c6229ade.
 
 Straight-line program: 1269 assignments, 1337 lines.
 CasADi Functions (SX instructions / nodes):

@@ -1,6 +1,6 @@
 """Shared fixtures: the Table 1 actuator, a private model cache, and the slow-test policy.
 
-Slow studies (large n, full sweeps) are marked ``@pytest.mark.slow``. They are skipped unless
+Slow tests (large n, full sweeps) are marked ``@pytest.mark.slow``. They are skipped unless
 ``pytest --slow`` is given; in CI (``CI=true``) the ones also marked ``@pytest.mark.ci`` run, a
 small honest subset that keeps CI under 10 minutes.
 """
@@ -17,7 +17,7 @@ TABLE1 = {"L": 135.0, "r1": 8.0, "r2": 3.0, "d": 4.0, "rho": math.radians(10.0),
 
 
 def pytest_addoption(parser):
-    parser.addoption("--slow", action="store_true", help="also run the slow studies")
+    parser.addoption("--slow", action="store_true", help="also run the slow tests")
 
 
 def pytest_collection_modifyitems(config, items):
@@ -30,7 +30,7 @@ def pytest_collection_modifyitems(config, items):
             continue
         if in_ci and item.get_closest_marker("ci") is not None:
             continue
-        item.add_marker(pytest.mark.skip(reason="slow study: run with --slow (CI runs the ones marked ci)"))
+        item.add_marker(pytest.mark.skip(reason="slow test: run with --slow (CI runs the ones marked ci)"))
 
 
 @pytest.fixture(scope="session", autouse=True)

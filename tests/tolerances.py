@@ -16,18 +16,18 @@ KERNEL_ATOL = 1e-8
 FD_STEP = 1e-5
 FD_RTOL = 1e-6
 FD_ATOL = 1e-5
-#: the paper's Table 2 (issue 3): segment and total angles in degrees, tip in mm
+#: the paper's Table 2: segment and total angles in degrees, tip in mm
 TABLE2_ANGLE_DEG = 0.15
 TABLE2_TIP_MM = 0.2
-#: batch vs IPOPT (issue 5): both stop at max |dU/dtheta| <= 1e-7 N mm/rad on Hessians of
+#: batch vs IPOPT: both stop at max |dU/dtheta| <= 1e-7 N mm/rad on Hessians of
 #: O(10-1000) N mm/rad^2, so the angles of the same equilibrium agree to about 1e-8 rad
 BATCH_THETA_ATOL = 1e-6
 #: an equilibrium counts as stationary (the solver's own acceptance, SolverOptions.stationarity_tol)
 EQUILIBRIUM_GRAD_ATOL = 1e-7
-#: continuity in the loads (issue 5) is bounded by the linear response itself (tests/test_properties.py):
+#: continuity in the loads is bounded by the linear response itself (tests/test_properties.py):
 #: a small load step moves the tip by at most twice J dtheta, with H dtheta = -(dg/dload) dload
 
-#: design (issue 4), the issue's cross-check: IPOPT and PSO designs within 0.01 mm, objectives
+#: design, the cross-check: IPOPT and PSO designs within 0.01 mm, objectives
 #: within 0.1 %
 AGREE_MM = 0.01
 AGREE_REL = 1e-3
@@ -36,13 +36,13 @@ AGREE_REL = 1e-3
 SAME_K_REL = 1e-7
 #: a multiplier against a central difference of the optimum over bound steps +-h: O(h^2) error
 SENSITIVITY_REL = 1e-3
-#: path following (issue 8): special points located to this relative accuracy in lambda
+#: path following: special points located to this relative accuracy in lambda
 LOCATE_RTOL = 1e-8
 #: a Newton corrector converges quadratically: r_{k+1} <= C r_k^2 (measured C <= 1.7e-3 for
 #: n = 1, 3, 8, 32 on Table 1, gradients in N mm/rad); the bound leaves a factor 60 for other n
 QUADRATIC_CONSTANT = 0.1
 
-#: sensitivities (issue 10) against central differences of solves, d theta/dp ~ (theta(p+h) - theta(p-h)) / 2h
+#: sensitivities against central differences of solves, d theta/dp ~ (theta(p+h) - theta(p-h)) / 2h
 #: with h = 1e-5 max(1, |p|): truncation O(h^2) ~ 1e-10 relative; each solve is stationary to round-off
 #: after the Newton polish (theta to ~1e-12 rad), so round-off ~ 1e-12 / 1e-5 = 1e-7 relative
 SENS_FD_STEP = 1e-5

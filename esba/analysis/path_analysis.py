@@ -1,6 +1,6 @@
-"""A path study of a scene: its branch in one parameter, the branches crossing it, and the hysteresis.
+"""The path analysis of a scene: its branch in one parameter, the branches crossing it, and the hysteresis.
 
-:func:`study` is what ``esba path`` runs: from the scene's equilibrium (:func:`esba.statics.equilibrium.solve`)
+:func:`analyse` is what ``esba path`` runs: from the scene's equilibrium (:func:`esba.statics.equilibrium.solve`)
 at the start value of the parameter, it traces the branch to the target value (:func:`esba.paths.continuation.trace`),
 traces both sides of every branch point on it (:func:`esba.paths.continuation.bifurcating_branches`), and loads
 quasi-statically up to the target and back down (:func:`esba.paths.loading.history`), so that a bistable
@@ -12,7 +12,7 @@ compressive tip load, the check of every branch point found on that path.
 Examples
 --------
 >>> from esba.model.scene import Scene, Payload
->>> s = study(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", 0.3)
+>>> s = analyse(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", 0.3)
 >>> [(p.kind, round(p.lam, 5)) for p in s.main.special]
 [('fold', 0.17354), ('fold', 0.1636)]
 >>> round(s.hysteresis["width"], 5)
@@ -35,7 +35,7 @@ from esba.paths.loading import Ramp, history
 from esba.paths.problem import PathError, PathProblem
 from esba.statics.equilibrium import Equilibrium, EquilibriumError, solve
 
-__all__ = ["PathStudy", "study", "column_buckling_load"]
+__all__ = ["PathAnalysis", "analyse", "column_buckling_load"]
 
 
 def column_buckling_load(actuator: Actuator | None = None, segments: int = 3) -> float:
@@ -64,8 +64,8 @@ def column_buckling_load(actuator: Actuator | None = None, segments: int = 3) ->
 
 
 @dataclass(frozen=True, eq=False)
-class PathStudy:
-    """What :func:`study` found.
+class PathAnalysis:
+    """What :func:`analyse` found.
 
     Attributes
     ----------
@@ -155,7 +155,7 @@ class PathStudy:
 
 
 def trace_window(problem: PathProblem, lam_from: float, to: float) -> tuple[float, float]:
-    """The interval the branches of a study stay in: from ``to`` back past the start by as much
+    """The interval the branches of an analysis stay in: from ``to`` back past the start by as much
     again (cut to the parameter's range). A start inside a bistable range lies between two folds,
     so the branch through it runs back past the start along its unstable middle before it turns
     to the far stable branch and reaches ``to``; a branch crossing at a branch point may likewise
@@ -167,7 +167,7 @@ def trace_window(problem: PathProblem, lam_from: float, to: float) -> tuple[floa
     return to, min(hi, lam_from + span)
 
 
-def study(
+def analyse(
     scene: Scene,
     parameter: str,
     to: float,
@@ -176,7 +176,7 @@ def study(
     options: PathOptions | None = None,
     switch: bool = True,
     loading: bool = True,
-) -> PathStudy:
+) -> PathAnalysis:
     """Trace ``scene``'s branch in ``parameter`` from ``start`` (default: the scene's value) to ``to``.
 
     Raises
@@ -206,4 +206,4 @@ def study(
         for k, bp in enumerate(main.branch_points, start=1):
             crossing += bifurcating_branches(problem, bp, bounds=window, options=options, label=f"BP{k} ")
     ramps = tuple(history(problem, first.theta, lam_from, [to, lam_from], options)) if loading and to != lam_from else ()
-    return PathStudy(scene, problem, first, main, tuple(crossing), ramps, lam_from, to)
+    return PathAnalysis(scene, problem, first, main, tuple(crossing), ramps, lam_from, to)

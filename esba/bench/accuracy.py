@@ -2,16 +2,16 @@
 
 Every number of that page is printed by ``esba bench accuracy`` (which writes the page and its
 figure with :mod:`esba.pages.accuracy`), and the batch numbers also by ``esba bench batch``. The
-studies:
+benchmarks:
 
-* :func:`accuracy_study`: the tip position and total angle of three scenes (the paper's Table 2
+* :func:`accuracy_benchmark`: the tip position and total angle of three scenes (the paper's Table 2
   case, a vertical tip payload, a horizontal payload at mid-length) for n = 1 ... 128 against a
   converged reference, beside the paper's n-vs-(n+1) criterion, with the time to generate each
   model (cold), to load it (warm) and to solve one equilibrium (median).
-* :func:`tolerance_study`: IPOPT's tolerance against time and error at a fixed n.
-* :func:`effect_study`: the cost of each effect (model size, generation and solve time) and the
+* :func:`tolerance_benchmark`: IPOPT's tolerance against time and error at a fixed n.
+* :func:`effect_benchmark`: the cost of each effect (model size, generation and solve time) and the
   change it makes in the answer.
-* :func:`naive_study` and :func:`batch_study`: the first script a researcher writes (SciPy BFGS
+* :func:`naive_benchmark` and :func:`batch_benchmark`: the first script a researcher writes (SciPy BFGS
   with numeric gradients on the same energy) against esba's IPOPT solve and the batch path.
 
 Timings are medians on a shared machine: compare the ratios within one run.
@@ -47,21 +47,21 @@ __all__ = [
     "REFERENCE_N",
     "CASES",
     "ModelCost",
-    "AccuracyStudy",
+    "AccuracyBenchmark",
     "model_cost",
-    "accuracy_study",
-    "tolerance_study",
-    "effect_study",
-    "naive_study",
-    "batch_study",
+    "accuracy_benchmark",
+    "tolerance_benchmark",
+    "effect_benchmark",
+    "naive_benchmark",
+    "batch_benchmark",
 ]
 
-#: Segment counts of the accuracy study (issue 5).
+#: Segment counts of the accuracy benchmark.
 ACCURACY_NS: tuple[int, ...] = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 64, 128)
 #: The finest model solved; the reference is extrapolated from it and n / 2, n / 4.
 REFERENCE_N = 256
 
-#: The scenes of the study: Table 1 at its 90 degree pressure with a 2 N tip payload,
+#: The scenes of the benchmark: Table 1 at its 90 degree pressure with a 2 N tip payload,
 #: horizontal (Table 2), vertical (Table 3), and horizontal at mid-length.
 CASES: dict[str, Scene] = {
     "table2": Scene(target_angle_deg=90.0, payloads=(Payload(2.0, 90.0, 1.0),)),
@@ -142,7 +142,7 @@ class AccuracyRow:
 
 
 @dataclass(frozen=True)
-class AccuracyStudy:
+class AccuracyBenchmark:
     """Errors against n for each case, the reference used and the model costs.
 
     Attributes
@@ -176,13 +176,13 @@ def _tip_and_angle(scene: Scene) -> tuple[np.ndarray, float, bool, float]:
     return np.asarray(r.tip[:2], dtype=float), r.total_angle_deg, r.ok, float(ev[-1] / ev[0])
 
 
-def accuracy_study(
+def accuracy_benchmark(
     ns: Sequence[int] = ACCURACY_NS,
     reference_n: int = REFERENCE_N,
     cases: Sequence[str] = tuple(CASES),
     repeat: int = 5,
     progress: Callable[[str], None] | None = None,
-) -> AccuracyStudy:
+) -> AccuracyBenchmark:
     """Tip and angle errors against n, the n-vs-(n+1) gaps, and what each n costs.
 
     The reference is the Richardson extrapolation of the solutions at reference_n / 4,
@@ -244,14 +244,14 @@ def accuracy_study(
                     condition=cond,
                 )
             )
-    return AccuracyStudy(rows, reference, costs, reference_n)
+    return AccuracyBenchmark(rows, reference, costs, reference_n)
 
 
 # ---------------------------------------------------------------------------------------------
 # tolerance, effects, naive, batch
 
 
-def tolerance_study(
+def tolerance_benchmark(
     n: int = 16, tolerances: Sequence[float] = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12), repeat: int = 7, case: str = "table2"
 ) -> list[dict]:
     """IPOPT's ``tol`` against solve time, iterations and the tip error at a fixed n.
@@ -280,7 +280,7 @@ def tolerance_study(
     return rows
 
 
-def effect_study(n: int = 16, repeat: int = 5) -> list[dict]:
+def effect_benchmark(n: int = 16, repeat: int = 5) -> list[dict]:
     """Each effect's cost (model size, generation, solve) and the change it makes in the answer.
 
     All scenes hold the pressure of the Table 2 case (the 90 degree pressure of the base model),
@@ -327,7 +327,7 @@ def naive_solve(model, pv: np.ndarray, n: int, theta0: np.ndarray | None = None)
     return minimize(lambda th: model.energy(th, pv), np.zeros(n) if theta0 is None else theta0, method="BFGS")
 
 
-def naive_study(ns: Sequence[int] = (3, 8, 16), repeat: int = 5, case: str = "table2") -> list[dict]:
+def naive_benchmark(ns: Sequence[int] = (3, 8, 16), repeat: int = 5, case: str = "table2") -> list[dict]:
     """SciPy BFGS with numeric gradients on the same generated energy against esba's solve.
 
     Both solve the same scene at the same pressure; the naive error is the tip distance to
@@ -373,7 +373,7 @@ def batch_grid(size: int = 10_000, segments: int = 3) -> tuple[object, dict]:
     return model, vals
 
 
-def batch_study(size: int = 10_000, segments: int = 3, naive_repeat: int = 5, ipopt_samples: int = 50) -> dict:
+def batch_benchmark(size: int = 10_000, segments: int = 3, naive_repeat: int = 5, ipopt_samples: int = 50) -> dict:
     """µs per equilibrium of the batch path (compiled, interpreted) against IPOPT and naive BFGS."""
     from esba.statics.batch import BatchOptions, compiler, solve_arrays
 

@@ -8,7 +8,8 @@ reasonable time, and the compiled limit: one Newton step of the bordered system 
 kernel, :func:`esba.solvers.newton.bordered_function`) compiled to C and mapped over many calls, so
 that it is timed without Python.
 
-``esba bench path`` prints the table and writes the ``path`` section of ``docs/performance.md``.
+``esba bench path`` prints the table and writes the ``path`` section of ``docs/performance.md``
+(:mod:`esba.pages.performance` renders both).
 """
 
 from __future__ import annotations
@@ -30,9 +31,9 @@ from esba.statics.equilibrium import solve
 from .accuracy import naive_solve
 from .timing import median_time
 
-__all__ = ["PathBenchRow", "path_benchmark", "path_table", "path_section", "PATH_NS"]
+__all__ = ["PathBenchRow", "path_benchmark", "PATH_NS"]
 
-#: Segment counts of the benchmark (the issue's).
+#: Segment counts of the benchmark.
 PATH_NS = (3, 100)
 #: The naive BFGS is timed up to this n (it takes minutes beyond).
 NAIVE_MAX_N = 8
@@ -125,61 +126,3 @@ def path_benchmark(ns: Sequence[int] = PATH_NS, repeat: int = 5, naive_max_n: in
         if progress is not None:
             progress(n)
     return rows
-
-
-def path_table(rows: Sequence[PathBenchRow]) -> str:
-    """The benchmark as a fixed-width table."""
-    head = (
-        f"{'n':>4} {'points':>6} {'us/point':>9} {'C step us':>9} {'ratio':>6} {'trace ms':>9} "
-        f"{'IPOPT ramp ms':>14} {'ratio':>6} {'naive ms':>9} {'ratio':>6}"
-    )
-    lines = [head, "-" * len(head)]
-    for r in rows:
-        naive = "-" if r.naive_s is None else f"{1e3 * r.naive_s:9.1f}"
-        naive_ratio = "-" if r.naive_s is None else f"{r.naive_s / r.trace_s:6.1f}"
-        step = "-" if r.newton_step_us is None else f"{r.newton_step_us:9.2f}"
-        step_ratio = "-" if r.newton_step_us is None else f"{r.point_us / r.newton_step_us:6.1f}"
-        lines.append(
-            f"{r.n:>4} {r.points:>6} {r.point_us:9.1f} {step:>9} {step_ratio:>6} {1e3 * r.trace_s:9.2f} "
-            f"{1e3 * r.ipopt_s:14.2f} {r.ipopt_s / r.trace_s:6.1f} {naive:>9} {naive_ratio:>6}"
-        )
-    lines += [""] + [f"folds at n = {r.n}: " + ", ".join(f"{lam:.12f} MPa" for lam in r.folds) for r in rows]
-    lines += [
-        "",
-        "trace: esba.paths.continuation.trace of the 2 N horizontal-payload pressure path 0 -> 0.3 MPa (both folds located)",
-        "us/point: the trace's time per point of the branch; C step: one Newton step of the bordered system compiled",
-        "  to C and mapped (no Python); ratio = us/point / C step (a point takes two or three Newton steps)",
-        "IPOPT ramp: one warm-started IPOPT solve at each lambda of the traced path (the load ramp before path following);",
-        "  it cannot follow the unstable middle branch and snaps across it instead",
-        "naive: SciPy BFGS with numeric gradients, warm-started at each lambda (ratio = other / trace, same run)",
-    ]
-    return "\n".join(lines)
-
-
-def path_section(rows: Sequence[PathBenchRow]) -> str:
-    """The ``path`` section of docs/performance.md."""
-    import platform
-
-    r3, rn = rows[0], rows[-1]
-    return "\n".join(
-        [
-            "## Path following",
-            "",
-            "The time to trace the Table 1 actuator's branch under a 2 N horizontal tip payload as the pressure",
-            "goes from 0 to 0.3 MPa (through the bistable range, both folds located to 1e-8), against what it",
-            "replaces and against the compiled limit. Medians over repeated runs on a shared 2-core machine; the",
-            "ratios come from one run.",
-            "",
-            f"Machine: {platform.machine()}, Python {platform.python_version()}, CasADi {ca.__version__}.",
-            "",
-            "```",
-            path_table(rows),
-            "```",
-            "",
-            f"A point costs {r3.point_us:.0f} us at n = {r3.n} and {r3.point_us if rn is r3 else rn.point_us:.0f} us at n = {rn.n}. Each corrector step is one",
-            "call of the bordered kernel compiled to C (`esba.solvers.native`: the block elimination with two O(n)",
-            "structured solves of H, the residuals, the domain margin, H's pivots and the tangent); the eigenvalues",
-            "of a branch are computed only when asked for. The rest of a point is Python: the step control, the",
-            "checks for folds and branch points, locating the two folds by their extended system.",
-        ]
-    )

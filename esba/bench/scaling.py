@@ -46,7 +46,7 @@ from esba.studies.sweep import (
 )
 from esba.studies.sweep_runner import sweep_study
 
-__all__ = ["scaling_study", "study_plan", "DEFAULTS"]
+__all__ = ["scaling_benchmark", "study_plan", "DEFAULTS"]
 
 #: The defaults of ``esba bench scaling``.
 DEFAULTS = {"points": 12_000, "segments": 16, "repeat": 3, "chunk": 1000, "chunk_sizes": (128, 1000, 4000), "workers": (1, 2), "round_trips": 21, "round_trip_points": 64}
@@ -102,7 +102,7 @@ def _row(where: str, workers: int, chunk: int | None, chunks: int, times: list[f
     }
 
 
-def scaling_study(
+def scaling_benchmark(
     points: int = DEFAULTS["points"],
     segments: int = DEFAULTS["segments"],
     repeat: int = DEFAULTS["repeat"],

@@ -1,7 +1,7 @@
 """Benchmark of everyday single-scene calls: esba, the naive SciPy script and the compiled limit.
 
 Side by side in one run, medians over repeats (``esba bench solve``, which writes the ``solve``
-section of ``docs/performance.md``):
+section of ``docs/performance.md`` with :mod:`esba.pages.performance`):
 
 * ``solve()`` of the Table 2 scene (Table 1 at its 90 degree pressure, 2 N horizontal tip payload)
   for n = 3, 16, 64, 100, 128: esba (warm process); the naive script (SciPy BFGS from theta = 0
@@ -39,7 +39,7 @@ from esba.statics.equilibrium import pressure_for_angle, solve
 from .accuracy import naive_solve
 from .timing import growth_exponent, median_time
 
-__all__ = ["SOLVE_NS", "solve_benchmark", "solve_table", "solve_section"]
+__all__ = ["SOLVE_NS", "solve_benchmark"]
 
 #: Segment counts of the solve rows (the growth is fitted from 16 to 128).
 SOLVE_NS = (3, 16, 64, 100, 128)
@@ -177,72 +177,3 @@ def _model_load_row(n: int, repeat: int) -> dict:
         times.append(time.perf_counter() - t0)
     esba_s = float(np.median(times))
     return {"call": f"a model ready to call, n = {n}", "n": n, "esba_s": esba_s, "naive_s": exec_s, "compiled_s": None, "ok": True, "naive_label": "exec of the model file"}
-
-
-def _ms(v: float | None) -> str:
-    if v is None:
-        return "-"
-    return f"{1e3 * v:.3f}" if v < 0.01 else f"{1e3 * v:.1f}"
-
-
-def solve_table(data: dict) -> str:
-    """The benchmark as a fixed-width table (milliseconds; ratios = other / esba, same run)."""
-    head = f"{'call':<46} {'esba ms':>9} {'naive ms':>10} {'naive/esba':>10} {'compiled ms':>11} {'esba/compiled':>13}"
-    lines = [head, "-" * len(head)]
-    wrong = []
-    for r in data["rows"]:
-        naive = _ms(r["naive_s"]) + ("*" if r.get("naive_estimated") else "")
-        ratio = "-" if r["naive_s"] is None else f"{r['naive_s'] / r['esba_s']:.0f}x"
-        result = r.get("naive_result")
-        if result is not None and not result["converged"]:
-            naive, ratio = naive + "!", "wrong"
-            if "tip_error_mm" in result:
-                wrong.append(f"n = {r['n']}: BFGS stops after {result['iterations']} iterations, its tip {result['tip_error_mm']:.1f} mm from esba's")
-            else:
-                wrong.append(f"{r['call']}: the naive stiffnesses are {100 * result['stiffness_rel_error']:.1f} % off")
-        comp_ratio = "-" if r["compiled_s"] is None else f"{r['esba_s'] / r['compiled_s']:.1f}x"
-        lines.append(f"{r['call']:<46} {_ms(r['esba_s']):>9} {naive:>10} {ratio:>10} {_ms(r['compiled_s']):>11} {comp_ratio:>13}")
-    if data.get("growth_16_128") is not None:
-        lines.append(f"\nsolve() time grows as n^{data['growth_16_128']:.2f} from n = 16 to 128 (target: no worse than n^1.5)")
-    lines += [
-        "naive: SciPy BFGS with numeric gradients on the same generated energy (one start from theta = 0);",
-        "  for the model row: executing the generated Python file; * estimated: 1500 naive stiffness evaluations",
-        "compiled: esba's fast-path Newton ramp (4 load steps, O(n) structured solves) generated to C, one call",
-    ]
-    if wrong:
-        lines.append("! the naive script returns a wrong answer (no ratio: its time is not that of a solve): " + "; ".join(wrong))
-    return "\n".join(lines)
-
-
-def solve_section(data: dict) -> str:
-    """The ``solve`` section of docs/performance.md."""
-    import platform
-
-    rows = {r["call"]: r for r in data["rows"]}
-    first = next(iter(rows.values()))
-    return "\n".join(
-        [
-            "## Single-scene calls",
-            "",
-            "What a researcher's everyday calls cost in a warm process, side by side with the first script one",
-            "writes (SciPy BFGS with numeric gradients on the same generated energy) and with the compiled limit",
-            "of the same generated model (its gradient and Hessian in the same Newton load ramp, compiled to C,",
-            "without IPOPT and without Python). Medians over repeated runs on a shared 2-core machine: the",
-            "ratios come from one run and hold better than the absolute times.",
-            "",
-            f"Machine: {platform.machine()}, Python {platform.python_version()}, CasADi {ca.__version__}.",
-            "",
-            "```",
-            solve_table(data),
-            "```",
-            "",
-            "Where the time of `solve()` goes: the load ramp is one call of a CasADi Function (`esba/solvers/newton.py`:",
-            "a natural-parameter continuation whose Newton steps are solved in O(n) from the Hessian's structure,",
-            "`esba/model/structured.py`), accepted only when every Hessian it met was positive definite and every",
-            "step contracted (else the adaptive path trace of `esba/paths/continuation.py` takes over); IPOPT then certifies",
-            "the state from there (zero iterations when it is already converged); the result's energy terms,",
-            "gradient, Hessian and kinematics come from one more call, its eigenvalues and centre-line from",
-            "NumPy with one BLAS thread (`esba/infra/threads.py`).",
-            f"At n = {first['n']} the compiled ramp alone takes {_ms(first['compiled_s'])} ms of esba's {_ms(first['esba_s'])} ms.",
-        ]
-    )

@@ -13,7 +13,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-#: Segment counts of the generation benchmark (issue 2).
+#: Segment counts of the generation benchmark.
 GENERATION_NS = (1, 2, 4, 8, 16, 32, 64, 100)
 #: The naive SymPy route (expanded POE, sympy.diff) is timed up to this n only: it grows ~n^3.3.
 NAIVE_MAX_N = 16

@@ -3,7 +3,7 @@
 The paper (Sections 4.4 and 5) reports, for the Table 1 actuator, experimental (EXP) and finite
 element (FEM) values next to its model with E = 0.54 MPa from a tensile test. They are here as
 two measurement sets (:func:`paper_data`), the FEM column treated as a second "measured"
-actuator. The study (:func:`run_study`):
+actuator. The comparison (:func:`compare_with_paper`):
 
 * every measured value against esba's model with E = 0.54 MPa (:func:`esba.calibration.fit.predict`);
 * E, and E with rho, fitted to all of each column (:func:`esba.calibration.fit.fit`);
@@ -21,7 +21,7 @@ good to 0.1 mm, its placement on the tip less so), and for a stiffness K = 1000 
 effect of 1 mm on the displacement delta, K^2 / (1000 F). Every fit scales its Fisher matrix by
 the residual variance, so only their ratios matter for the intervals.
 
-The page ``docs/experiments.md`` is written from the study by :mod:`esba.pages.experiments`.
+The page ``docs/experiments.md`` is written from the comparison by :mod:`esba.pages.experiments`.
 
 Examples
 --------
@@ -55,7 +55,7 @@ from .uncertainty import (
     resolve_sigmas,
 )
 
-__all__ = ["COLUMNS", "PAPER", "UNLOADED", "paper_data", "Fold", "Column", "Study", "run_study", "PAPER_PRESSURE_90"]
+__all__ = ["COLUMNS", "PAPER", "UNLOADED", "paper_data", "Fold", "Column", "PaperComparison", "compare_with_paper", "PAPER_PRESSURE_90"]
 
 #: The two columns of the paper's results.
 COLUMNS = ("EXP", "FEM")
@@ -122,7 +122,7 @@ def paper_data(column: str, base: Scene | None = None) -> MeasurementSet:
 
 
 # ---------------------------------------------------------------------------------------------
-# the study
+# the comparison
 
 
 @dataclass(frozen=True, eq=False)
@@ -171,7 +171,7 @@ class Fold:
 
 @dataclass(frozen=True, eq=False)
 class Column:
-    """The study of one column (EXP or FEM)."""
+    """The comparison of one column (EXP or FEM)."""
 
     name: str
     data: MeasurementSet
@@ -184,7 +184,7 @@ class Column:
 
 
 @dataclass(frozen=True, eq=False)
-class Study:
+class PaperComparison:
     """Everything ``docs/experiments.md`` reports.
 
     ``identifiability_all``: column -> Fisher ratio of E and rho from all its rows at the paper's
@@ -213,14 +213,14 @@ def _fold(data: MeasurementSet, train: tuple[str, ...], level: float) -> Fold:
     return Fold(train, test, f, both, preds, z, t)
 
 
-#: The main job's modulus tolerance of the study: E known to +-20 % (uniform).
+#: The main job's modulus tolerance of the comparison: E known to +-20 % (uniform).
 MODULUS_TOLERANCE = "E=±20%"
-#: Monte Carlo samples and seed of the study.
+#: Monte Carlo samples and seed of the comparison.
 MC_SAMPLES, MC_SEED = 10_000, 0
 
 
-def run_study(segments: int = 3, level: float = 0.95) -> Study:
-    """Run the whole study of ``docs/experiments.md`` (about half a minute)."""
+def compare_with_paper(segments: int = 3, level: float = 0.95) -> PaperComparison:
+    """Run every comparison of ``docs/experiments.md`` (about half a minute)."""
     base = Scene(segments=segments)
     columns = []
     for name in COLUMNS:
@@ -242,4 +242,4 @@ def run_study(segments: int = 3, level: float = 0.95) -> Study:
     a = base.actuator
     rho, tan = math.radians(a.rho_deg), math.tan(math.radians(a.rho_deg))
     tradeoff = -8.0 * a.r2 * tan * (1.0 + tan**2) * rho / (a.r1 - 4.0 * a.r2 * tan**2)
-    return Study(tuple(columns), pressure_for_angle(base, 90.0), first, mc, compare(first, mc), level, ident, tradeoff)
+    return PaperComparison(tuple(columns), pressure_for_angle(base, 90.0), first, mc, compare(first, mc), level, ident, tradeoff)

@@ -605,7 +605,7 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
     z = np.clip(sol["z"], nlp.built.lbx[nlp.built.slices["z"]], nlp.built.ubx[nlp.built.slices["z"]])
     estimate = scale * z
     # predictions, the Jacobian of the weighted residuals, and the checks of every state
-    residuals, J_rows, r_rows, row_reports = [], [], [], []
+    residuals, J_rows, r_rows, row_checks = [], [], [], []
     messages = [] if sol.success else [f"IPOPT did not converge: {sol.status}"]
     for i, (m, row) in enumerate(zip(data.rows, nlp.rows)):
         tl = sol[f"theta_l{i}"]
@@ -619,15 +619,15 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
                               "sd": sd, "sd_given": q in m.sds, "residual": float(yq - meas), "normalised": float((yq - meas) / sd)})
             J_rows.append(dq / sd)
             r_rows.append((yq - meas) / sd)
-        row_reports.append(_check_row(m, row, free, estimate, tl, tu, solver_options, options))
-    bad = [r for r in row_reports if not (r["stable"] and r["on_load_path"])]
+        row_checks.append(_check_row(m, row, free, estimate, tl, tu, solver_options, options))
+    bad = [r for r in row_checks if not (r["stable"] and r["on_load_path"])]
     for r in bad:
         messages.append(f"row {r['row']!r}: {r['message']}")
     lbz, ubz = nlp.built.lbx[nlp.built.slices["z"]], nlp.built.ubx[nlp.built.slices["z"]]
     at_bound = [n for n, zz, lo, hi in zip(free, z, lbz, ubz)
                 if (math.isfinite(lo) and zz <= lo + 1e-5 * max(1.0, abs(lo))) or (math.isfinite(hi) and zz >= hi - 1e-5 * max(1.0, abs(hi)))]
     st = _statistics(np.array(J_rows), np.array(r_rows), free, scale, estimate, at_bound, all(d["sd_given"] for d in residuals), options)
-    for r in row_reports:
+    for r in row_checks:
         st["warnings"] += [f"row {r['row']!r} is outside the model's range at the fitted parameters: {v}" for v in r["validity"]]
         st["warnings"] += [f"row {r['row']!r}: at the fitted parameters {v}; the row is compared with the state after the jump"
                            for v in r["snaps"]]
@@ -638,7 +638,7 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
     return FitResult(
         data=data, free=free, units=tuple(UNITS[n] for n in free), level=options.level, start=start, estimate=estimate,
         std_error=st["se"], interval=st["interval"], covariance=st["cov"], correlation=st["corr"], fisher=st["fisher"],
-        residual_variance=st["s2"], dof=st["dof"], residuals=tuple(residuals), rows=tuple(row_reports),
+        residual_variance=st["s2"], dof=st["dof"], residuals=tuple(residuals), rows=tuple(row_checks),
         identifiable=st["identifiable"], fisher_ratio=st["ratio"], warnings=tuple(st["warnings"]),
         status="ok" if not messages else "failed", message="; ".join(messages), iterations=sol.iterations, solve_time_s=elapsed,
     )

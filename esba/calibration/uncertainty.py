@@ -86,14 +86,10 @@ __all__ = [
     "monte_carlo",
     "compare",
     "ellipse",
-    "CHI2_2D_95",
 ]
 
 #: The most Monte Carlo samples one run may draw (they are all held in memory).
 MAX_SAMPLES = 1_000_000
-
-#: The 95 % quantile of the chi-square distribution with 2 degrees of freedom: -2 ln(0.05).
-CHI2_2D_95 = -2.0 * math.log(0.05)
 
 #: Outputs reported by propagation and Monte Carlo, with their units.
 OUTPUTS = (("tip_x", "mm"), ("tip_y", "mm"), ("total_angle", "deg"))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 
 from esba.infra import outputs
@@ -21,30 +22,30 @@ from .results import EXIT_OK, print_result
 
 def _cmd_bench_generation(args: argparse.Namespace) -> int:
     from esba.bench import timing as bench
+    from esba.pages.performance import PAGE, GenerationSettings, generation_table
 
     page = outputs.check_file(args.markdown, "--markdown") if args.markdown else None
-    ns = [n for n in bench.GENERATION_NS if n <= args.max_n]
+    command = f"esba bench generation --max-n {args.max_n} --repeat {args.repeat}{' --no-naive' if args.no_naive else ''} --markdown {args.markdown}"
+    settings = GenerationSettings(args.max_n, args.repeat, not args.no_naive, command)
 
     def progress(n):
         print(f"  n = {n} done", file=sys.stderr)
 
-    rows = bench.generation(ns, repeat=args.repeat, naive=not args.no_naive, progress=None if args.json else progress)
+    rows = PAGE.compute_section("generation", settings, None if args.json else progress)
     exponent, why = bench.growth([r.n for r in rows], [r.total_s for r in rows])
     data = {"rows": [r.__dict__ for r in rows], "growth_exponent": exponent}
     if exponent is None:
         data["growth_exponent_reason"] = why
-    from esba.pages import performance
-
-    print_result(args, data, lambda d: performance.generation_table(rows))
+    print_result(args, data, lambda d: generation_table(rows))
     if page is not None:
-        command = f"esba bench generation --max-n {args.max_n} --repeat {args.repeat}{' --no-naive' if args.no_naive else ''} --markdown {args.markdown}"
-        path = performance.write_generation_page(page, rows, command)
+        path = PAGE.write_section(page, "generation", rows, settings)
         print(f"esba: wrote {path}", file=sys.stderr)
     return EXIT_OK
 
 
 def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
     from esba.bench import accuracy as acc
+    from esba.pages.accuracy import PAGE, AccuracySettings
 
     if args.quick:
         refuse(args, ["max_n", "reference_n", "fixed_n"], "with --quick (it fixes n <= 4, reference n = 16)")
@@ -53,10 +54,8 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
     max_n = 128 if args.max_n is None else args.max_n
     reference_n = acc.REFERENCE_N if args.reference_n is None else args.reference_n
     fixed_n = 16 if args.fixed_n is None else args.fixed_n
-    if args.quick:
-        ns, ref_n, fixed_n, naive_ns, size = (1, 2, 3, 4), 16, 4, (3,), 1000
-    else:
-        ns, ref_n, naive_ns, size = tuple(n for n in acc.ACCURACY_NS if n <= max_n), reference_n, (3, 8, 16), 10_000
+    settings = AccuracySettings(args.quick, max_n, reference_n, fixed_n, args.repeat)
+    _, ref_n, _, _, _ = settings.plan
     if ref_n < 4 or ref_n % 4:
         raise UsageError(f"--reference-n {ref_n}: expected a multiple of 4 (the reference extrapolates from n/4, n/2, n)")
     doc = fig = None
@@ -66,47 +65,36 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
         if args.figure is None and outputs.checkout_root() is None:
             outputs.check_folder(fig.parent, "--figure")
         fig = outputs.figure_file(fig, "--figure", "accuracy-vs-time.png")
+    command = "esba bench accuracy" + (" --quick" if args.quick else "")
+    if not args.quick and (max_n, reference_n, fixed_n, args.repeat) != (128, 256, 16, 5):
+        command += f" --max-n {max_n} --reference-n {reference_n} --fixed-n {fixed_n} --repeat {args.repeat}"
+    settings = dataclasses.replace(settings, command=command, figure=fig)
 
     def say(msg):
         if not args.json:
             print(f"  {msg}", file=sys.stderr)
 
-    study = acc.accuracy_study(ns, ref_n, repeat=args.repeat, progress=say)
-    say(f"tolerance study (n = {fixed_n})")
-    tol = acc.tolerance_study(fixed_n, repeat=args.repeat)
-    say(f"effect study (n = {fixed_n})")
-    eff = acc.effect_study(fixed_n, repeat=args.repeat)
-    for rows in (tol, eff):
-        for r in rows:
-            r["n"] = fixed_n
-    say("naive BFGS against esba")
-    naive = acc.naive_study(naive_ns, repeat=args.repeat)
-    say(f"batch of {size}")
-    batch = acc.batch_study(size)
+    runs = PAGE.compute(settings, say)
+    accuracy, batch = runs.accuracy, runs.batch
     data = {
-        "reference": study.reference,
-        "rows": [r.__dict__ for r in study.rows],
-        "costs": {n: c.__dict__ for n, c in study.costs.items()},
+        "reference": accuracy.reference,
+        "rows": [r.__dict__ for r in accuracy.rows],
+        "costs": {n: c.__dict__ for n, c in accuracy.costs.items()},
         "reach": {
-            case: {f"{mm:g} mm": (None if (r := study.first_n_below(case, mm)) is None else r.n) for mm in (1.0, 0.1)} for case in study.reference
+            case: {f"{mm:g} mm": (None if (r := accuracy.first_n_below(case, mm)) is None else r.n) for mm in (1.0, 0.1)} for case in accuracy.reference
         },
-        "tolerance": tol,
-        "effects": eff,
-        "naive": naive,
+        "tolerance": runs.tolerance,
+        "effects": runs.effects,
+        "naive": runs.naive,
         "batch": batch,
     }
     if doc is not None:
-        command = "esba bench accuracy" + (" --quick" if args.quick else "")
-        if not args.quick and (max_n, reference_n, fixed_n, args.repeat) != (128, 256, 16, 5):
-            command += f" --max-n {max_n} --reference-n {reference_n} --fixed-n {fixed_n} --repeat {args.repeat}"
-        from esba.pages.accuracy import write_page
-
-        doc, fig = write_page(study, tol, eff, naive, batch, command, doc=doc, fig_path=fig)
+        PAGE.write(doc, settings, data=runs)
         data["page"], data["figure"] = str(doc), str(fig)
 
     def table(d: dict) -> str:
         lines = [f"{'case':>10} {'n':>4} {'error mm':>9} {'n vs n+1':>9} {'solve ms':>9}"]
-        for r in study.rows:
+        for r in accuracy.rows:
             lines.append(f"{r.case:>10} {r.n:>4} {r.error_mm:9.3g} {r.next_mm:9.3g} {1e3 * r.solve_s:9.2f}")
         lines += [f"{case}: reaches {reach}" for case, reach in d["reach"].items()]
         lines.append(f"batch: {batch.get('compiled_us', batch['interpreted_us']):.1f} us per equilibrium; naive {batch['naive_us']:.0f} us; IPOPT {batch['ipopt_us']:.0f} us")
@@ -128,36 +116,30 @@ def _bench_progress(args: argparse.Namespace, form: str):
     return progress
 
 
-def _bench_section(args: argparse.Namespace, name: str, body: str) -> None:
-    """Write the ``name`` section of the --markdown page (checked when the command started)."""
-    from esba.pages.performance import PERFORMANCE_TITLE
-    from esba.pages.sections import write_section
-
-    if args.markdown:
-        command = f"esba bench {name} --repeat {args.repeat} --markdown {args.markdown}"
-        print(f"wrote {write_section(args.markdown, name, body, command, PERFORMANCE_TITLE)}", file=sys.stderr)
-
-
 def _cmd_bench_solve(args: argparse.Namespace) -> int:
-    from esba.bench import solve as bench_solve
+    from esba.pages.performance import PAGE, SolveSettings, solve_table
 
     if args.markdown:
         outputs.check_file(args.markdown, "--markdown", (".md",))
-    data = bench_solve.solve_benchmark(repeat=args.repeat, progress=_bench_progress(args, "  {} done"))
-    print_result(args, data, bench_solve.solve_table)
-    _bench_section(args, "solve", bench_solve.solve_section(data))
+    settings = SolveSettings(args.repeat, f"esba bench solve --repeat {args.repeat} --markdown {args.markdown}")
+    data = PAGE.compute_section("solve", settings, _bench_progress(args, "  {} done"))
+    print_result(args, data, solve_table)
+    if args.markdown:
+        print(f"wrote {PAGE.write_section(args.markdown, 'solve', data, settings)}", file=sys.stderr)
     return EXIT_OK
 
 
 def _cmd_bench_path(args: argparse.Namespace) -> int:
-    from esba.bench import path as bench_path
+    from esba.pages.performance import PAGE, PathSettings, path_table
 
     if args.markdown:
         outputs.check_file(args.markdown, "--markdown", (".md",))
-    rows = bench_path.path_benchmark(repeat=args.repeat, progress=_bench_progress(args, "  n = {} done"))
+    settings = PathSettings(args.repeat, f"esba bench path --repeat {args.repeat} --markdown {args.markdown}")
+    rows = PAGE.compute_section("path", settings, _bench_progress(args, "  n = {} done"))
     data = {"rows": [dict(r.__dict__, folds=list(r.folds), points_per_s=r.points_per_s, point_us=r.point_us) for r in rows]}
-    print_result(args, data, lambda d: bench_path.path_table(rows))
-    _bench_section(args, "path", bench_path.path_section(rows))
+    print_result(args, data, lambda d: path_table(rows))
+    if args.markdown:
+        print(f"wrote {PAGE.write_section(args.markdown, 'path', rows, settings)}", file=sys.stderr)
     return EXIT_OK
 
 
@@ -166,7 +148,7 @@ def _cmd_bench_batch(args: argparse.Namespace) -> int:
     from esba.statics.batch import check_size
 
     check_size(args.size, args.segments, "--size", UsageError)
-    data = acc.batch_study(args.size, args.segments)
+    data = acc.batch_benchmark(args.size, args.segments)
 
     def table(d: dict) -> str:
         rows = [("batch size", f"{d['size']} equilibria, n = {d['segments']} (pressures 0-0.2 MPa x horizontal tip payloads 0-2 N)")]
@@ -201,7 +183,7 @@ _MAX_SIZE = 10_000_000
 
 def _cmd_bench_scaling(args: argparse.Namespace) -> int:
     from esba.bench import scaling as bench_scaling
-    from esba.pages import scaling as scaling_report
+    from esba.pages.scaling import PAGE, ScalingSettings, summary
     from esba.studies.distributed import DistributedError, require_dask
 
     if args.scheduler is not None and args.workers is not None:
@@ -220,27 +202,27 @@ def _cmd_bench_scaling(args: argparse.Namespace) -> int:
         if not args.json:
             print(f"  {msg}", file=sys.stderr)
 
-    workers = tuple(args.workers) if args.workers else bench_scaling.DEFAULTS["workers"]
+    command = "esba bench scaling"
+    defaults = bench_scaling.DEFAULTS
+    for flag, value, default in (("--points", args.points, defaults["points"]), ("--segments", args.segments, defaults["segments"]),
+                                 ("--repeat", args.repeat, defaults["repeat"]), ("--chunk", args.chunk, defaults["chunk"])):
+        if value != default:
+            command += f" {flag} {value}"
+    if args.workers:
+        command += "".join(f" --workers {w}" for w in args.workers)
+    if args.scheduler:
+        command += f" --scheduler {args.scheduler}"
+    command += f" --markdown {args.markdown}"
+    workers = tuple(args.workers) if args.workers else defaults["workers"]
+    settings = ScalingSettings(args.points, args.segments, args.repeat, args.chunk, workers, args.scheduler, args.connect_timeout or 10.0, command)
     try:
-        data = bench_scaling.scaling_study(points=args.points, segments=args.segments, repeat=args.repeat, chunk=args.chunk,
-                                           workers=workers, scheduler=args.scheduler, timeout=args.connect_timeout or 10.0, progress=say)
+        data = PAGE.compute(settings, say)
     except DistributedError as exc:
         raise UsageError(str(exc)) from None
     if args.markdown:
-        command = "esba bench scaling"
-        defaults = bench_scaling.DEFAULTS
-        for flag, value, default in (("--points", args.points, defaults["points"]), ("--segments", args.segments, defaults["segments"]),
-                                     ("--repeat", args.repeat, defaults["repeat"]), ("--chunk", args.chunk, defaults["chunk"])):
-            if value != default:
-                command += f" {flag} {value}"
-        if args.workers:
-            command += "".join(f" --workers {w}" for w in args.workers)
-        if args.scheduler:
-            command += f" --scheduler {args.scheduler}"
-        command += f" --markdown {args.markdown}"
-        data["page"] = str(scaling_report.write_page(args.markdown, data, command))
+        data["page"] = str(PAGE.write(args.markdown, settings, data=data).path)
 
-    print_result(args, data, scaling_report.summary)
+    print_result(args, data, summary)
     return EXIT_OK
 
 
@@ -286,9 +268,9 @@ def add_bench(sub) -> None:
     g.set_defaults(func=_cmd_bench_generation)
 
     a = bsub.add_parser("accuracy", help="tip error against n, tolerance, effects, naive vs esba, batch (about 4 minutes); writes the accuracy page")
-    a.add_argument("--max-n", type=segments_arg, default=None, help="largest n of the study (default 128)")
+    a.add_argument("--max-n", type=segments_arg, default=None, help="largest n of the benchmark (default 128)")
     a.add_argument("--reference-n", type=segments_arg, default=None, help="finest n; the reference extrapolates from n/4, n/2, n (default 256)")
-    a.add_argument("--fixed-n", type=segments_arg, default=None, help="n of the tolerance and effect studies (default 16)")
+    a.add_argument("--fixed-n", type=segments_arg, default=None, help="n of the tolerance and effect benchmarks (default 16)")
     a.add_argument("--repeat", type=count_arg("repeat", 1, _MAX_REPEAT), default=5, help="solves per timing, median reported (default 5, at most 100)")
     a.add_argument("--quick", action="store_true", help="a small smoke run (n <= 4, reference n = 16, batch of 1000)")
     a.add_argument("--out", default=None, metavar="FILE", help="page to write (default docs/accuracy-vs-time.md in a checkout, else ./accuracy-vs-time.md)")

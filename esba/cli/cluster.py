@@ -1,4 +1,4 @@
-"""The flags of studies on Dask (issue 11): ``--workers``, ``--scheduler``, ``--connect-timeout``,
+"""The flags of studies on Dask: ``--workers``, ``--scheduler``, ``--connect-timeout``,
 ``--chunk``; checked by :mod:`esba.studies.distributed` without importing Dask."""
 
 from __future__ import annotations

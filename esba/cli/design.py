@@ -1,4 +1,4 @@
-"""``esba design`` (issue 4): the stiffest (r2, d) by IPOPT on the full-space NLP, and by PSO as the paper did."""
+"""``esba design``: the stiffest (r2, d) by IPOPT on the full-space NLP, and by PSO as the paper did."""
 
 from __future__ import annotations
 
@@ -69,11 +69,11 @@ def _cmd_design(args: argparse.Namespace) -> int:
         optimise_ipopt,
         optimise_pso,
     )
-    from esba.pages.design import write_doc
+    from esba.pages.design import PAGE, DesignSettings
     from esba.solvers.pso import PSOOptions, PSOOptionsError
 
     if args.write_doc:
-        refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot"], "with --write-doc (the study runs its own problems)")
+        refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot"], "with --write-doc (the page runs its own design cases)")
         page = outputs.check_file(args.write_doc, "--write-doc")
     method = args.method or "ipopt"
     if method == "ipopt":
@@ -89,7 +89,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         )
         options = DesignOptions(starts=4 if args.starts is None else args.starts)
         if args.write_doc:
-            path, _ = write_doc(page, segments=args.segments, options=options, pso_options=pso_options)
+            path = PAGE.write(page, DesignSettings(args.segments, options, pso_options)).path
             print_result(args, {"page": str(path)}, lambda d: f"wrote {d['page']}")
             return EXIT_OK
         problem = DesignProblem(
@@ -171,6 +171,6 @@ def add_design(sub) -> None:
     p.add_argument("--iterations", type=count_arg("iterations", 1, 500_000, "particles x (iterations + 1) is at most 1000000"), default=None, help="PSO iterations (default 50, the paper's)")
     p.add_argument("--starts", type=count_arg("starts", 1, 8), default=None, help="IPOPT starts (1 to 8, default 4)")
     p.add_argument("--plot", metavar="FILE|DIR", help="write the stiffness map with the design(s) (and the swarm); a folder gets esba-design.png")
-    p.add_argument("--write-doc", metavar="FILE", help="run the whole study (both methods, every problem; minutes) and write it, e.g. docs/design.md")
+    p.add_argument("--write-doc", metavar="FILE", help="run every design case of the page (both methods, every problem; minutes) and write it, e.g. docs/design.md")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_design)

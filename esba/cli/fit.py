@@ -1,4 +1,4 @@
-"""``esba fit`` and ``esba experiments`` (issue 10): parameters from measurements, the paper's EXP
+"""``esba fit`` and ``esba experiments``: parameters from measurements, the paper's EXP
 and FEM values against the model."""
 
 from __future__ import annotations
@@ -164,27 +164,26 @@ def _experiments_table(d: dict) -> str:
 
 
 def _cmd_experiments(args: argparse.Namespace) -> int:
-    from esba.pages import experiments as experiments_page
+    from esba.pages.experiments import DOC_COMMAND, PAGE
 
     if args.check:
-        if experiments_page.check_page(args.check):
-            print(f"esba: {args.check} is stale: run `{experiments_page.DOC_COMMAND}` and commit it", file=sys.stderr)
+        check = PAGE.check(args.check)
+        if not check.ok:
+            print(f"esba: {args.check} is {check.status}: run `{DOC_COMMAND}` and commit it", file=sys.stderr)
             return EXIT_FAILED
         print("experiments page is up to date")
         return EXIT_OK
-    from esba.calibration.experiments import run_study
-
-    study = run_study()
+    comparison = PAGE.compute()
     data = {
         "columns": [
             {"name": c.name, "nominal": [p.to_dict() for p in c.nominal], "fit_e": c.fit_e.to_dict(), "fit_both": c.fit_both.to_dict()}
-            for c in study.columns
+            for c in comparison.columns
         ],
-        "modulus": study.modulus_agreement.to_dict(),
+        "modulus": comparison.modulus_agreement.to_dict(),
     }
     if args.write_doc:
         try:
-            path, _ = experiments_page.write_page(args.write_doc, study)
+            path = PAGE.write(args.write_doc, data=comparison).path
         except OSError as exc:
             raise UsageError(f"--write-doc {args.write_doc!r}: cannot write: {exc}") from None
         data["page"] = str(path)

@@ -90,21 +90,20 @@ def add_generate(sub) -> None:
 
 
 def _cmd_audit(args: argparse.Namespace) -> int:
+    from esba.pages.derivations import PAGE
+
     page = outputs.default_page("derivations.md") if args.out is None else args.out
     if args.check:
-        from derive import audit_page  # SymPy: only for this command
-
-        stale = audit_page.check_page(page)
+        check = PAGE.check(page)
+        stale = not check.ok
         print_result(args, {"page": str(page), "stale": stale}, lambda d: f"{d['page']} is {'STALE' if d['stale'] else 'up to date'}")
         if stale:
-            print(f"esba: {page} is stale: run `esba audit` and commit it", file=sys.stderr)
+            print(f"esba: {page} is {check.status}: run `esba audit` and commit it", file=sys.stderr)
             return EXIT_FAILED
         return EXIT_OK
     page = outputs.check_file(page, "--out")
-    from derive import audit_page  # SymPy: only for this command
-
-    path, verdicts = audit_page.write_page(page)
-    data = {"page": str(path), "verdicts": {k: v.verdict for k, v in verdicts.items()}}
+    written = PAGE.write(page)
+    data = {"page": str(written.path), "verdicts": written.data.verdicts()}
     print_result(args, data, lambda d: "\n".join([f"wrote {d['page']}"] + [f"  {k:<26} {v}" for k, v in d["verdicts"].items()]))
     return EXIT_OK
 

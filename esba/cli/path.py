@@ -1,4 +1,4 @@
-"""``esba path`` (issue 8): branches, special points, hysteresis."""
+"""``esba path``: branches, special points, hysteresis."""
 
 from __future__ import annotations
 
@@ -68,19 +68,18 @@ def _path_table(d: dict) -> str:
 
 
 def _path_write_doc(args: argparse.Namespace) -> int:
-    """``esba path --write-doc FILE``: the whole study of docs/paths.md (no other path flags)."""
+    """``esba path --write-doc FILE``: every path case of docs/paths.md (no other path flags)."""
     given = [flag for flag, v in (("--to", args.to), ("--from", args.start), ("--out", args.out), ("--plot", args.plot), ("SCENE.toml", args.scene)) if v is not None]
     if given:
-        raise UsageError(f"--write-doc runs its own studies of the Table 1 actuator: give no {', '.join(given)} with it")
+        raise UsageError(f"--write-doc runs its own path cases of the Table 1 actuator: give no {', '.join(given)} with it")
     outputs.check_file(args.write_doc, "--write-doc", (".md",))
-    from esba.pages.paths import paths_data, write_page
+    from esba.pages.paths import PAGE, PathsSettings
 
     def say(msg):
         if not args.json:
             print(f"  {msg}", file=sys.stderr)
 
-    data = paths_data(progress=say)
-    page = write_page(args.write_doc, data, f"esba path --write-doc {args.write_doc}")
+    page = PAGE.write(args.write_doc, PathsSettings(f"esba path --write-doc {args.write_doc}"), progress=say).path
     print_result(args, {"page": str(page.resolve())}, lambda d: f"wrote {d['page']}")
     return EXIT_OK
 
@@ -95,7 +94,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
         raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
     out = None if args.no_out else outputs.check_file(args.out or DEFAULT_PATH_OUT, "--out", (".csv", ".json"))
     plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_PATH_FIGURE, "--plot", DEFAULT_PATH_FIGURE)
-    from esba.analysis.path_analysis import study
+    from esba.analysis.path_analysis import analyse
     from esba.paths.continuation import PathOptions, write_branches
     from esba.paths.problem import PathError
     from esba.statics.equilibrium import EquilibriumError
@@ -108,7 +107,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
         param = f"{param}{args.payload_index}"
     try:
         options = PathOptions(locate=args.locate, max_steps=args.max_steps, ds_max=args.ds_max, ds=min(0.05, args.ds_max))
-        result = study(scene, param, args.to, start=args.start, options=options, switch=not args.no_switch, loading=not args.no_loading)
+        result = analyse(scene, param, args.to, start=args.start, options=options, switch=not args.no_switch, loading=not args.no_loading)
     except PathError as exc:
         raise UsageError(str(exc)) from None
     except EquilibriumError as exc:
@@ -119,9 +118,9 @@ def _cmd_path(args: argparse.Namespace) -> int:
         extra = {k: v for k, v in result.to_dict(points=False).items() if k != "branches"}
         data["out"] = str(write_branches(result.branches, out, extra).resolve())
     if plot:
-        from esba.figures.paths import save_figure, study_figure
+        from esba.figures.paths import path_figure, save_figure
 
-        data["figure"] = str(save_figure(study_figure(result, args.y), plot).resolve())
+        data["figure"] = str(save_figure(path_figure(result, args.y), plot).resolve())
     print_result(args, data, _path_table)
     warn_findings(data["validity"])
     reached = result.main.stopped == "loop" or (len(result.main) and result.main.lam[-1] == args.to)
@@ -152,5 +151,5 @@ def add_path(sub) -> None:
     p.add_argument("--plot", metavar="FILE", help=f"the figure (default {DEFAULT_PATH_FIGURE})")
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--points", action="store_true", help="with --json: print every point, not only the special ones")
-    p.add_argument("--write-doc", metavar="FILE", help="run the studies of docs/paths.md (Table 1: bistable ranges, buckling for n = 1..8) and write the page and its figures (several seconds)")
+    p.add_argument("--write-doc", metavar="FILE", help="run the path cases of docs/paths.md (Table 1: bistable ranges, buckling for n = 1..8) and write the page and its figures (several seconds)")
     p.set_defaults(func=_cmd_path)

@@ -400,19 +400,20 @@ def add_pressure(sub) -> None:
 
 def _cmd_validate(args: argparse.Namespace) -> int:
     from esba.calibration import validation
-    from esba.pages import validation as validation_report
+    from esba.pages.validation import PAGE
 
     page = outputs.default_page("validation.md") if args.out is None else args.out
     if not args.check:
         page = outputs.check_file(page, "--out")
-    rows = validation.table2()
+    cases = PAGE.compute()
+    rows = list(cases.paper)
     if args.check:
-        stale = validation_report.check_page(page, rows)
-        if stale:
-            print(f"esba: {page} is stale: run `esba validate` and commit it", file=sys.stderr)
+        check = PAGE.check(page, data=cases)
+        if not check.ok:
+            print(f"esba: {page} is {check.status}: run `esba validate` and commit it", file=sys.stderr)
             return EXIT_FAILED
     else:
-        page = validation_report.write_page(page, rows)
+        page = PAGE.write(page, data=cases).path
     data = {"passed": all(r.passed for r in rows), "rows": [r.to_dict() for r in rows]}
     if not args.check:
         data["page"] = str(page)

@@ -1,4 +1,4 @@
-"""``esba sweep`` (issue 5): grids on the batch path, in this process or chunk by chunk on Dask (issue 11)."""
+"""``esba sweep``: grids on the batch path, in this process or chunk by chunk on Dask."""
 
 from __future__ import annotations
 

@@ -1,14 +1,14 @@
-"""Figures of the parameter study and the design optimisation (the paper's Figs. 13 and 14).
+"""Figures of the parameter sweep and the design optimisation (the paper's Figs. 13 and 14).
 
-* :func:`figure_13a`: the free bending angle over the (r2, d) triangle at 0.2 MPa (Fig. 13a);
-* :func:`figure_13b`: the secant stiffness over the triangle (each design at its own 90 degree
+* :func:`draw_13a`: the free bending angle over the (r2, d) triangle at 0.2 MPa (Fig. 13a);
+* :func:`draw_13b`: the secant stiffness over the triangle (each design at its own 90 degree
   pressure, 2 N horizontal tip payload), with the IPOPT optimum marked (Fig. 13b);
-* :func:`figure_14`: the swarm's positions per iteration, coloured by iteration (Fig. 14).
+* :func:`draw_14`: the swarm's positions per iteration, coloured by iteration (Fig. 14).
 
-Each writes one PNG into ``out_dir`` and returns its path; :mod:`esba.figures.paper` lists them as
-``fig13a``, ``fig13b``, ``fig14`` for ``esba figures``. The numbers behind them come from
-:func:`triangle_grid`, :func:`stiffness_map` and :func:`angle_map`, so that tests can check them
-without drawing. :func:`design_figure` draws one ``esba design`` run (``--plot``).
+Each returns the Figure; :mod:`esba.figures.paper` lists them as ``fig13a``, ``fig13b``, ``fig14``
+for ``esba figures``, which writes them. The numbers behind them come from :func:`triangle_grid`,
+:func:`stiffness_map` and :func:`angle_map`, so that tests can check them without drawing.
+:func:`draw_design` draws one ``esba design`` run, :func:`design_figure` writes it (``--plot``).
 
 Examples
 --------
@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.tri import Triangulation
 
 from esba.analysis.stiffness import secant_stiffness
@@ -47,9 +48,10 @@ __all__ = [
     "triangle_grid",
     "stiffness_map",
     "angle_map",
-    "figure_13a",
-    "figure_13b",
-    "figure_14",
+    "draw_13a",
+    "draw_13b",
+    "draw_14",
+    "draw_design",
     "design_figure",
 ]
 
@@ -121,8 +123,8 @@ def _contour(fig, ax: Axes, grid: np.ndarray, values: np.ndarray, levels, label:
     return tri
 
 
-def figure_13a(out_dir: str | Path, problem: DesignProblem | None = None, points: int = RESOLUTION) -> Path:
-    """Fig. 13a: the free bending angle at 0.2 MPa over the (r2, d) triangle; writes ``fig13a.png``."""
+def draw_13a(problem: DesignProblem | None = None, points: int = RESOLUTION) -> Figure:
+    """Fig. 13a: the free bending angle at 0.2 MPa over the (r2, d) triangle."""
     problem = DesignProblem() if problem is None else problem
     grid, angle = angle_map(problem, FIG13A_PRESSURE, points)
     fig = new_figure(6.2, 5.0)
@@ -136,11 +138,11 @@ def figure_13a(out_dir: str | Path, problem: DesignProblem | None = None, points
     _triangle_axes(ax, a.r1)
     ax.legend(loc="upper right", fontsize=8)
     ax.set_title(f"Fig. 13a: unloaded bending angle at {FIG13A_PRESSURE:g} MPa (n = {problem.segments}; yellow: > 720 deg)", fontsize=9)
-    return save_figure(fig, Path(out_dir) / "fig13a.png")
+    return fig
 
 
-def figure_13b(out_dir: str | Path, problem: DesignProblem | None = None, points: int = RESOLUTION) -> Path:
-    """Fig. 13b: the secant stiffness over the triangle with the optimum marked; writes ``fig13b.png``."""
+def draw_13b(problem: DesignProblem | None = None, points: int = RESOLUTION) -> Figure:
+    """Fig. 13b: the secant stiffness over the triangle with the optimum marked."""
     problem = DesignProblem() if problem is None else problem
     grid, K = stiffness_map(problem, points)
     best = optimise_ipopt(problem)
@@ -161,7 +163,7 @@ def figure_13b(out_dir: str | Path, problem: DesignProblem | None = None, points
         f"Fig. 13b: stiffness, {problem.payload_n:g} N horizontal tip payload from {problem.start_angle_deg:g} deg (n = {problem.segments})",
         fontsize=9,
     )
-    return save_figure(fig, Path(out_dir) / "fig13b.png")
+    return fig
 
 
 def _k(problem: DesignProblem, r2: float, d: float) -> float:
@@ -195,11 +197,12 @@ def _swarm_axes(fig, ax: Axes, result: DesignResult, problem: DesignProblem) -> 
     _triangle_axes(ax, problem.actuator.r1)
 
 
-def figure_14(out_dir: str | Path, problem: DesignProblem | None = None, pso_options: PSOOptions | None = None) -> Path:
-    """Fig. 14: the swarm's positions per iteration (paper's settings, seed 0); writes ``fig14.png``."""
+def draw_14(problem: DesignProblem | None = None, pso_options: PSOOptions | None = None, map_points: int = 30) -> Figure:
+    """Fig. 14: the swarm's positions per iteration (paper's settings, seed 0), over the stiffness
+    contours (a map of ``map_points`` per side)."""
     problem = DesignProblem() if problem is None else problem
     result = optimise_pso(problem, pso_options=pso_options)
-    grid, K = stiffness_map(problem.stiffest(), 30)
+    grid, K = stiffness_map(problem.stiffest(), map_points)
     fig = new_figure(10.5, 4.6)
     ax, ax2 = fig.subplots(1, 2, width_ratios=[1.25, 1])
     ok = np.isfinite(K)
@@ -233,10 +236,10 @@ def figure_14(out_dir: str | Path, problem: DesignProblem | None = None, pso_opt
     inset.set_title(f"|best - final| ({problem.unit})", fontsize=7)
     inset.set_xlabel("iteration", fontsize=6, labelpad=1)
     inset.tick_params(labelsize=6)
-    return save_figure(fig, Path(out_dir) / "fig14.png")
+    return fig
 
 
-def design_figure(run: DesignResult | Comparison, path: str | Path, points: int = 40) -> Path:
+def draw_design(run: DesignResult | Comparison, points: int = 40) -> Figure:
     """The stiffness map with the run's design(s), the K_min contour and the swarm (``esba design --plot``)."""
     results = [run.ipopt, run.pso] if isinstance(run, Comparison) else [run]
     problem = results[0].problem
@@ -265,5 +268,10 @@ def design_figure(run: DesignResult | Comparison, path: str | Path, points: int 
     _triangle_axes(ax, problem.actuator.r1)
     ax.legend(loc="upper right", fontsize=7)
     ax.set_title(problem.describe()[:110], fontsize=7)
-    return save_figure(fig, path)
+    return fig
+
+
+def design_figure(run: DesignResult | Comparison, path: str | Path, points: int = 40) -> Path:
+    """Write :func:`draw_design` to ``path``; return the path."""
+    return save_figure(draw_design(run, points), path)
 

@@ -1,9 +1,9 @@
 """The paper's figures, regenerated from esba's model: a registry of figure functions.
 
-Each figure is a function ``make(out_dir) -> Path`` that solves what it needs, draws it with
-matplotlib on the Agg canvas (:mod:`esba.figures.scenes`) and writes one PNG into ``out_dir``. The data
-behind each figure comes from a function of its own, so that tests can check the numbers
-without drawing them:
+Each figure is a function ``draw() -> Figure`` that solves what it needs (or takes the data it is
+given) and draws it with matplotlib on the Agg canvas (:mod:`esba.figures.scenes`); :func:`write_all`
+writes each as one PNG. The data behind each figure comes from a function of its own, so that
+tests can check the numbers, and then that the figure shows them (its lines' data, its labels):
 
 ========  ==============================================  =================================
 name      what                                            data
@@ -18,7 +18,7 @@ fig11     secant stiffness against payload (0.5, 1, 2 N    :func:`horizontal_pay
           and a fine curve), n = 3
 ========  ==============================================  =================================
 
-The design figures of the parameter study (``fig13a``, ``fig13b``, ``fig14``) live in
+The design figures of the parameter sweep (``fig13a``, ``fig13b``, ``fig14``) live in
 :mod:`esba.figures.design`; :func:`registry` lists them when that module is installed and
 imports it only when one of them is drawn.
 
@@ -44,6 +44,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from esba.analysis.stiffness import PAPER_FORCES, SecantStiffness, secant_stiffness
 from esba.infra.errors import InputError
@@ -60,7 +61,6 @@ from .scenes import draw_payloads, draw_shape, new_figure, save_figure, setup_fr
 
 __all__ = [
     "FigureError",
-    "DEFAULT_OUT",
     "FIBRE_ANGLES_DEG",
     "PressureAngleCurve",
     "pressure_angle_curves",
@@ -68,18 +68,14 @@ __all__ = [
     "payload_shapes",
     "horizontal_payload_sweep",
     "payload_branch",
-    "figure_7b",
-    "figure_8c",
-    "figure_10",
-    "figure_11",
+    "draw_7b",
+    "draw_8c",
+    "draw_10",
+    "draw_11",
     "registry",
     "check_names",
     "write_all",
 ]
-
-#: The repository's figures folder (``esba figures`` writes there when run inside a checkout; see
-#: :mod:`esba.infra.outputs` for the default elsewhere).
-DEFAULT_OUT = Path(__file__).resolve().parents[2] / "docs" / "figures"
 
 #: Fibre winding angles of Fig. 7b, degrees (10 is Table 1's).
 FIBRE_ANGLES_DEG: tuple[float, ...] = (5.0, 10.0, 15.0, 20.0)
@@ -188,9 +184,10 @@ def pressure_angle_curves(
     return curves
 
 
-def figure_7b(out_dir: str | Path) -> Path:
-    """Fig. 7b: unloaded bending angle against pressure for fibre angles 5, 10, 15, 20 deg."""
-    curves = pressure_angle_curves()
+def draw_7b(curves: Sequence[PressureAngleCurve] | None = None) -> Figure:
+    """Fig. 7b: unloaded bending angle against pressure for fibre angles 5, 10, 15, 20 deg
+    (``curves``: :func:`pressure_angle_curves`, computed when not given)."""
+    curves = pressure_angle_curves() if curves is None else curves
     fig = new_figure(6.0, 4.6)
     ax = fig.add_subplot()
     for k, c in enumerate(curves):
@@ -218,7 +215,7 @@ def figure_7b(out_dir: str | Path) -> Path:
     )
     ax.grid(True, color="0.9", lw=0.6)
     ax.legend(title="fibre angle", loc="upper left", fontsize=8, title_fontsize=8)
-    return save_figure(fig, Path(out_dir) / "fig7b.png")
+    return fig
 
 
 # ---------------------------------------------------------------------------------------------
@@ -278,9 +275,10 @@ def payload_shapes(segments: Sequence[int] = (1, 2, 3, 4), force: float = 2.0, a
     return PayloadShapes(pressure, unloaded, loaded)
 
 
-def figure_8c(out_dir: str | Path) -> Path:
-    """Fig. 8c: shapes for n = 1..4 under a 2 N horizontal tip payload, with the unloaded 90 deg shape."""
-    data = payload_shapes()
+def draw_8c(data: PayloadShapes | None = None) -> Figure:
+    """Fig. 8c: shapes for n = 1..4 under a 2 N horizontal tip payload, with the unloaded 90 deg shape
+    (``data``: :func:`payload_shapes`, computed when not given)."""
+    data = payload_shapes() if data is None else data
     fig = new_figure(6.4, 6.0)
     ax = fig.add_subplot()
     setup_frame_axes(ax)
@@ -304,7 +302,7 @@ def figure_8c(out_dir: str | Path) -> Path:
     ax.set_xlim(-30.0, 125.0)
     ax.set_ylim(145.0, -5.0)
     ax.legend(loc="upper right", fontsize=7.5)
-    return save_figure(fig, Path(out_dir) / "fig8c.png")
+    return fig
 
 
 # ---------------------------------------------------------------------------------------------
@@ -360,11 +358,12 @@ def payload_branch(segments: int = 3, to: float = 2.0, angle_deg: float = 90.0):
     return trace(problem, start.theta, 0.0, to=to, milestones=PAPER_FORCES, options=PathOptions(ds_max=0.05))
 
 
-def figure_10(out_dir: str | Path) -> Path:
-    """Fig. 10: horizontal tip payload 0-2 N against the tip position, n = 3 (a traced branch)."""
+def draw_10(branch=None) -> Figure:
+    """Fig. 10: horizontal tip payload 0-2 N against the tip position, n = 3 (``branch``: the traced
+    branch of :func:`payload_branch`, computed when not given)."""
     from .paths import draw_branch
 
-    b = payload_branch()
+    b = payload_branch() if branch is None else branch
     fig = new_figure(8.0, 4.4)
     ax_y, ax_x = fig.subplots(1, 2, sharey=True)
     y0 = b.tip[0, 1]
@@ -398,13 +397,14 @@ def figure_10(out_dir: str | Path) -> Path:
         f"Tip position under a horizontal tip payload from 90°, P = {problem_pressure:.4f} MPa held (cf. paper Fig. 10)",
         fontsize=10,
     )
-    return save_figure(fig, Path(out_dir) / "fig10.png")
+    return fig
 
 
-def figure_11(out_dir: str | Path) -> Path:
-    """Fig. 11: secant stiffness against payload (0.5, 1, 2 N and a fine curve), n = 3."""
-    fine = horizontal_payload_sweep()
-    paper = horizontal_payload_sweep(PAPER_FORCES)
+def draw_11(fine: SecantStiffness | None = None, paper: SecantStiffness | None = None) -> Figure:
+    """Fig. 11: secant stiffness against payload (the paper's 0.5, 1, 2 N: ``paper``, and a fine curve:
+    ``fine``; each :func:`horizontal_payload_sweep`, computed when not given), n = 3."""
+    fine = horizontal_payload_sweep() if fine is None else fine
+    paper = horizontal_payload_sweep(PAPER_FORCES) if paper is None else paper
     fig = new_figure(6.0, 4.4)
     ax = fig.add_subplot()
     ax.plot(fine.forces, fine.stiffness_n_per_m, "C0-", lw=1.8, label="secant K = ΔF/Δy, esba n = 3")
@@ -428,36 +428,36 @@ def figure_11(out_dir: str | Path) -> Path:
     )
     ax.grid(True, color="0.9", lw=0.6)
     ax.legend(loc="upper right", fontsize=8)
-    return save_figure(fig, Path(out_dir) / "fig11.png")
+    return fig
 
 
 # ---------------------------------------------------------------------------------------------
 # the registry
 
-#: The figures of this module, in the paper's order.
-FIGURES: dict[str, Callable[[str | Path], Path]] = {
-    "fig7b": figure_7b,
-    "fig8c": figure_8c,
-    "fig10": figure_10,
-    "fig11": figure_11,
+#: The figures of this module, in the paper's order: name -> draw() -> Figure.
+FIGURES: dict[str, Callable[[], Figure]] = {
+    "fig7b": draw_7b,
+    "fig8c": draw_8c,
+    "fig10": draw_10,
+    "fig11": draw_11,
 }
 
-#: The parameter-study figures: registry name -> function name in :mod:`esba.figures.design`.
-DESIGN_FIGURES: dict[str, str] = {"fig13a": "figure_13a", "fig13b": "figure_13b", "fig14": "figure_14"}
+#: The parameter-sweep figures: registry name -> function name in :mod:`esba.figures.design`.
+DESIGN_FIGURES: dict[str, str] = {"fig13a": "draw_13a", "fig13b": "draw_13b", "fig14": "draw_14"}
 _DESIGN_MODULE = "esba.figures.design"
 
 
-def _design_figure(function: str) -> Callable[[str | Path], Path]:
-    def make(out_dir: str | Path) -> Path:
-        return getattr(importlib.import_module(_DESIGN_MODULE), function)(out_dir)
+def _design_figure(function: str) -> Callable[[], Figure]:
+    def draw() -> Figure:
+        return getattr(importlib.import_module(_DESIGN_MODULE), function)()
 
-    make.__name__ = function
-    make.__doc__ = f"{_DESIGN_MODULE}.{function} (imported when drawn)."
-    return make
+    draw.__name__ = function
+    draw.__doc__ = f"{_DESIGN_MODULE}.{function} (imported when drawn)."
+    return draw
 
 
-def registry() -> dict[str, Callable[[str | Path], Path]]:
-    """Every figure by name, in the paper's order: ``name -> make(out_dir) -> Path``.
+def registry() -> dict[str, Callable[[], Figure]]:
+    """Every figure by name, in the paper's order: ``name -> draw() -> Figure``.
 
     The design figures are listed only when :mod:`esba.figures.design` is installed; the module is
     imported when one of them is drawn, not here.
@@ -505,4 +505,4 @@ def write_all(out_dir: str | Path | None = None, names: Sequence[str] | None = N
     figures = registry()
     chosen = check_names(names) or list(figures)
     out = check_folder(figures_dir() if out_dir is None else out_dir, "out_dir")
-    return {name: figures[name](out) for name in chosen}
+    return {name: save_figure(figures[name](), Path(out) / f"{name}.png") for name in chosen}

@@ -9,10 +9,10 @@ Examples
 --------
 >>> import tempfile, pathlib
 >>> from esba.model.scene import Scene, Payload
->>> from esba.analysis.path_analysis import study
->>> s = study(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", 0.3)
+>>> from esba.analysis.path_analysis import analyse
+>>> s = analyse(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", 0.3)
 >>> out = pathlib.Path(tempfile.mkdtemp()) / "path.png"
->>> save_figure(study_figure(s), out).exists()
+>>> save_figure(path_figure(s), out).exists()
 True
 """
 
@@ -29,7 +29,7 @@ from esba.paths.loading import Ramp
 
 from .scenes import new_figure, save_figure
 
-__all__ = ["Y_AXES", "branch_values", "draw_branch", "draw_loading", "study_figure", "save_figure"]
+__all__ = ["Y_AXES", "branch_values", "draw_branch", "draw_loading", "path_figure", "save_figure"]
 
 #: What a path figure can show against the parameter: name -> (label, unit).
 Y_AXES = {"total-angle": ("total bending angle", "deg"), "tip-x": ("tip x, vertical, downwards", "mm"), "tip-y": ("tip y, horizontal", "mm")}
@@ -103,27 +103,27 @@ def draw_loading(ax: Axes, ramps: Sequence[Ramp], y: str = "total-angle", swap: 
             ax.annotate("", xy=end, xytext=start, arrowprops={"arrowstyle": "-|>", "color": color, "lw": 1.6})
 
 
-def study_figure(study, y: str = "total-angle", title: str | None = None) -> Figure:
-    """The figure of a :class:`esba.analysis.path_analysis.PathStudy`: every branch, its special points, the hysteresis."""
+def path_figure(analysis, y: str = "total-angle", title: str | None = None) -> Figure:
+    """The figure of a :class:`esba.analysis.path_analysis.PathAnalysis`: every branch, its special points, the hysteresis."""
     fig = new_figure(7.0, 4.8)
     ax = fig.add_subplot()
-    draw_loading(ax, study.loading, y)
-    draw_branch(ax, study.main, y, "C0", "branch through the start")
-    for k, b in enumerate(study.crossing):
+    draw_loading(ax, analysis.loading, y)
+    draw_branch(ax, analysis.main, y, "C0", "branch through the start")
+    for k, b in enumerate(analysis.crossing):
         bp = k // 2 + 1
         draw_branch(ax, b, y, f"C{bp + 3}", f"branch crossing at BP{bp} (both sides)" if k % 2 == 0 else None)
     # legend entries for the line styles and markers
     ax.plot([], [], color="0.3", ls="-", label="stable")
     ax.plot([], [], color="0.3", ls="--", label="unstable")
-    if any(b.folds for b in study.branches):
+    if any(b.folds for b in analysis.branches):
         ax.plot([], [], "o", mfc="white", mec="0.3", label="fold (LP)")
-    if any(b.branch_points for b in study.branches):
+    if any(b.branch_points for b in analysis.branches):
         ax.plot([], [], "s", mfc="white", mec="0.3", label="branch point (BP)")
-    unit = study.problem.unit.split(" ")[0]
-    ax.set_xlabel(f"{study.problem.name}" + ("" if unit == "1" else f" ({unit})"))
+    unit = analysis.problem.unit.split(" ")[0]
+    ax.set_xlabel(f"{analysis.problem.name}" + ("" if unit == "1" else f" ({unit})"))
     name, yunit = Y_AXES[y]
     ax.set_ylabel(f"{name} ({yunit})")
     ax.grid(True, color="0.9", lw=0.6)
     ax.legend(fontsize=7.5, loc="best")
-    ax.set_title(title or f"{study.scene.describe()}\n(esba path --param {study.problem.name})", fontsize=8)
+    ax.set_title(title or f"{analysis.scene.describe()}\n(esba path --param {analysis.problem.name})", fontsize=8)
     return fig

@@ -27,7 +27,7 @@ from matplotlib.figure import Figure
 
 from esba.statics.equilibrium import Equilibrium
 
-__all__ = ["new_figure", "save_figure", "draw_shape", "draw_payloads", "draw_tip_ellipse", "setup_frame_axes", "solve_figure", "shapes_figure"]
+__all__ = ["new_figure", "save_figure", "draw_shape", "draw_payloads", "draw_tip_ellipse", "setup_frame_axes", "solve_figure"]
 
 
 def new_figure(width: float = 5.5, height: float = 5.0) -> Figure:
@@ -122,20 +122,5 @@ def solve_figure(result: Equilibrium, unloaded: Equilibrium | None = None, tip_c
         draw_tip_ellipse(ax, result.tip[:2], tip_cov, 0.95, label="tip, 95 % ellipse (first order)", lw=1.5)
     s = result.scene
     ax.set_title(f"n = {s.segments}, P = {result.pressure:.4f} MPa, {s.variant} model", fontsize=10)
-    ax.legend(loc="upper right", fontsize=8)
-    return fig
-
-
-def shapes_figure(results: Sequence[Equilibrium], labels: Sequence[str], title: str = "") -> Figure:
-    """Several solved shapes on one set of axes (e.g. n = 1..4 under the same payload, Fig. 8c)."""
-    fig = new_figure()
-    ax = fig.add_subplot()
-    setup_frame_axes(ax)
-    for k, (r, lab) in enumerate(zip(results, labels)):
-        draw_shape(ax, r, label=lab, color=f"C{k}")
-    if results:
-        draw_payloads(ax, results[-1])
-    if title:
-        ax.set_title(title, fontsize=10)
     ax.legend(loc="upper right", fontsize=8)
     return fig

@@ -35,10 +35,10 @@ from numbers import Integral
 from typing import Any
 
 #: The largest segment count esba builds a model for. The model's Hessian has n^2 entries and its
-#: generation takes minutes beyond this; the accuracy study's finest reference is n = 256, and the
+#: generation takes minutes beyond this; the accuracy benchmark's finest reference is n = 256, and the
 #: tip is within 0.1 mm of it from n = 16 (docs/accuracy-vs-time.md).
 MAX_SEGMENTS = 256
-MAX_SEGMENTS_WHY = "the finest model of the accuracy study; larger n costs n^2 memory and minutes to generate for no accuracy"
+MAX_SEGMENTS_WHY = "the finest model of the accuracy benchmark; larger n costs n^2 memory and minutes to generate for no accuracy"
 
 #: A decimal number as people write it (no digit-group underscores, no hex), or nan/inf, which
 #: the field checks then refuse with their own message.

@@ -87,7 +87,7 @@ def pressure_for_angle(scene: Scene, angle_deg: float | None = None) -> float:
 
 @lru_cache(maxsize=1024)
 def _pressure_for_angle(scene: Scene, angle_deg: float) -> float:
-    """:func:`pressure_for_angle`, kept per scene and angle (a stiffness study asks several times)."""
+    """:func:`pressure_for_angle`, kept per scene and angle (a stiffness computation asks several times)."""
     model = scene.model()
     values = scene.parameters(0.0, load_factor=0.0)
     with np.errstate(all="ignore"):

@@ -51,7 +51,7 @@ Examples
 >>> Scene(segments=0)
 Traceback (most recent call last):
 ...
-esba.model.scene.SceneError: segments=0: expected a whole number from 1 to 256 (the finest model of the accuracy study; larger n costs n^2 memory and minutes to generate for no accuracy)
+esba.model.scene.SceneError: segments=0: expected a whole number from 1 to 256 (the finest model of the accuracy benchmark; larger n costs n^2 memory and minutes to generate for no accuracy)
 """
 
 from __future__ import annotations

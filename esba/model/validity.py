@@ -22,7 +22,7 @@ check                quantity                                                   
 ===================  ==========================================================  ===============
 
 "Far outside" the paper's range is five times its largest value: a factor chosen to flag
-extrapolation that is clearly beyond the experiments, not to police every design study.
+extrapolation that is clearly beyond the experiments, not to police every design.
 
 Examples
 --------
@@ -64,9 +64,9 @@ __all__ = [
 STRAIN_LIMIT = 1.0
 #: A total bend beyond one full turn passes the actuator through itself.
 MAX_BEND_DEG = 360.0
-#: The largest pressure of the paper's studies, MPa (Fig. 7b, Fig. 12, Fig. 13a).
+#: The largest pressure of the paper's experiments, MPa (Fig. 7b, Fig. 12, Fig. 13a).
 PAPER_MAX_PRESSURE = 0.2
-#: The largest payload of the paper's studies, N (Tables 2-3, Figs. 8-11).
+#: The largest payload of the paper's experiments, N (Tables 2-3, Figs. 8-11).
 PAPER_MAX_PAYLOAD = 2.0
 #: "Far outside" the paper's range: this many times its largest value.
 FAR_FACTOR = 5.0

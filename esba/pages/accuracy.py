@@ -1,17 +1,29 @@
-"""The page ``docs/accuracy-vs-time.md`` and its figure, from the studies of :mod:`esba.bench.accuracy`
-(written by ``esba bench accuracy``)."""
+"""The page ``docs/accuracy-vs-time.md`` and its figure, rendered from the benchmarks of
+:mod:`esba.bench.accuracy` (``esba bench accuracy`` and ``esba docs --write accuracy-vs-time`` write
+it; ``esba docs --check accuracy-vs-time`` reruns the benchmarks once each and compares, times
+aside: every time on the page is written through :class:`esba.pages.page.Times`)."""
 
 from __future__ import annotations
 
+import dataclasses
 import platform
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from esba.bench.accuracy import AccuracyStudy
-from esba.infra.outputs import default_page, figures_dir
+from esba.bench.accuracy import ACCURACY_NS, REFERENCE_N, AccuracyBenchmark
 
-__all__ = ["figure", "render_page", "write_page", "CASE_LABELS"]
+from .page import TIMES, Page, Progress, Rendered, Times
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
+__all__ = ["PAGE", "AccuracyPage", "AccuracySettings", "AccuracyRuns", "figure", "render_page", "CASE_LABELS", "FIGURE_NAME"]
+
+#: The figure's file name (in ``figures/`` beside the page unless told otherwise).
+FIGURE_NAME = "accuracy-vs-time.png"
 
 CASE_LABELS = {
     "table2": "Table 2: 2 N horizontal at the tip",
@@ -23,14 +35,14 @@ CASE_LABELS = {
 SWEEP_FIGURES = {"fig12": "docs/figures/sweep-fig12.png", "pressure": "docs/figures/sweep-pressure-payload.png"}
 
 
-def figure(study: AccuracyStudy):
+def figure(accuracy: AccuracyBenchmark) -> "Figure":
     """Tip error against n (true and n-vs-(n+1)) and against solve time."""
     from esba.figures.scenes import new_figure
 
     fig = new_figure(11.0, 4.6)
     ax_n, ax_t = fig.subplots(1, 2)
-    for k, case in enumerate(study.reference):
-        rows = study.by_case(case)
+    for k, case in enumerate(accuracy.reference):
+        rows = accuracy.by_case(case)
         ns = [r.n for r in rows]
         c = f"C{k}"
         ax_n.loglog(ns, [r.error_mm for r in rows], "o-", color=c, label=f"{CASE_LABELS[case]}: true error")
@@ -51,20 +63,22 @@ def figure(study: AccuracyStudy):
     ax_t.set_xlabel("solve time per equilibrium (ms, esba.statics.equilibrium.solve)")
     ax_t.set_title("(b) error against solve time (labels: n)")
     ax_t.legend(fontsize=7)
-    ref = study.reference[next(iter(study.reference))]
+    ref = accuracy.reference[next(iter(accuracy.reference))]
     fig.suptitle(f"Accuracy against time (reference: {ref['method']}; esba bench accuracy)", fontsize=10)
     return fig
 
 
-def _fmt_s(s: float) -> str:
+def _fmt_s(s: float, t: Times = TIMES) -> str:
     if s < 1e-3:
-        return f"{s * 1e6:.0f} µs"
-    if s < 1.0:
-        return f"{s * 1e3:.1f} ms"
-    return f"{s:.1f} s"
+        text = f"{s * 1e6:.0f} µs"
+    elif s < 1.0:
+        text = f"{s * 1e3:.1f} ms"
+    else:
+        text = f"{s:.1f} s"
+    return t.word(text)
 
 
-def _batch_cost(b: dict) -> list[str]:
+def _batch_cost(b: dict, t: Times) -> list[str]:
     """Where the compiled batch's time per equilibrium goes: natural continuation, its finer retry,
     and the elements it hands to pseudo-arclength continuation of their load history."""
     if "compiled_us" not in b:
@@ -72,8 +86,8 @@ def _batch_cost(b: dict) -> list[str]:
     retried = b["counts"].get("newton-retry", 0)
     handed = b["counts"].get("continuation", 0)
     line = (
-        f"- Where the {b['compiled_us']:.1f} µs go: natural continuation {b['compiled_fast_path_us']:.1f} µs and its finer "
-        f"retry {b.get('compiled_retry_us', 0.0):.1f} µs per equilibrium of the batch ({retried} elements retried, "
+        f"- Where the {t(b['compiled_us'], '.1f')} µs go: natural continuation {t(b['compiled_fast_path_us'], '.1f')} µs and its finer "
+        f"retry {t(b.get('compiled_retry_us', 0.0), '.1f')} µs per equilibrium of the batch ({retried} elements retried, "
         f"{100 * retried / b['size']:.2g} %: in this grid (pressures 0-0.2 MPa, horizontal tip payloads 0-2 N) they sit "
         "at the edge of the bistable range of [paths.md](paths.md), where the 8-step ramp passes close to the cusp "
         "and is refused by the acceptance rule, and the 64-step ramp, compiled as the first, is accepted)"
@@ -81,21 +95,22 @@ def _batch_cost(b: dict) -> list[str]:
     if handed:
         line += (
             f"; the {handed} elements ({100 * handed / b['size']:.2g} %) whose finer ramp is refused too take "
-            f"{1e3 * b['compiled_fallback_s'] / handed:.1f} ms each in pseudo-arclength continuation of their load history "
-            f"(`esba.statics.equilibrium.load_history`), {1e6 * b['compiled_fallback_s'] / b['size']:.1f} µs per equilibrium "
+            f"{t(1e3 * b['compiled_fallback_s'] / handed, '.1f')} ms each in pseudo-arclength continuation of their load history "
+            f"(`esba.statics.equilibrium.load_history`), {t(1e6 * b['compiled_fallback_s'] / b['size'], '.1f')} µs per equilibrium "
             "of the batch: it goes round the fold, takes any jump and notes it"
         )
     return [line + "."]
 
 
-def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict], naive: list[dict], batch: dict, command: str, figure_rel: str) -> str:
+def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = TIMES) -> str:
     """The Markdown of ``docs/accuracy-vs-time.md``."""
+    accuracy, tolerance, effects, naive, batch = runs.accuracy, runs.tolerance, runs.effects, runs.naive, runs.batch
     lines = [
         "# What accuracy costs in time",
         "",
         f"Every number on this page is printed by `{command}`, which also writes this page and",
-        f"[the figure]({figure_rel}). Machine: {platform.machine()}, {platform.python_implementation()} "
-        f"{platform.python_version()}, 2 cores shared with other jobs: read times as orders of magnitude and",
+        f"[the figure]({figure_rel}). Machine: {t.word(f'{platform.machine()}, {platform.python_implementation()} {platform.python_version()}')}"
+        ", 2 cores shared with other jobs: read times as orders of magnitude and",
         "compare ratios within the page (they come from one run).",
         "",
         f"![accuracy against time]({figure_rel})",
@@ -103,21 +118,21 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
         "## The reference",
         "",
     ]
-    for case, ref in study.reference.items():
+    for case, ref in accuracy.reference.items():
         lines.append(
             f"- {CASE_LABELS[case]}: tip ({ref['tip'][0]:.4f}, {ref['tip'][1]:.4f}) mm, total angle "
             f"{ref['total_angle_deg']:.4f} deg; {ref['method']}; the n = {ref['n_max']} solution is "
             f"{ref['n_max_error_mm']:.2g} mm from it."
         )
-    nmax = study.reference_n
-    worst = max(ref["n_max_error_mm"] for ref in study.reference.values())
+    nmax = accuracy.reference_n
+    worst = max(ref["n_max_error_mm"] for ref in accuracy.reference.values())
     lines += [
         "",
         f"Why Richardson extrapolation rather than n = {nmax} alone: the chain of constant-curvature",
         "segments converges to the continuum as a clean power of 1/n (the observed orders above), so",
         "extrapolating from three successive halvings removes the leading error term. The distance of",
         f"the n = {nmax} solution from the reference (at most {worst:.2g} mm) is what using n = {nmax}",
-        f"directly would have added to every error below; it is {'well below' if worst < 0.01 else 'not far below'} the 0.1 mm the study resolves.",
+        f"directly would have added to every error below; it is {'well below' if worst < 0.01 else 'not far below'} the 0.1 mm this page resolves.",
         "",
         "## Tip error against n, and what each n costs",
         "",
@@ -130,51 +145,51 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
         "Hessian condition = largest / smallest eigenvalue of the Hessian at the equilibrium.",
         "",
     ]
-    for case in study.reference:
+    for case in accuracy.reference:
         lines += [
             f"### {CASE_LABELS[case]}",
             "",
             "| n | tip x, y (mm) | error (mm) | n vs n+1 (mm) | angle error (deg) | n vs n+1 angle (deg) | generate | load | solve | Hessian condition |",
             "|---|---|---|---|---|---|---|---|---|---|",
         ]
-        for r in study.by_case(case):
-            c = study.costs[r.n]
+        for r in accuracy.by_case(case):
+            c = accuracy.costs[r.n]
             flag = "" if r.ok else " (not ok)"
             lines.append(
                 f"| {r.n} | {r.tip[0]:.3f}, {r.tip[1]:.3f}{flag} | {r.error_mm:.3g} | {r.next_mm:.3g} | "
-                f"{r.angle_error_deg:+.3g} | {r.next_angle_deg:+.3g} | {_fmt_s(c.generate_s)} | {_fmt_s(c.load_s)} | {_fmt_s(r.solve_s)} | {r.condition:.3g} |"
+                f"{r.angle_error_deg:+.3g} | {r.next_angle_deg:+.3g} | {_fmt_s(c.generate_s, t)} | {_fmt_s(c.load_s, t)} | {_fmt_s(r.solve_s, t)} | {r.condition:.3g} |"
             )
         lines.append("")
         for mm in (1.0, 0.1):
-            r = study.first_n_below(case, mm)
+            r = accuracy.first_n_below(case, mm)
             if r is None:
-                lines.append(f"- {mm:g} mm: not reached by n = {study.by_case(case)[-1].n}.")
+                lines.append(f"- {mm:g} mm: not reached by n = {accuracy.by_case(case)[-1].n}.")
             else:
-                c = study.costs[r.n]
-                crit = next((q for q in study.by_case(case) if q.next_mm < mm), None)
+                c = accuracy.costs[r.n]
+                crit = next((q for q in accuracy.by_case(case) if q.next_mm < mm), None)
                 crit_txt = f"the n-vs-(n+1) criterion would stop at n = {crit.n}" if crit else "the n-vs-(n+1) criterion never falls below it"
                 lines.append(
-                    f"- {mm:g} mm: reached at n = {r.n} (error {r.error_mm:.3g} mm): generate {_fmt_s(c.generate_s)} once, "
-                    f"load {_fmt_s(c.load_s)}, solve {_fmt_s(r.solve_s)}; {crit_txt}."
+                    f"- {mm:g} mm: reached at n = {r.n} (error {r.error_mm:.3g} mm): generate {_fmt_s(c.generate_s, t)} once, "
+                    f"load {_fmt_s(c.load_s, t)}, solve {_fmt_s(r.solve_s, t)}; {crit_txt}."
                 )
         lines.append("")
-    n_big = max(study.costs)
-    c = study.costs[n_big]
-    big = [n for n in sorted(study.costs) if n >= 8]
+    n_big = max(accuracy.costs)
+    c = accuracy.costs[n_big]
+    big = [n for n in sorted(accuracy.costs) if n >= 8]
     if len(big) >= 2:
-        slope = np.polyfit(np.log(big), np.log([study.costs[n].instructions["hessian"] for n in big]), 1)[0]
-        tslope = np.polyfit(np.log(big), np.log([study.costs[n].generate_s for n in big]), 1)[0]
-        growth = f"The Hessian's size grows as n^{slope:.2f} and the cold generation time as n^{tslope:.2f} (fits over n >= 8); "
+        slope = np.polyfit(np.log(big), np.log([accuracy.costs[n].instructions["hessian"] for n in big]), 1)[0]
+        tslope = np.polyfit(np.log(big), np.log([accuracy.costs[n].generate_s for n in big]), 1)[0]
+        growth = f"The Hessian's size grows as n^{slope:.2f} and the cold generation time as n^{t(tslope, '.2f')} (fits over n >= 8); "
     else:
         growth = ""
-    ratios = [r.error_mm / r.next_mm for r in study.rows if r.n == max(q.n for q in study.rows) and r.next_mm > 0]
+    ratios = [r.error_mm / r.next_mm for r in accuracy.rows if r.n == max(q.n for q in accuracy.rows) and r.next_mm > 0]
     lines += [
         f"{growth}n = {n_big}: {c.instructions['energy']} / {c.instructions['gradient']} / {c.instructions['hessian']} "
-        f"SX instructions for U / gradient / Hessian, generated cold in {_fmt_s(c.generate_s)}.",
+        f"SX instructions for U / gradient / Hessian, generated cold in {_fmt_s(c.generate_s, t)}.",
         "",
         "The paper's n-vs-(n+1) criterion underestimates the true error, and more so as n grows: for an",
         "error falling as C/n^2 the gap between n and n+1 is about 2C/n^3, so the error is about n/2",
-        f"gaps. At n = {max(q.n for q in study.rows)} the true error is {min(ratios):.1f} to {max(ratios):.1f} times the gap. Stopping when the",
+        f"gaps. At n = {max(q.n for q in accuracy.rows)} the true error is {min(ratios):.1f} to {max(ratios):.1f} times the gap. Stopping when the",
         "gap falls below a tolerance therefore leaves an error well above that tolerance (see where the",
         "criterion would stop, above).",
         "",
@@ -188,14 +203,14 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
     ]
     for r in tolerance:
         lines.append(
-            f"| {r['tol']:.0e} | {_fmt_s(r['solve_s'])} | {r['iterations']} | {r['gradient_norm']:.2g} | {r['tip_error_mm']:.2g} | {r['angle_error_deg']:+.2g} |"
+            f"| {r['tol']:.0e} | {_fmt_s(r['solve_s'], t)} | {r['iterations']} | {r['gradient_norm']:.2g} | {r['tip_error_mm']:.2g} | {r['angle_error_deg']:+.2g} |"
         )
     if tolerance:
         ts = [r["solve_s"] for r in tolerance]
         lines += [
             "",
             f"From tol = {tolerance[0]['tol']:.0e} to {tolerance[-1]['tol']:.0e} the solve time changes by a factor of "
-            f"{max(ts) / min(ts):.1f} at most (IPOPT's per-solve overhead dominates at this size), while the error falls from "
+            f"{t(max(ts) / min(ts), '.1f')} at most (IPOPT's per-solve overhead dominates at this size), while the error falls from "
             f"{tolerance[0]['tip_error_mm']:.2g} mm to {tolerance[-1]['tip_error_mm']:.2g} mm: a tight tolerance is nearly free, and",
             "esba's default (1e-10, then Newton polishing) costs nothing worth saving.",
         ]
@@ -212,8 +227,8 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
     for r in effects:
         i = r["instructions"]
         lines.append(
-            f"| {r['effect']} | `{r['effects']}` | {i['energy']} / {i['gradient']} / {i['hessian']} | {_fmt_s(r['generate_s'])} | "
-            f"{_fmt_s(r['solve_s'])} | {r['tip_mm'][0]:.2f}, {r['tip_mm'][1]:.2f} | {r['tip_change_mm']:.2f} | {r['angle_change_deg']:+.2f} |"
+            f"| {r['effect']} | `{r['effects']}` | {i['energy']} / {i['gradient']} / {i['hessian']} | {_fmt_s(r['generate_s'], t)} | "
+            f"{_fmt_s(r['solve_s'], t)} | {r['tip_mm'][0]:.2f}, {r['tip_mm'][1]:.2f} | {r['tip_change_mm']:.2f} | {r['angle_change_deg']:+.2f} |"
         )
     lines += [
         "",
@@ -230,9 +245,9 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
     ]
     for r in naive:
         lines.append(
-            f"| {r['n']} | {_fmt_s(r['naive_s'])} | {r['naive_evaluations']} | {'yes' if r['naive_success'] else 'no'} | "
-            f"{r['naive_tip_error_mm']:.2g} | {_fmt_s(r['esba_s'])} | "
-            f"{r['ratio']:.1f}x | {_fmt_s(r['esba_single_s'])} | {r['ratio_single']:.1f}x |"
+            f"| {r['n']} | {_fmt_s(r['naive_s'], t)} | {r['naive_evaluations']} | {'yes' if r['naive_success'] else 'no'} | "
+            f"{r['naive_tip_error_mm']:.2g} | {_fmt_s(r['esba_s'], t)} | "
+            f"{t(r['ratio'], '.1f')}x | {_fmt_s(r['esba_single_s'], t)} | {t(r['ratio_single'], '.1f')}x |"
         )
     wrong = [r for r in naive if r["naive_tip_error_mm"] > 0.01]
     lines += [
@@ -254,7 +269,7 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
         "## Many solves: the batch path",
         "",
         f"{b['size']} equilibria, n = {b['segments']}: Table 1, pressures 0-0.2 MPa x horizontal tip payloads 0-2 N",
-        "(`esba bench batch` runs this study alone; warm = median of 3 runs). Each element follows the load path with Newton steps",
+        "(`esba bench batch` runs this benchmark alone; warm = median of 3 runs). Each element follows the load path with Newton steps",
         "in one CasADi graph mapped over the batch, is verified (stationarity, domain, Hessian",
         "eigenvalues), retried with a denser path or solved by IPOPT when that fails.",
         "",
@@ -263,18 +278,18 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
     ]
     if "compiled_us" in b:
         lines += [
-            f"| batch, compiled C, warm (cached library) | {b['compiled_us']:.1f} |",
-            f"| batch, compiled C, first call (compiles in {b['compiled_first_compile_s']:.1f} s) | {b['compiled_first_us']:.1f} |",
+            f"| batch, compiled C, warm (cached library) | {t(b['compiled_us'], '.1f')} |",
+            f"| batch, compiled C, first call (compiles in {t(b['compiled_first_compile_s'], '.1f')} s) | {t(b['compiled_first_us'], '.1f')} |",
         ]
     lines += [
-        f"| batch, CasADi interpreter | {b['interpreted_us']:.1f} |",
-        f"| esba.statics.equilibrium.solve (IPOPT), one by one | {b['ipopt_us']:.0f} |",
-        f"| naive SciPy BFGS, one by one | {b['naive_us']:.0f} |",
+        f"| batch, CasADi interpreter | {t(b['interpreted_us'], '.1f')} |",
+        f"| esba.statics.equilibrium.solve (IPOPT), one by one | {t(b['ipopt_us'], '.0f')} |",
+        f"| naive SciPy BFGS, one by one | {t(b['naive_us'], '.0f')} |",
         "",
         "- Target: 20 µs or less per equilibrium for n = 3 on 10 000: "
-        + (f"{'met' if b.get('compiled_us', 1e9) <= 20 else 'NOT met'} ({b.get('compiled_us', float('nan')):.1f} µs compiled, warm)." if "compiled_us" in b else "no C compiler here: interpreted only."),
-        *_batch_cost(b),
-        f"- Speed-up: {b['speedup_vs_naive']:.0f}x the naive script, {b['speedup_vs_ipopt']:.0f}x IPOPT one by one.",
+        + (f"{t.word('met' if b.get('compiled_us', 1e9) <= 20 else 'NOT met')} ({t(b.get('compiled_us', float('nan')), '.1f')} µs compiled, warm)." if "compiled_us" in b else "no C compiler here: interpreted only."),
+        *_batch_cost(b, t),
+        f"- Speed-up: {t(b['speedup_vs_naive'], '.0f')}x the naive script, {t(b['speedup_vs_ipopt'], '.0f')}x IPOPT one by one.",
         f"- How the elements were answered: {b['counts']}; backend: {b['backend'].split(', cached')[0]}.",
         f"- Largest difference from IPOPT on {50} sampled elements: {b['max_theta_difference_vs_ipopt']:.2g} rad.",
         "",
@@ -303,16 +318,79 @@ def render_page(study: AccuracyStudy, tolerance: list[dict], effects: list[dict]
     return "\n".join(lines)
 
 
-def write_page(study, tolerance, effects, naive, batch, command: str = "esba bench accuracy", doc: Path | None = None, fig_path: Path | None = None) -> tuple[Path, Path]:
-    """Write the page and the figure; return their paths."""
-    from esba.figures.scenes import save_figure
+@dataclass(frozen=True, eq=False)
+class AccuracyRuns:
+    """The page's data: the five benchmarks of :mod:`esba.bench.accuracy`."""
 
-    doc = default_page("accuracy-vs-time.md") if doc is None else Path(doc)
-    fig_path = figures_dir() / "accuracy-vs-time.png" if fig_path is None else Path(fig_path)
-    save_figure(figure(study), fig_path)
-    try:
-        rel = fig_path.resolve().relative_to(doc.resolve().parent).as_posix()
-    except ValueError:
-        rel = fig_path.resolve().as_posix()
-    doc.write_text(render_page(study, tolerance, effects, naive, batch, command, rel), encoding="utf-8")
-    return doc, fig_path
+    accuracy: AccuracyBenchmark
+    tolerance: list[dict]
+    effects: list[dict]
+    naive: list[dict]
+    batch: dict
+
+
+@dataclass(frozen=True)
+class AccuracySettings:
+    """What ``esba bench accuracy`` takes (``quick``: n <= 4, reference n = 16, a batch of 1000), the
+    command the page names, and where its figure goes (None: ``figures/`` beside the page)."""
+
+    quick: bool = False
+    max_n: int = 128
+    reference_n: int = REFERENCE_N
+    fixed_n: int = 16
+    repeat: int = 5
+    command: str = "esba bench accuracy"
+    figure: Path | None = None
+
+    @property
+    def plan(self) -> tuple[tuple[int, ...], int, int, tuple[int, ...], int]:
+        """(segment counts, reference n, n of the tolerance and effect benchmarks, n of the naive one, batch size)."""
+        if self.quick:
+            return (1, 2, 3, 4), 16, 4, (3,), 1000
+        return tuple(n for n in ACCURACY_NS if n <= self.max_n), self.reference_n, self.fixed_n, (3, 8, 16), 10_000
+
+
+class AccuracyPage(Page):
+    """``docs/accuracy-vs-time.md`` and its figure."""
+
+    name = "accuracy-vs-time"
+
+    def settings(self) -> AccuracySettings:
+        return AccuracySettings()
+
+    def check_settings(self) -> AccuracySettings:
+        return dataclasses.replace(self.settings(), repeat=1)
+
+    def compute(self, settings: AccuracySettings | None = None, progress: Progress | None = None) -> AccuracyRuns:
+        from esba.bench import accuracy as acc
+
+        settings = self.settings() if settings is None else settings
+        say = progress or (lambda msg: None)
+        ns, ref_n, fixed_n, naive_ns, size = settings.plan
+        accuracy = acc.accuracy_benchmark(ns, ref_n, repeat=settings.repeat, progress=say)
+        say(f"tolerance benchmark (n = {fixed_n})")
+        tolerance = acc.tolerance_benchmark(fixed_n, repeat=settings.repeat)
+        say(f"effect benchmark (n = {fixed_n})")
+        effects = acc.effect_benchmark(fixed_n, repeat=settings.repeat)
+        for rows in (tolerance, effects):
+            for r in rows:
+                r["n"] = fixed_n
+        say("naive BFGS against esba")
+        naive = acc.naive_benchmark(naive_ns, repeat=settings.repeat)
+        say(f"batch of {size}")
+        batch = acc.batch_benchmark(size)
+        return AccuracyRuns(accuracy, tolerance, effects, naive, batch)
+
+    def figure_path(self, settings: AccuracySettings, path: Path) -> Path:
+        return path.parent / "figures" / FIGURE_NAME if settings.figure is None else Path(settings.figure)
+
+    def render(self, data: AccuracyRuns, settings: AccuracySettings, path: Path, times: Times = TIMES) -> Rendered:
+        fig_path = self.figure_path(settings, path)
+        try:
+            rel = fig_path.resolve().relative_to(path.resolve().parent).as_posix()
+        except ValueError:
+            rel = fig_path.resolve().as_posix()
+        return Rendered(render_page(data, settings.command, rel, times), {fig_path: lambda: figure(data.accuracy)})
+
+
+PAGE = AccuracyPage()

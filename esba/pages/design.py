@@ -1,43 +1,31 @@
-"""The design study page, ``docs/design.md``: the paper's problem and the constrained ones, written.
+"""The page ``docs/design.md``: the paper's design problem and the constrained ones, rendered.
 
-Presentation only: :func:`design_report` runs the study with :mod:`esba.design.optimise` (IPOPT and PSO on
-every problem of the page, the pressure/stiffness trade-off, the optimum against n) and turns it
-into Markdown; :func:`write_doc` writes it (``esba design --write-doc docs/design.md``).
+Presentation only: :func:`esba.design.cases.design_cases` runs every optimisation (IPOPT and PSO on
+every problem of the page, the pressure/stiffness trade-off, the optimum against n) and returns
+them; :func:`render_page` turns them into Markdown. ``esba design --write-doc docs/design.md`` and
+``esba docs --write design`` write the page; ``esba docs --check design`` checks it, times aside
+(every wall-clock time on the page is written through :class:`esba.pages.page.Times`).
 """
 
 from __future__ import annotations
 
-import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from esba.design.optimise import (
-    DEFAULT_DESIGN_OPTIONS,
-    Comparison,
-    DesignOptions,
-    DesignProblem,
-    DesignResult,
-    compare,
-    evaluate,
-    free_angle,
-    optimise_ipopt,
-    term_curvatures,
-)
+from esba.design.cases import MAX_PRESSURE, MIN_STIFFNESS, WALLS, DesignCases, design_cases
+from esba.design.optimise import DEFAULT_DESIGN_OPTIONS, Comparison, DesignOptions, DesignResult
 from esba.solvers.pso import PSOOptions
 
-__all__ = ["design_report", "write_doc", "DOC_PATH", "DOC_COMMAND"]
+from .page import TIMES, Page, Progress, Rendered, Times
+from .registry import ENTRIES
+
+__all__ = ["PAGE", "DesignPage", "DesignSettings", "render_page", "DOC_COMMAND"]
 
 
-#: Where :func:`write_doc` writes by default.
-DOC_PATH = Path(__file__).resolve().parents[2] / "docs" / "design.md"
 #: The command that writes the page.
-DOC_COMMAND = "esba design --write-doc docs/design.md"
-
-#: The stiffness-constrained requests of the page: K_min (N/m), P_max (MPa), walls (mm).
-DOC_MIN_STIFFNESS = 40.0
-DOC_MAX_PRESSURE = 0.2
-DOC_WALLS = (6.6, 5.8)
+DOC_COMMAND = ENTRIES["design"].command
 
 
 def _fmt_active(r: DesignResult) -> str:
@@ -52,12 +40,12 @@ def _fmt_active(r: DesignResult) -> str:
     return ", ".join(parts)
 
 
-def _row(r: DesignResult) -> str:
+def _row(r: DesignResult, t: Times) -> str:
     obj = f"{r.objective:.6g} {r.problem.unit}"
     work = f"{r.iterations} iterations, {r.evaluations} starts" if r.method == "ipopt" else f"{r.evaluations} designs evaluated"
     return (
         f"| {r.method} | {r.status} | {r.r2_mm:.5f} | {r.d_mm:.5f} | {r.pressure_mpa:.5f} | {r.stiffness_n_per_m:.4f} | {obj} | "
-        f"{r.solve_time_s:.3f} | {work} |"
+        f"{t(r.solve_time_s, '.3f')} | {work} |"
     )
 
 
@@ -67,13 +55,13 @@ _HEAD = (
 )
 
 
-def _comparison_block(title: str, c: Comparison) -> list[str]:
-    lines = [f"**{title}.** {c.ipopt.problem.describe()}.", "", _HEAD, _row(c.ipopt), _row(c.pso), ""]
+def _comparison_block(title: str, c: Comparison, t: Times) -> list[str]:
+    lines = [f"**{title}.** {c.ipopt.problem.describe()}.", "", _HEAD, _row(c.ipopt, t), _row(c.pso, t), ""]
     if c.ipopt.ok and c.pso.ok:
         lines.append(
             f"PSO - IPOPT: r2 {c.r2_diff_mm:+.2e} mm, d {c.d_diff_mm:+.2e} mm, objective {100 * c.objective_rel_diff:+.2e} %; "
             f"{'they agree' if c.agree else '**they do not agree**'} (design within 0.01 mm, objective within 0.1 %); PSO took "
-            f"{c.speedup:.0f} times as long as IPOPT."
+            f"{t(c.speedup, '.0f')} times as long as IPOPT."
         )
     else:
         lines.append(f"IPOPT: {c.ipopt.status} ({c.ipopt.message or 'ok'}); PSO: {c.pso.status} ({c.pso.message or 'ok'}).")
@@ -86,43 +74,12 @@ def _comparison_block(title: str, c: Comparison) -> list[str]:
     return lines + [""]
 
 
-def design_report(
-    segments: int = 3, options: DesignOptions | None = None, pso_options: PSOOptions | None = None
-) -> tuple[str, dict]:
-    """Run the study of ``docs/design.md`` and return (markdown, data).
-
-    The paper's problem and the stiffness-constrained ones, each with IPOPT and PSO from one
-    run (times side by side), the pressure/stiffness trade-off, and the optimum against n.
-    """
-    options = DEFAULT_DESIGN_OPTIONS if options is None else options
-    pso_options = PSOOptions() if pso_options is None else pso_options
-    base = DesignProblem(segments=segments)
-    km, pm = DOC_MIN_STIFFNESS, DOC_MAX_PRESSURE
-    runs = {
-        "paper": compare(base, options, pso_options),
-        "max_pressure": compare(base.replace(max_pressure=pm), options, pso_options),
-        "angle": compare(base.replace(objective="angle", max_pressure=pm, min_stiffness=km), options, pso_options),
-        "pressure": compare(base.replace(objective="pressure", min_stiffness=km), options, pso_options),
-        "wall_stiffness": compare(base.replace(min_wall=DOC_WALLS[0]), options, pso_options),
-        "wall_angle": compare(base.replace(objective="angle", max_pressure=pm, min_stiffness=km, min_wall=DOC_WALLS[1]), options, pso_options),
-    }
-    best = runs["paper"].ipopt
-    k_infeasible = 5.0 * math.ceil((best.stiffness_n_per_m + 1.0) / 5.0)
-    infeasible = compare(base.replace(objective="pressure", min_stiffness=k_infeasible), options, pso_options)
-    # the pressure/stiffness trade-off: the lowest 90 degree pressure for each K_min
-    trade = []
-    for k in (20.0, 25.0, 30.0, 35.0, 40.0, 42.5, 44.0, 45.0):
-        if k < best.stiffness_n_per_m:
-            trade.append(optimise_ipopt(base.replace(objective="pressure", min_stiffness=k), options))
-    # along d = 0 and at the Table 1 design
-    r2_line = np.array([0.3, 0.5, 1.0, best.r2_mm, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0])
-    line = evaluate(base, r2_line, np.zeros_like(r2_line), options)
-    line_angle = free_angle(base, r2_line, np.zeros_like(r2_line), pm, options)
-    line_terms = [term_curvatures(base, float(v), 0.0) for v in r2_line]
-    hard = compare(base.replace(objective="pressure", min_stiffness=30.0), options, pso_options)
-    t1 = evaluate(base, [base.actuator.r2], [base.actuator.d], options)
-    by_n = [optimise_ipopt(DesignProblem(segments=k), options) for k in (1, 2, 3, 4, 5, 6)]
-
+def render_page(cases: DesignCases, t: Times = TIMES) -> str:
+    """The Markdown of ``docs/design.md`` from :func:`esba.design.cases.design_cases`."""
+    segments, options, pso_options, base = cases.segments, cases.options, cases.pso_options, cases.base
+    runs, best, trade, hard, infeasible, by_n = cases.runs, cases.best, cases.trade_off, cases.hard, cases.infeasible, cases.by_segments
+    r2_line, line, line_angle, line_terms, t1 = cases.line_r2, cases.line, cases.line_angle, cases.line_terms, cases.table1
+    km, pm = MIN_STIFFNESS, MAX_PRESSURE
     p = runs["paper"]
     L = []
     L.append("# Design optimisation: the stiffest chamber, by IPOPT and by a particle swarm")
@@ -181,15 +138,15 @@ def design_report(
     L.append("## The optimum")
     L.append("")
     L.append(_HEAD)
-    L.append(_row(p.ipopt))
-    L.append(_row(p.pso))
+    L.append(_row(p.ipopt, t))
+    L.append(_row(p.pso, t))
     L.append("")
     L.append(
         f"**r2 = {best.r2_mm:.4f} mm, d = {best.d_mm:.4f} mm, K = {best.stiffness_n_per_m:.4f} N/m at P = "
         f"{best.pressure_mpa:.5f} MPa** (the Table 1 design: K = {t1.stiffness[0]:.2f} N/m at {t1.pressure[0]:.5f} MPa). "
         f"PSO - IPOPT: r2 {p.r2_diff_mm:+.1e} mm, d {p.d_diff_mm:+.1e} mm, K {100 * p.stiffness_rel_diff:+.1e} %. "
-        f"IPOPT: {p.ipopt.solve_time_s * 1000:.0f} ms; PSO: {p.pso.solve_time_s:.2f} s, {p.speedup:.0f} times as long, "
-        f"in the same run (IPOPT's one-off set-up, building the NLP and its derivatives: {p.ipopt.setup_time_s:.2f} s)."
+        f"IPOPT: {t(p.ipopt.solve_time_s * 1000, '.0f')} ms; PSO: {t(p.pso.solve_time_s, '.2f')} s, {t(p.speedup, '.0f')} times as long, "
+        f"in the same run (IPOPT's one-off set-up, building the NLP and its derivatives: {t(p.ipopt.setup_time_s, '.2f')} s)."
     )
     L.append("")
     L.append(
@@ -267,23 +224,23 @@ def design_report(
     L.append("")
     L.append("## Stiffness-constrained designs (IPOPT and PSO, each from one run)")
     L.append("")
-    L.extend(_comparison_block("Stiffness with a pressure budget", runs["max_pressure"]))
-    L.extend(_comparison_block("(a) The largest free bending angle", runs["angle"]))
-    L.extend(_comparison_block("(b) The lowest pressure for 90 deg", runs["pressure"]))
-    L.extend(_comparison_block("(c) A minimum wall, stiffness objective", runs["wall_stiffness"]))
-    L.extend(_comparison_block("(c) A minimum wall, angle objective", runs["wall_angle"]))
+    L.extend(_comparison_block("Stiffness with a pressure budget", runs["max_pressure"], t))
+    L.extend(_comparison_block("(a) The largest free bending angle", runs["angle"], t))
+    L.extend(_comparison_block("(b) The lowest pressure for 90 deg", runs["pressure"], t))
+    L.extend(_comparison_block("(c) A minimum wall, stiffness objective", runs["wall_stiffness"], t))
+    L.extend(_comparison_block("(c) A minimum wall, angle objective", runs["wall_angle"], t))
     a, b = runs["angle"].ipopt, runs["pressure"].ipopt
     w = runs["wall_angle"].ipopt
     L.append(
         f"Here (K_min = {km:g} N/m) problems (a) and (b) land on the same design (r2 = {a.r2_mm:.4f} vs {b.r2_mm:.4f} mm, "
         f"d = {a.d_mm:.4f} vs {b.d_mm:.4f} mm): along the stiffness constraint both the free angle and the pressure saving grow "
         "with r2, and d lowers K faster than it helps them, so both run along d = 0 until K = K_min. With a wall of "
-        f"{DOC_WALLS[1]:g} mm the chamber cannot grow that far: the active constraints there are "
+        f"{WALLS[1]:g} mm the chamber cannot grow that far: the active constraints there are "
         f"{', '.join(c.name for c in w.active_constraints) or 'none'}, and K = {w.stiffness_n_per_m:.2f} N/m "
         f"{'> K_min: the stiffness constraint is slack' if w.stiffness_n_per_m > km * (1 + 1e-6) else '= K_min'}."
     )
     L.append("")
-    L.extend(_comparison_block("A harder case: (b) with K_min = 30 N/m", hard))
+    L.extend(_comparison_block("A harder case: (b) with K_min = 30 N/m", hard, t))
     L.append(
         "Between K_min of about 25 and 30 N/m the lowest-pressure design leaves the d = 0 edge (see the trade-off table: "
         "at 25 N/m it sits on the wall with a large eccentricity), and along the curve K = K_min the pressure is nearly "
@@ -304,7 +261,7 @@ def design_report(
     for r in by_n:
         L.append(
             f"| {r.problem.segments} | {r.r2_mm:.4f} | {r.d_mm:.4f} | {r.pressure_mpa:.5f} | {r.stiffness_n_per_m:.4f} | "
-            f"{', '.join(c.name for c in r.active_constraints) or 'none'} | {r.solve_time_s:.3f} |"
+            f"{', '.join(c.name for c in r.active_constraints) or 'none'} | {t(r.solve_time_s, '.3f')} |"
         )
     L.append("")
     L.append("## The swarm")
@@ -337,18 +294,32 @@ def design_report(
         "actuator, the free angle grows without bound)."
     )
     L.append("")
-    data = {k: v.to_dict() for k, v in runs.items()}
-    data["infeasible"] = infeasible.to_dict()
-    data["hard"] = hard.to_dict()
-    data["trade_off"] = [r.to_dict() for r in trade]
-    data["by_segments"] = [r.to_dict() for r in by_n]
-    return "\n".join(L), data
+    return "\n".join(L)
 
 
-def write_doc(path: str | Path | None = None, segments: int = 3, options: DesignOptions | None = None, pso_options: PSOOptions | None = None) -> tuple[Path, dict]:
-    """Run :func:`design_report` and write the page (default ``docs/design.md``); return (path, data)."""
-    path = DOC_PATH if path is None else Path(path)
-    text, data = design_report(segments, options, pso_options)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    return path, data
+@dataclass(frozen=True)
+class DesignSettings:
+    """What ``esba design --write-doc`` takes: the segment count, IPOPT's starts and the swarm."""
+
+    segments: int = 3
+    options: DesignOptions = DEFAULT_DESIGN_OPTIONS
+    pso_options: PSOOptions = PSOOptions()
+
+
+class DesignPage(Page):
+    """``docs/design.md`` (its figures are ``esba figures``'s fig13a, fig13b and fig14)."""
+
+    name = "design"
+
+    def settings(self) -> DesignSettings:
+        return DesignSettings()
+
+    def compute(self, settings: DesignSettings | None = None, progress: Progress | None = None) -> DesignCases:
+        settings = self.settings() if settings is None else settings
+        return design_cases(settings.segments, settings.options, settings.pso_options, progress)
+
+    def render(self, data: DesignCases, settings: DesignSettings, path: Path, times: Times = TIMES) -> Rendered:
+        return Rendered(render_page(data, times))
+
+
+PAGE = DesignPage()

@@ -1,9 +1,9 @@
-"""The page ``docs/experiments.md`` and its figure, written from :func:`esba.calibration.experiments.run_study`.
+"""The page ``docs/experiments.md`` and its figure, rendered from :func:`esba.calibration.experiments.compare_with_paper`.
 
-Presentation only: every number comes from the study object; nothing here computes a model.
+Presentation only: every number comes from the comparison; nothing here computes a model.
 ``esba experiments --write-doc docs/experiments.md`` writes the page and
-``docs/figures/experiments.png``; the page holds no times, so ``esba experiments --check`` can
-say whether the committed one is stale.
+``docs/figures/experiments.png``; the page holds no times, so ``esba experiments --check FILE`` and
+``esba docs --check experiments`` can say whether the committed one is stale.
 """
 
 from __future__ import annotations
@@ -23,18 +23,19 @@ from esba.calibration.experiments import (
     SD_TIP,
     Column,
     Fold,
-    Study,
-    run_study,
+    PaperComparison,
+    compare_with_paper,
 )
 from esba.calibration.fit import FitResult, Prediction
-from esba.figures.fit import Series, measured_vs_predicted, save_figure
+from esba.figures.fit import Series, measured_vs_predicted
 
-__all__ = ["DOC_PATH", "DOC_COMMAND", "FIGURE_NAME", "render", "figure", "write_page", "check_page"]
+from .page import TIMES, Page, Progress, Rendered, Times
+from .registry import ENTRIES
 
-#: Where the page goes by default.
-DOC_PATH = Path(__file__).resolve().parents[2] / "docs" / "experiments.md"
+__all__ = ["PAGE", "ExperimentsPage", "DOC_COMMAND", "FIGURE_NAME", "render", "figure"]
+
 #: The command that writes it.
-DOC_COMMAND = "esba experiments --write-doc docs/experiments.md"
+DOC_COMMAND = ENTRIES["experiments"].command
 #: The figure, in ``figures/`` beside the page.
 FIGURE_NAME = "experiments.png"
 
@@ -67,14 +68,14 @@ def _estimate(r: FitResult, name: str) -> str:
     return f"{r.estimate[j]:.4f} ± {se:.4f} {unit}, 95 % [{lo:.4f}, {hi:.4f}]"
 
 
-def _comparison(study: Study) -> list[str]:
-    exp, fem = study.columns
-    by = {c.name: {(p.row, p.quantity): p for p in c.nominal} for c in study.columns}
+def _comparison(comparison: PaperComparison) -> list[str]:
+    exp, fem = comparison.columns
+    by = {c.name: {(p.row, p.quantity): p for p in c.nominal} for c in comparison.columns}
     lines = [
         "| measurement | quantity | EXP | FEM | esba, E = 0.54 MPa | esba − EXP | esba − FEM |",
         "|---|---|---:|---:|---:|---:|---:|",
-        f"| pressure for a 90° unloaded bend | pressure (MPa) | {exp.pressure_90:.3f} | {fem.pressure_90:.3f} | {study.model_pressure_90:.5f} | "
-        f"{study.model_pressure_90 - exp.pressure_90:+.5f} | {study.model_pressure_90 - fem.pressure_90:+.5f} |",
+        f"| pressure for a 90° unloaded bend | pressure (MPa) | {exp.pressure_90:.3f} | {fem.pressure_90:.3f} | {comparison.model_pressure_90:.5f} | "
+        f"{comparison.model_pressure_90 - exp.pressure_90:+.5f} | {comparison.model_pressure_90 - fem.pressure_90:+.5f} |",
     ]
     for row in exp.data.rows:
         for q in ("total_angle", "tip_x", "tip_y", "stiffness"):
@@ -137,9 +138,9 @@ def _fold_block(col: Column, fold: Fold, title: str) -> list[str]:
     return lines
 
 
-def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
+def render(comparison: PaperComparison, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
     """The Markdown of the page."""
-    exp, fem = study.columns
+    exp, fem = comparison.columns
     L: list[str] = []
     L += [
         "# How far to trust the model: the paper's experiments and FEM against esba",
@@ -167,11 +168,11 @@ def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
         "",
         "## The model with E = 0.54 MPa against the paper's values",
         "",
-        *_comparison(study),
+        *_comparison(comparison),
         "",
     ]
     rows = []
-    for col in study.columns:
+    for col in comparison.columns:
         parts = []
         for kind, unit in (("total_angle", "deg"), ("tip", "mm"), ("stiffness", "N/m")):
             rms, worst, k = _rms(col.nominal, kind)
@@ -189,7 +190,7 @@ def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
         "| column | free | E | rho | corr(E, rho) | s² (dof) | fitted states | notes |",
         "|---|---|---|---|---:|---|---|---|",
     ]
-    for col in study.columns:
+    for col in comparison.columns:
         for r in (col.fit_e, col.fit_both):
             rho = _estimate(r, "rho") if "rho" in r.free else "10° (held)"
             corr = f"{r.correlation[0, 1]:+.3f}" if len(r.free) > 1 and math.isfinite(r.correlation[0, 1]) else "–"
@@ -221,14 +222,14 @@ def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
         "variance of E), and against the 95 % prediction band that adds the training fit's own scatter (s² times the measurement's sd²).",
         "",
     ]
-    for col in study.columns:
+    for col in comparison.columns:
         L += _fold_block(col, col.folds[0], "fit on the unloaded rows, predict the loaded ones")
         L += _fold_block(col, col.folds[1], "fit on the loaded rows, predict the unloaded ones")
-    inside = sum(f.inside_parameter_band(p) for c in study.columns for f in c.folds for p in f.predictions)
-    band = sum(f.inside_prediction_band(p) for c in study.columns for f in c.folds for p in f.predictions)
-    total = sum(len(f.predictions) for c in study.columns for f in c.folds)
+    inside = sum(f.inside_parameter_band(p) for c in comparison.columns for f in c.folds for p in f.predictions)
+    band = sum(f.inside_prediction_band(p) for c in comparison.columns for f in c.folds for p in f.predictions)
+    total = sum(len(f.predictions) for c in comparison.columns for f in c.folds)
     split = "; ".join(f"{c.name} {c.folds[0].fit.value('E'):.4f} MPa from the unloaded rows against {c.folds[1].fit.value('E'):.4f} MPa "
-                      f"from the loaded ones" for c in study.columns)
+                      f"from the loaded ones" for c in comparison.columns)
     L += [
         f"Over both columns and both directions, {inside} of {total} held-out errors fall inside the uncertainty propagated from the "
         f"fitted E, and {band} of {total} inside the prediction bands. The two groups of rows want different moduli ({split}). "
@@ -238,7 +239,7 @@ def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
            "The held-out errors are mostly within the propagated uncertainty: one modulus serves both kinds of test."),
         "",
     ]
-    fo, ag = study.modulus_first_order, study.modulus_agreement
+    fo, ag = comparison.modulus_first_order, comparison.modulus_agreement
     axes, angle = fo.ellipse()
     L += [
         "## What E known to ±20 % means",
@@ -272,14 +273,14 @@ def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
         "E and rho enter only through (r1 − 4 r2 tan² rho) / E. The Fisher matrix of the unloaded rows is singular to round-off "
         f"(the first folds above) and its undetermined direction, dE/E = {exp.folds[0].both.direction.get('E', math.nan):+.4f} per "
         f"drho/rho = {exp.folds[0].both.direction.get('rho', math.nan):+.4f}, is that combination's: d ln(r1 − 4 r2 tan² rho) / d ln rho = "
-        f"{study.tradeoff:+.4f} at rho = 10°. `esba fit` says so.",
+        f"{comparison.tradeoff:+.4f} at rho = 10°. `esba fit` says so.",
         "- **At a target angle rho drops out altogether.** When the pressure is the one that bends the unloaded actuator to 90°, the "
         "pressure follows rho so that the net moment is the same: every loaded state at the 90° pressure is independent of rho "
         "(`esba solve --sensitivities` gives d/drho = 0 there). The FEM column's loaded rows cannot determine rho at all (Fisher ratio "
         f"{fem.folds[1].both.ratio:.1g}); the EXP column's can only through the optimised prototype, tested at a given pressure (ratio "
         f"{exp.folds[1].both.ratio:.1g}).",
-        f"- **All rows together determine both** (EXP: Fisher ratio at the paper's values {_g(study.identifiability_all['EXP'], 2)}; FEM "
-        f"{_g(study.identifiability_all['FEM'], 2)}), through the combination of free bends (E against rho) and payload rows (E alone).",
+        f"- **All rows together determine both** (EXP: Fisher ratio at the paper's values {_g(comparison.identifiability_all['EXP'], 2)}; FEM "
+        f"{_g(comparison.identifiability_all['FEM'], 2)}), through the combination of free bends (E against rho) and payload rows (E alone).",
         "",
         "## A copy error in the paper",
         "",
@@ -291,11 +292,11 @@ def render(study: Study, figure_path: str = f"figures/{FIGURE_NAME}") -> str:
     return "\n".join(L)
 
 
-def figure(study: Study):
+def figure(comparison: PaperComparison):
     """Measured against predicted for both columns, at E = 0.54 MPa and fitted."""
     series = []
     styles = {"EXP": ("o", "C0"), "FEM": ("^", "C1")}
-    for col in study.columns:
+    for col in comparison.columns:
         sds = {(r.label, q): sd for r in col.data.rows for q, sd in r.sds.items()}
         marker, color = styles[col.name]
         series.append(Series(f"{col.name}, E = 0.54 MPa", col.nominal, sds, marker, "0.55"))
@@ -304,21 +305,16 @@ def figure(study: Study):
     return measured_vs_predicted(series, title="The paper's EXP and FEM values against esba (n = 3)")
 
 
-def write_page(path: str | Path | None = None, study: Study | None = None) -> tuple[Path, Study]:
-    """Run the study (unless given) and write the page and its figure; return (page path, study)."""
-    path = Path(path) if path else DOC_PATH
-    study = run_study() if study is None else study
-    path.parent.mkdir(parents=True, exist_ok=True)
-    save_figure(figure(study), path.parent / "figures" / FIGURE_NAME)
-    path.write_text(render(study), encoding="utf-8")
-    return path, study
+class ExperimentsPage(Page):
+    """``docs/experiments.md`` and ``figures/experiments.png`` beside it."""
+
+    name = "experiments"
+
+    def compute(self, settings: None = None, progress: Progress | None = None) -> PaperComparison:
+        return compare_with_paper()
+
+    def render(self, data: PaperComparison, settings: None, path: Path, times: Times = TIMES) -> Rendered:
+        return Rendered(render(data), {path.parent / "figures" / FIGURE_NAME: lambda: figure(data)})
 
 
-def check_page(path: str | Path | None = None, study: Study | None = None) -> bool:
-    """True when the page is missing or differs from what :func:`write_page` would write."""
-    path = Path(path) if path else DOC_PATH
-    if not path.exists():
-        return True
-    study = run_study() if study is None else study
-    return path.read_text(encoding="utf-8") != render(study)
-
+PAGE = ExperimentsPage()

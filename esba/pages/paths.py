@@ -1,16 +1,8 @@
-"""``docs/paths.md``: where the Table 1 actuator snaps, how wide its hysteresis is, where it buckles.
+"""The page ``docs/paths.md`` and its figures, rendered from :func:`esba.analysis.path_cases.path_cases`
+(``esba path --write-doc docs/paths.md`` writes them; ``esba docs --check paths`` says whether the
+committed page is stale).
 
-:func:`paths_data` runs the studies (path traces, :mod:`esba.analysis.path_analysis`), :func:`write_page`
-writes the page and its figures; ``esba path --write-doc docs/paths.md`` runs both.
-
-* the pressure under the 2 N horizontal tip payload (Table 2's load): the bistable range, its two
-  folds and the hysteresis of inflating and deflating under the load;
-* the same for payloads of 1 to 3 N: how the bistable range opens with the payload;
-* the payload direction at the 90 degree pressure (2 N): the bistable range near 120 degrees;
-* the fold pressures against n (how many segments the folds need);
-* the straight actuator pushed along its axis, n = 1..8: the buckling load found by the trace
-  against the closed form (:func:`esba.analysis.path_analysis.column_buckling_load`), and what each side of
-  the crossing branch does.
+Presentation only: every number comes from the path cases; nothing here traces a path.
 """
 
 from __future__ import annotations
@@ -18,125 +10,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from esba.analysis.path_analysis import PathStudy, column_buckling_load, study
-from esba.figures.paths import save_figure, study_figure
-from esba.model.scene import Payload, Scene
-from esba.paths.continuation import (
-    PathOptions,
-    PathProblem,
-    bifurcating_branches,
-    trace,
-)
+from esba.analysis.path_cases import COLUMN_NS, FOLD_NS, PathCases, path_cases
+from esba.figures.paths import path_figure
 
-__all__ = ["paths_data", "write_page", "PathsData"]
+from .page import TIMES, Page, Progress, Rendered, Times
 
-#: Payloads of the bistable-range table, N.
-PAYLOADS = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
-#: Segment counts of the fold convergence table.
-FOLD_NS = (1, 2, 3, 4, 6, 8, 16)
-#: Segment counts of the buckling table.
-COLUMN_NS = tuple(range(1, 9))
+__all__ = ["PAGE", "PathsPage", "PathsSettings", "render_page", "FIGURES"]
 
-
-#: Path settings of the studies: a finer largest step than the default, for the figures.
-OPTIONS = PathOptions(ds_max=0.1)
-
-
-@dataclass(frozen=True, eq=False)
-class PathsData:
-    pressure: PathStudy
-    direction: PathStudy
-    column: PathStudy
-    by_payload: list[dict[str, Any]]
-    cusp_n: float | None
-    history_mpa: float | None
-    by_segments: list[dict[str, Any]]
-    buckling: list[dict[str, Any]]
-
-
-def _folds(problem: PathProblem, theta: np.ndarray, lam0: float, to: float) -> list[float]:
-    b = trace(problem, theta, lam0, to=to, options=OPTIONS)
-    return [f.lam for f in b.folds]
-
-
-def _pressure_folds(force: float, segments: int = 3, to: float = 0.4) -> list[float]:
-    from esba.statics.equilibrium import solve
-
-    scene = Scene(pressure=0.0, payloads=(Payload(force, 90.0),), segments=segments)
-    return _folds(PathProblem.from_scene(scene, "pressure"), solve(scene).theta, 0.0, to)
-
-
-def _bisect(low: float, high: float, above, tol: float) -> float:
-    """The boundary in [low, high] where ``above`` turns True (False at low, True at high)."""
-    while high - low > tol:
-        mid = 0.5 * (low + high)
-        if above(mid):
-            high = mid
-        else:
-            low = mid
-    return 0.5 * (low + high)
-
-
-def paths_data(progress=None) -> PathsData:
-    """Run every study of the page (about half a minute)."""
-    say = progress or (lambda msg: None)
-    from esba.statics.equilibrium import solve
-
-    say("pressure under 2 N")
-    p_study = study(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", 0.3, options=OPTIONS)
-    say("payload direction at the 90 degree pressure")
-    d_study = study(Scene(payloads=(Payload(2.0, 90.0),)), "omega", 150.0, options=OPTIONS)
-    say("bistable range against the payload")
-    by_payload = [{"payload_n": f, "folds_mpa": _pressure_folds(f)} for f in PAYLOADS]
-    without = [r["payload_n"] for r in by_payload if len(r["folds_mpa"]) < 2]
-    with_folds = [r["payload_n"] for r in by_payload if len(r["folds_mpa"]) == 2]
-    cusp = None
-    if without and with_folds and max(without) < min(with_folds):
-        cusp = _bisect(max(without), min(with_folds), lambda f: len(_pressure_folds(f)) == 2, 1e-3)
-    say("which state solve()'s history reaches in the bistable range")
-    upper, lower = (f.lam for f in p_study.main.folds[:2]) if len(p_study.main.folds) >= 2 else (None, None)
-    history_p = None
-    if upper is not None:
-
-        def reaches_upper(p: float) -> bool:
-            r = solve(Scene(pressure=p, payloads=(Payload(2.0, 90.0),)))
-            return r.total_angle_deg > p_study.main.folds[0].total_angle_deg
-
-        if reaches_upper(upper) and not reaches_upper(lower):
-            history_p = _bisect(lower, upper, reaches_upper, 1e-5)
-    say("fold pressures against n")
-    by_segments = [{"n": n, "folds_mpa": _pressure_folds(2.0, n, 0.3)} for n in FOLD_NS]
-    say("column buckling, n = 1..8")
-    buckling = []
-    for n in COLUMN_NS:
-        f_cr = column_buckling_load(segments=n)
-        scene = Scene(pressure=0.0, payloads=(Payload(0.5 * f_cr, 180.0),), segments=n)
-        problem = PathProblem.from_scene(scene, "payload")
-        b = trace(problem, np.zeros(n), 0.5 * f_cr, to=1.5 * f_cr)
-        row: dict[str, Any] = {"n": n, "closed_form_n": f_cr, "traced_n": None, "sides": []}
-        if b.branch_points:
-            bp = b.branch_points[0]
-            row["traced_n"] = bp.lam
-            row["status"] = bp.status
-            for side in bifurcating_branches(problem, bp, bounds=(0.5 * f_cr, 1.5 * f_cr), options=OPTIONS):
-                bend = float(np.degrees(np.sum(side.theta[min(1, len(side) - 1)])))
-                row["sides"].append(
-                    {
-                        "direction": "towards the chamber (theta > 0)" if bend > 0 else "away from the chamber (theta < 0)",
-                        "load_after": "falls" if len(side) > 1 and side.lam[1] < bp.lam else "rises",
-                        "stable_at_first": bool(side.stable[min(1, len(side) - 1)]),
-                        "folds_n": [f.lam for f in side.folds],
-                        "fold_angles_deg": [f.total_angle_deg for f in side.folds],
-                    }
-                )
-        buckling.append(row)
-    say("column, n = 4, for the figure")
-    c_study = study(Scene(pressure=0.0, payloads=(Payload(1.0, 180.0),), segments=4), "payload", 6.4, options=OPTIONS)
-    return PathsData(p_study, d_study, c_study, by_payload, cusp, history_p, by_segments, buckling)
+#: The page's figures, in ``figures/`` beside it.
+FIGURES = {"pressure": "path-pressure-2N.png", "direction": "path-omega-2N.png", "column": "path-column-n4.png"}
 
 
 def _fold_row(label: str, folds: list[float]) -> str:
@@ -149,19 +34,10 @@ def _fmt_folds(folds: list[float], digits: int = 5) -> str:
     return ", ".join(f"{f:.{digits}f}" for f in folds) if folds else "none"
 
 
-def write_page(path: str | Path, data: PathsData, command: str, figures: str | Path | None = None) -> Path:
-    """Write ``docs/paths.md`` (and its figures into ``figures``, default ``figures/`` beside the page)."""
-    path = Path(path)
-    fig_dir = Path(figures) if figures is not None else path.parent / "figures"
-    names = {"pressure": "path-pressure-2N.png", "direction": "path-omega-2N.png", "column": "path-column-n4.png"}
-    save_figure(study_figure(data.pressure), fig_dir / names["pressure"])
-    save_figure(study_figure(data.direction), fig_dir / names["direction"])
-    save_figure(study_figure(data.column), fig_dir / names["column"])
-    rel = {k: Path(v).name for k, v in names.items()}
-    try:
-        fig_rel = fig_dir.resolve().relative_to(path.parent.resolve())
-    except ValueError:
-        fig_rel = fig_dir.resolve()
+def render_page(data: PathCases, command: str) -> str:
+    """The Markdown of ``docs/paths.md``; its figures (:data:`FIGURES`) are in ``figures/`` beside it."""
+    fig_rel = Path("figures")
+    rel = FIGURES
     p = data.pressure
     up, down = p.main.folds[0].lam, p.main.folds[1].lam
     h = p.hysteresis or {"width": float("nan")}
@@ -301,6 +177,31 @@ def write_page(path: str | Path, data: PathsData, command: str, figures: str | P
         f"- The folds converge fast in n: n = 3, as in the paper, places them within {fold_gap:.2f} kPa of n = {FOLD_NS[-1]}.",
         "",
     ]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines), encoding="utf-8")
-    return path
+    return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class PathsSettings:
+    """The page's one setting: the command it names as its writer."""
+
+    command: str
+
+
+class PathsPage(Page):
+    """``docs/paths.md`` and its three figures in ``figures/`` beside it."""
+
+    name = "paths"
+
+    def settings(self) -> PathsSettings:
+        return PathsSettings(self.command)
+
+    def compute(self, settings: PathsSettings | None = None, progress: Progress | None = None) -> PathCases:
+        return path_cases(progress)
+
+    def render(self, data: PathCases, settings: PathsSettings, path: Path, times: Times = TIMES) -> Rendered:
+        shown = {"pressure": data.pressure, "direction": data.direction, "column": data.column}
+        figures = {path.parent / "figures" / FIGURES[k]: (lambda a=a: path_figure(a)) for k, a in shown.items()}
+        return Rendered(render_page(data, settings.command), figures)
+
+
+PAGE = PathsPage()

@@ -1,5 +1,7 @@
 """``docs/scaling.md``: the page of ``esba bench scaling`` (presentation only; the measurements are
-:func:`esba.bench.scaling.scaling_study`).
+:func:`esba.bench.scaling.scaling_benchmark`). ``esba docs --check scaling`` reruns the benchmark
+(one repeat) and compares, times aside: every time, rate and ratio of times, the load averages
+and the versions are written through :class:`esba.pages.page.Times`.
 
 Examples
 --------
@@ -16,10 +18,14 @@ True
 
 from __future__ import annotations
 
+import dataclasses
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-__all__ = ["scaling_page", "write_page", "summary", "SLURM_EXAMPLE"]
+from .page import TIMES, Page, Progress, Rendered, Times
+
+__all__ = ["PAGE", "ScalingPage", "ScalingSettings", "scaling_page", "summary", "SLURM_EXAMPLE"]
 
 #: How to run the same study on a SLURM cluster (documented, not run here).
 SLURM_EXAMPLE = '''\
@@ -57,12 +63,12 @@ once each. Without dask-jobqueue, any Dask cluster does: `dask scheduler` on one
 '''
 
 
-def _rate(v: float | None) -> str:
-    return "-" if v is None else f"{v:,.0f}"
+def _rate(v: float | None, t: Times = TIMES) -> str:
+    return "-" if v is None else t(v, ",.0f")
 
 
-def scaling_page(data: dict[str, Any], command: str) -> str:
-    """The Markdown of ``docs/scaling.md`` from :func:`esba.bench.scaling.scaling_study`."""
+def scaling_page(data: dict[str, Any], command: str, t: Times = TIMES) -> str:
+    """The Markdown of ``docs/scaling.md`` from :func:`esba.bench.scaling.scaling_benchmark`."""
     st = data["setup"]
     rows = data["rows"]
     base = rows[0]["per_second"]
@@ -72,12 +78,12 @@ def scaling_page(data: dict[str, Any], command: str) -> str:
         f"Written by `{command}`; rerun it to refresh. Every number on this page comes from that command.",
         "",
         f"The study: a sweep grid of {st['points']:,} equilibria at n = {st['segments']} ({st['grid']}), each along its load",
-        f"path on the batch path ({st['backend']}; answered by {st['methods']}). Each time is the median of {st['repeat']}",
-        f"runs. The machine: {st['cores']} cores shared with other work (load average {st['load_before'][0]:.2f} before the",
-        f"benchmark, {st['load_after'][0]:.2f} after), Python {st['python']}, CasADi {st['casadi']}, Dask {st['dask']}.",
-        (f"Before any timing the batch path's graph was built ({st['build_s']:.1f} s) and compiled to C ({st['compile_s']:.1f} s), once: "
-         "the library is cached and every worker loads it." if st["compile_s"] > 0 else
-         f"Before any timing the batch path's graph was built ({st['build_s']:.1f} s){' and its compiled library found in the cache' if st['compile'] == 'always' else ''}."),
+        f"path on the batch path ({st['backend']}; answered by {st['methods']}). Each time is the median of {t(st['repeat'])}",
+        f"runs. The machine: {t(st['cores'])} cores shared with other work (load average {t(st['load_before'][0], '.2f')} before the",
+        f"benchmark, {t(st['load_after'][0], '.2f')} after), Python {t(st['python'])}, CasADi {t(st['casadi'])}, Dask {t(st['dask'])}.",
+        t.word(f"Before any timing the batch path's graph was built ({st['build_s']:.1f} s) and compiled to C ({st['compile_s']:.1f} s), once: "
+               "the library is cached and every worker loads it." if st["compile_s"] > 0 else
+               f"Before any timing the batch path's graph was built ({st['build_s']:.1f} s){' and its compiled library found in the cache' if st['compile'] == 'always' else ''}."),
         "",
         "## Throughput against the worker count",
         "",
@@ -88,8 +94,8 @@ def scaling_page(data: dict[str, Any], command: str) -> str:
     ]
     for r in rows:
         lines.append(
-            f"| {r['where']} | {r['workers'] or '-'} | {r['chunks']} | {r['median_s']:.2f} | {_rate(r['per_second'])} equilibria/s | "
-            f"{r['per_second'] / base:.2f}x | {r['busy_us']:.0f} | {'yes' if r['identical'] else '**no**'} |"
+            f"| {r['where']} | {r['workers'] or '-'} | {r['chunks']} | {t(r['median_s'], '.2f')} | {_rate(r['per_second'], t)} equilibria/s | "
+            f"{t(r['per_second'] / base, '.2f')}x | {t(r['busy_us'], '.0f')} | {'yes' if r['identical'] else '**no**'} |"
         )
     lines += [
         "",
@@ -104,9 +110,9 @@ def scaling_page(data: dict[str, Any], command: str) -> str:
         if one is not None and most["workers"] > 1:
             lines += [
                 "",
-                f"{most['workers']} workers solve {most['per_second'] / one['per_second']:.2f}x as many equilibria per second as 1 worker, and "
-                f"{most['per_second'] / base:.2f}x as many as one batch in this process; the ideal on {st['cores']} cores is "
-                f"{min(most['workers'], st['cores'])}x, and these cores also run the client, the scheduler and other work.",
+                f"{most['workers']} workers solve {t(most['per_second'] / one['per_second'], '.2f')}x as many equilibria per second as 1 worker, and "
+                f"{t(most['per_second'] / base, '.2f')}x as many as one batch in this process; the ideal on {t(st['cores'])} cores is "
+                f"{t(min(most['workers'], st['cores']))}x, and these cores also run the client, the scheduler and other work.",
             ]
     if data["clusters"]:
         lines += [
@@ -117,7 +123,7 @@ def scaling_page(data: dict[str, Any], command: str) -> str:
             "|---|---|---|",
         ]
         for c in data["clusters"]:
-            lines.append(f"| {c['where']} | {c['start_s']:.2f} | {c['first_chunk_s']:.2f} |")
+            lines.append(f"| {c['where']} | {t(c['start_s'], '.2f')} | {t(c['first_chunk_s'], '.2f')} |")
         lines += [
             "",
             "Starting a local cluster spawns its worker processes; the first chunk a worker solves imports esba and",
@@ -135,12 +141,14 @@ def scaling_page(data: dict[str, Any], command: str) -> str:
             "|---|---|---|---|---|",
         ]
         for c in data["chunks"]:
-            lines.append(f"| {c['chunk']} | {c['chunks']} | {_rate(c['in_process_per_second'])} | {_rate(c['cluster_per_second'])} | {'yes' if c['identical'] else '**no**'} |")
+            lines.append(f"| {c['chunk']} | {c['chunks']} | {_rate(c['in_process_per_second'], t)} | {_rate(c['cluster_per_second'], t)} | {'yes' if c['identical'] else '**no**'} |")
         serial = [c["in_process_per_second"] for c in data["chunks"]]
+        verdict: list[str] = []
         if serial and min(serial) > base:
-            lines += ["", f"In this process every chunk size here ({min(serial) / base:.2f}x to {max(serial) / base:.2f}x) beats one batch of the whole grid."]
+            verdict = ["", f"In this process every chunk size here ({min(serial) / base:.2f}x to {max(serial) / base:.2f}x) beats one batch of the whole grid."]
         elif serial and max(serial) < base:
-            lines += ["", "In this process one batch of the whole grid beats every chunk size here."]
+            verdict = ["", "In this process one batch of the whole grid beats every chunk size here."]
+        lines += t.lines(verdict)
         lines += [
             "",
             f"A chunk is one task: its points go to the batch path as calls of the mapped Function on {st['batch_block']} points and,",
@@ -156,10 +164,10 @@ def scaling_page(data: dict[str, Any], command: str) -> str:
             "",
             "## The overhead of one chunk",
             "",
-            f"A chunk of {ov['points']} points sent through the scheduler to a warm worker and back: {1e3 * ov['round_trip_s']:.1f} ms",
-            f"(median); the same chunk solved in this process: {1e3 * ov['in_process_s']:.1f} ms. The difference,",
-            f"**{1e3 * ov['overhead_s']:.1f} ms per chunk**, is what Dask adds (scheduling, serialising the task and its",
-            f"result, the transfer; {100 * share:.0f} % of this chunk's solve time). While a worker solves one chunk the next ones",
+            f"A chunk of {ov['points']} points sent through the scheduler to a warm worker and back: {t(1e3 * ov['round_trip_s'], '.1f')} ms",
+            f"(median); the same chunk solved in this process: {t(1e3 * ov['in_process_s'], '.1f')} ms. The difference,",
+            f"**{t(1e3 * ov['overhead_s'], '.1f')} ms per chunk**, is what Dask adds (scheduling, serialising the task and its",
+            f"result, the transfer; {t(100 * share, '.0f')} % of this chunk's solve time). While a worker solves one chunk the next ones",
             f"are already queued (up to {st['window_per_worker']} per worker), so in a running study much of this latency overlaps the solving.",
         ]
     lines += [
@@ -181,14 +189,6 @@ def scaling_page(data: dict[str, Any], command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_page(path: str | Path, data: dict[str, Any], command: str) -> Path:
-    """Write :func:`scaling_page` to ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(scaling_page(data, command), encoding="utf-8")
-    return path
-
-
 def summary(data: dict[str, Any]) -> str:
     """The table ``esba bench scaling`` prints."""
     st = data["setup"]
@@ -203,3 +203,42 @@ def summary(data: dict[str, Any]) -> str:
     if data.get("page"):
         lines.append(f"wrote {data['page']}")
     return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class ScalingSettings:
+    """What ``esba bench scaling`` takes (see :data:`esba.bench.scaling.DEFAULTS`), and the command the page names."""
+
+    points: int = 12_000
+    segments: int = 16
+    repeat: int = 3
+    chunk: int = 1000
+    workers: tuple[int, ...] = (1, 2)
+    scheduler: str | None = None
+    timeout: float = 10.0
+    command: str = "esba bench scaling --markdown docs/scaling.md"
+
+
+class ScalingPage(Page):
+    """``docs/scaling.md`` (the benchmark needs the ``dask`` extra)."""
+
+    name = "scaling"
+
+    def settings(self) -> ScalingSettings:
+        return ScalingSettings()
+
+    def check_settings(self) -> ScalingSettings:
+        return dataclasses.replace(self.settings(), repeat=1)
+
+    def compute(self, settings: ScalingSettings | None = None, progress: Progress | None = None) -> dict[str, Any]:
+        from esba.bench.scaling import scaling_benchmark
+
+        s = self.settings() if settings is None else settings
+        return scaling_benchmark(points=s.points, segments=s.segments, repeat=s.repeat, chunk=s.chunk, workers=s.workers,
+                                 scheduler=s.scheduler, timeout=s.timeout, progress=progress)
+
+    def render(self, data: dict[str, Any], settings: ScalingSettings, path: Path, times: Times = TIMES) -> Rendered:
+        return Rendered(scaling_page(data, settings.command, times))
+
+
+PAGE = ScalingPage()

@@ -24,11 +24,29 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-__all__ = ["write_section", "read_sections"]
+from esba.infra.outputs import write_text
+
+__all__ = ["write_section", "read_sections", "section_block", "page_head", "join_sections"]
 
 
 def _markers(key: str) -> tuple[str, str]:
     return f"<!-- section {key} -->", f"<!-- end of section {key} -->"
+
+
+def page_head(title: str) -> str:
+    """The head of a page made of sections: its title and how it is written."""
+    return f"{title}\n\nEach section below is written by the command it names; rerun that command to refresh it.\n\n"
+
+
+def section_block(key: str, body: str, command: str) -> str:
+    """Section ``key`` as it stands in the page: between its markers, naming the command that wrote it."""
+    start, end = _markers(key)
+    return f"{start}\n<!-- Written by `{command}`; rerun it to refresh. -->\n\n{body.rstrip()}\n\n{end}\n"
+
+
+def join_sections(title: str, blocks: list[str]) -> str:
+    """A whole page from its title and its section blocks, in order."""
+    return page_head(title).rstrip("\n") + "\n\n" + "\n".join(b.rstrip("\n") + "\n" for b in blocks)
 
 
 def read_sections(text: str) -> tuple[str, list[tuple[str, str]]]:
@@ -50,15 +68,13 @@ def write_section(path: str | Path, key: str, body: str, command: str, title: st
     _, sections = read_sections(text)
     # the page is made of sections only: its head is always the title (text left before the
     # first section, e.g. from an older page format, would keep numbers no command refreshes)
-    head = f"{title}\n\nEach section below is written by the command it names; rerun that command to refresh it.\n\n"
-    start, end = _markers(key)
-    block = f"{start}\n<!-- Written by `{command}`; rerun it to refresh. -->\n\n{body.rstrip()}\n\n{end}\n"
+    block = section_block(key, body, command)
     keys = [k for k, _ in sections]
     if key in keys:
         sections[keys.index(key)] = (key, block)
     else:
         sections.append((key, block))
-    out = head.rstrip("\n") + "\n\n" + "\n".join(b.rstrip("\n") + "\n" for _, b in sections)
+    out = join_sections(title, [b for _, b in sections])
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(out, encoding="utf-8")
+    write_text(path, out)
     return path

@@ -1,20 +1,19 @@
 """The page ``docs/validation.md``: the Table 2 comparison of :mod:`esba.calibration.validation` (written by
-``esba validate``; ``esba validate --check`` fails when the committed page is stale)."""
+``esba validate``; ``esba validate --check`` and ``esba docs --check validation`` fail when the committed
+page is stale)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
 from esba.calibration.validation import TOLERANCE_DEG, TOLERANCE_MM, Table2Case, table2
-from esba.infra.outputs import default_page
 from esba.model.scene import MAIN_JOB
 
-__all__ = ["render_page", "write_page", "check_page", "DOC_PATH"]
+from .page import TIMES, Page, Progress, Rendered, Times
 
-#: The repository's page (``esba validate`` writes it when run inside a checkout; elsewhere the
-#: default is ``./validation.md``, see :mod:`esba.infra.outputs`).
-DOC_PATH = Path(__file__).resolve().parents[2] / "docs" / "validation.md"
+__all__ = ["PAGE", "ValidationPage", "Table2Cases", "render_page"]
 
 
 def _table(cases: Sequence[Table2Case]) -> list[str]:
@@ -44,7 +43,7 @@ def render_page(cases: Sequence[Table2Case], printed: Sequence[Table2Case] = ())
         "<!-- Written by `esba validate` (esba/calibration/validation.py, esba/pages/validation.py); do not edit by hand. -->",
         "<!-- `esba validate --check` exits 1 when this page is stale. -->",
         "",
-        "Written by the command `esba validate`; `pytest tests/test_equilibrium.py -k table2` asserts the",
+        "Written by the command `esba validate`; `pytest tests/statics/test_equilibrium.py -k table2` asserts the",
         "same comparison.",
         "",
         "**Scene** (Section 4.4.2 of the paper): the Table 1 actuator, L = "
@@ -116,23 +115,25 @@ def _figures_section() -> list[str]:
     return out[:-1]
 
 
-def _page(cases: Sequence[Table2Case] | None) -> str:
-    cases = table2("paper") if cases is None else cases
-    printed = table2("printed", segments=[c.n for c in cases])
-    return render_page(cases, printed)
+@dataclass(frozen=True, eq=False)
+class Table2Cases:
+    """The page's data: Table 2 against the ``paper`` variant, and the ``printed`` one beside it."""
+
+    paper: tuple[Table2Case, ...]
+    printed: tuple[Table2Case, ...]
 
 
-def write_page(path: str | Path | None = None, cases: Sequence[Table2Case] | None = None) -> Path:
-    """Write the validation page (default :func:`esba.infra.outputs.default_page`); return its path."""
-    path = Path(path) if path else default_page("validation.md")
-    path.write_text(_page(cases), encoding="utf-8")
-    return path
+class ValidationPage(Page):
+    """``docs/validation.md``: :func:`esba.calibration.validation.table2` for n = 1..4, both variants."""
+
+    name = "validation"
+
+    def compute(self, settings: None = None, progress: Progress | None = None) -> Table2Cases:
+        cases = table2("paper")
+        return Table2Cases(tuple(cases), tuple(table2("printed", segments=[c.n for c in cases])))
+
+    def render(self, data: Table2Cases, settings: None, path: Path, times: Times = TIMES) -> Rendered:
+        return Rendered(render_page(data.paper, data.printed))
 
 
-def check_page(path: str | Path | None = None, cases: Sequence[Table2Case] | None = None) -> bool:
-    """True when the page at ``path`` is missing or differs from what :func:`write_page` would write."""
-    path = Path(path) if path else default_page("validation.md")
-    if not path.exists():
-        return True
-    return path.read_text(encoding="utf-8") != _page(cases)
-
+PAGE = ValidationPage()

@@ -71,7 +71,7 @@ _BASE_OPTIONS = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"}
 
 @dataclass(frozen=True)
 class Constraint:
-    """One row block of g: ``lb <= expr <= ub``, named for the report.
+    """One row block of g: ``lb <= expr <= ub``, named so that a result can say which holds.
 
     Attributes
     ----------
@@ -83,8 +83,8 @@ class Constraint:
         Unit of the expression.
     lb, ub : float
         Bounds (equal for an equality).
-    report : bool
-        An inequality whose multiplier is worth reporting when active.
+    shown : bool
+        An inequality shown, with its multiplier, when it is active.
     """
 
     name: str
@@ -92,7 +92,7 @@ class Constraint:
     unit: str
     lb: float
     ub: float
-    report: bool = False
+    shown: bool = False
 
 
 @dataclass(frozen=True)
@@ -199,7 +199,7 @@ class EquilibriumNLP:
     ) -> Any:
         """A block of ``size`` variables (a CasADi SX column) with bounds.
 
-        ``lower`` / ``upper`` name a scalar variable's bounds for the report: (name, description,
+        ``lower`` / ``upper`` name a scalar variable's bounds, shown when active: (name, description,
         unit), e.g. ``("d_min", "d >= 0 mm", "mm")``.
         """
         if any(b[0] == name for b in self._blocks):
@@ -219,10 +219,10 @@ class EquilibriumNLP:
         self._params.append((name, sym))
         return sym
 
-    def constraint(self, expr: Any, name: str, description: str, unit: str, lb: float, ub: float, report: bool = False) -> None:
+    def constraint(self, expr: Any, name: str, description: str, unit: str, lb: float, ub: float, shown: bool = False) -> None:
         """Add ``lb <= expr <= ub`` (a scalar expression)."""
         self._g.append(expr)
-        self._constraints.append(Constraint(name, description, unit, float(lb), float(ub), report))
+        self._constraints.append(Constraint(name, description, unit, float(lb), float(ub), shown))
 
     def equilibrium(self, gradient: Any, label: str) -> None:
         """Hold a state to equilibrium: every entry of its gradient (N mm/rad) equal to 0."""
@@ -288,7 +288,7 @@ class BuiltNLP:
     constraints : tuple of Constraint
         One per row of g.
     bound_names : dict
-        (variable, "lower" | "upper") -> (name, description, unit) for reportable bounds.
+        (variable, "lower" | "upper") -> (name, description, unit) for the bounds shown when active.
     parameters : tuple of (str, int)
         The blocks of p, in order.
     build_time : float
@@ -343,7 +343,7 @@ class BuiltNLP:
         )
 
     def active(self, z: np.ndarray, g: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray, tol: float, factor: float) -> tuple[ActiveConstraint, ...]:
-        """Reportable inequalities and named bounds at their bound, with multipliers.
+        """The inequalities shown and the named bounds, at their bound, with multipliers.
 
         ``factor`` turns a multiplier into d(objective*)/d(bound) (for an objective minimised as
         sign * J / scale it is -sign * scale). A bound is active within ``tol`` times max(1, |bound|).
@@ -354,7 +354,7 @@ class BuiltNLP:
             return math.isfinite(bound) and abs(value - bound) <= tol * max(1.0, abs(bound))
 
         for c, value, lam in zip(self.constraints, g, lam_g):
-            if not c.report:
+            if not c.shown:
                 continue
             for bound in (c.lb, c.ub):
                 if near(value, bound):

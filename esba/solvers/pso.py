@@ -34,7 +34,7 @@ Constraints:
   an optimum on the boundary is reached exactly rather than approached from one side;
 * nonlinear constraints returned by the objective as a violation >= 0 (e.g. a minimum stiffness).
   An optimum on a curved constraint is approached from the feasible side only, so the swarm
-  closes in along such a boundary more slowly than along a wall (see ``tests/test_pso.py``).
+  closes in along such a boundary more slowly than along a wall (see ``tests/solvers/test_pso.py``).
 
 Particles are compared with Deb's feasibility rules (Deb 2000, "An efficient constraint
 handling method for genetic algorithms", Comput. Methods Appl. Mech. Eng. 186:311-338): a

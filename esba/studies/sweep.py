@@ -12,10 +12,6 @@ any range of the grid's points and returns plain arrays. :func:`sweep` solves th
 it in one call; :mod:`esba.studies.sweep_runner` solves it chunk by chunk, in this process or on Dask
 workers (:mod:`esba.studies.distributed`), with the same answers element for element.
 
-:func:`load_path` follows one scene's payloads from 0 to their full magnitude by path tracing
-(:mod:`esba.paths.loading`) and reports where the path jumps (a snap-through at a fold) instead of
-connecting the two branches silently.
-
 :mod:`esba.figures.sweeps` draws a sweep, and the paper's Fig. 12.
 
 Examples
@@ -49,25 +45,20 @@ from esba.infra.errors import InputError
 from esba.model import resolution
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import Finding, assess_arrays
-from esba.paths.continuation import PathOptions, PathProblem
-from esba.paths.loading import follow
 from esba.statics.batch import BatchOptions, check_size, decide_backend, solve_arrays
 from esba.statics.equilibrium import (
     DEFAULT_OPTIONS,
     EquilibriumError,
     pressure_for_angle,
-    solve,
 )
 
 __all__ = [
     "AXES",
     "SweepPlan",
     "SweepResult",
-    "LoadPath",
     "plan_sweep",
     "solve_points",
     "sweep",
-    "load_path",
     "parse_values",
     "row_fields",
     "point_rows",
@@ -642,94 +633,3 @@ def sweep(
     options, backend = decide_backend(plan.base.model(), options, plan.angle_mode, plan.size)
     part = solve_points(plan, 0, plan.size, options)
     return SweepResult.from_parts(plan, [part], backend)
-
-
-# ---------------------------------------------------------------------------------------------
-# one load path, jumps reported
-
-
-@dataclass(frozen=True, eq=False)
-class LoadPath:
-    """Equilibria along a payload ramp from 0 to the full load, and where the path jumps.
-
-    Attributes
-    ----------
-    factors : ndarray
-        Load factors of the points (0 ... 1), in the order the ramp met them.
-    theta : ndarray, shape (k, n)
-        Angles at each point, rad.
-    tip : ndarray, shape (k, 3)
-        Tip pose at each point.
-    min_eigenvalue : ndarray
-        Smallest Hessian eigenvalue at each point (it falls to 0 at a fold, where the path snaps).
-    kind : ndarray of str
-        What each point is (``start``, ``regular``, ``fold``, ``branch point``, ``end``; see
-        :class:`esba.paths.branch.Branch`).
-    jumps : list of dict
-        Each jump: the load factor of the fold and just after it, the tip before and after (mm),
-        the distance, and the kind of special point.
-    ok : bool
-        The ramp reached the full load on a stable equilibrium.
-    message : str
-        What went wrong, when ``ok`` is False.
-    """
-
-    factors: np.ndarray
-    theta: np.ndarray
-    tip: np.ndarray
-    min_eigenvalue: np.ndarray
-    kind: np.ndarray
-    jumps: list[dict]
-    ok: bool
-    message: str = ""
-
-    @property
-    def continuous(self) -> bool:
-        """True when no jump was found."""
-        return not self.jumps
-
-
-def load_path(scene: Scene, options: PathOptions | None = None) -> LoadPath:
-    """Follow ``scene``'s payloads (and weight) from 0 to full, quasi-statically.
-
-    The load factor is followed by path tracing (:func:`esba.paths.loading.follow`): every fold where
-    the stable branch ends is located, and the jump from it is recorded (a snap-through to another
-    branch), not smoothed over.
-
-    Examples
-    --------
-    >>> from esba.model.scene import Scene, Payload
-    >>> p = load_path(Scene(target_angle_deg=90.0, payloads=(Payload(2.0),)))
-    >>> p.ok, p.continuous, round(float(p.tip[-1, 1]), 2)
-    (True, True, 10.22)
-    """
-    unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False))
-    if not unloaded.ok or not (scene.payloads or scene.gravity):
-        one = np.array([0.0])
-        kind = np.array(["start"])
-        return LoadPath(one, unloaded.theta[None, :], unloaded.tip[None, :], np.array([unloaded.eigenvalues[0]]), kind, [], unloaded.ok, unloaded.message)
-    problem = PathProblem.from_scene(scene, "load", pressure=unloaded.pressure)
-    ramp = follow(problem, unloaded.theta, 0.0, 1.0, options)
-    pieces = ramp.pieces
-    jumps = [
-        {
-            "kind": j.kind,
-            "from_factor": j.lam,
-            "to_factor": j.lam_after,
-            "tip_before_mm": [float(v) for v in j.tip_before[:2]],
-            "tip_after_mm": [float(v) for v in j.tip_after[:2]],
-            "distance_mm": j.distance_mm,
-            "min_eigenvalue_before": j.point.eigenvalue,
-        }
-        for j in ramp.jumps
-    ]
-    return LoadPath(
-        factors=np.concatenate([b.lam for b in pieces]),
-        theta=np.vstack([b.theta for b in pieces]),
-        tip=np.vstack([b.tip for b in pieces]),
-        min_eigenvalue=np.concatenate([b.eigenvalues[:, 0] for b in pieces]),
-        kind=np.concatenate([b.kind for b in pieces]),
-        jumps=jumps,
-        ok=ramp.reached,
-        message=ramp.message,
-    )

@@ -4,20 +4,25 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
+import numpy as np
 import pytest
 
-from esba.calibration.experiments import COLUMNS, PAPER, UNLOADED, paper_data, run_study
+from esba.calibration.experiments import COLUMNS, PAPER, UNLOADED, compare_with_paper, paper_data
 from esba.cli import EXIT_FAILED, EXIT_OK, main
-from esba.pages.experiments import DOC_COMMAND, DOC_PATH, check_page, render
+from esba.pages.experiments import DOC_COMMAND, PAGE, render
+from tests.figures import drawn
+
+DOC_PATH = Path(__file__).resolve().parents[2] / "docs" / "experiments.md"
 
 
 @pytest.fixture(scope="module")
-def study():
-    return run_study()
+def comparison():
+    return compare_with_paper()
 
 
-def test_the_data_are_the_issues_table():
+def test_the_data_are_the_papers_tables():
     exp, fem = paper_data("EXP"), paper_data("FEM")
     assert [r.label for r in exp.rows] == [label for label, _, _ in PAPER]
     assert [r.label for r in fem.rows] == [label for label, _, v in PAPER if "FEM" in v]  # no prototype in FEM
@@ -33,19 +38,19 @@ def test_the_data_are_the_issues_table():
         paper_data("ANA")
 
 
-def test_the_model_at_the_papers_modulus(study):
-    by = {c.name: {(p.row, p.quantity): p for p in c.nominal} for c in study.columns}
+def test_the_model_at_the_papers_modulus(comparison):
+    by = {c.name: {(p.row, p.quantity): p for p in c.nominal} for c in comparison.columns}
     # esba's Table 2 numbers (docs/validation.md) and the design page's prototype stiffness
     assert by["EXP"][("2 N horizontal", "total_angle")].predicted == pytest.approx(25.322, abs=1e-3)
     assert by["EXP"][("2 N horizontal", "tip_y")].predicted == pytest.approx(10.217, abs=1e-3)
     assert by["EXP"][("K at 2 N", "stiffness")].predicted == pytest.approx(26.411, abs=1e-3)
     assert by["EXP"][("free bend", "total_angle")].error == pytest.approx(179.351 - 176.8, abs=1e-3)
-    assert study.model_pressure_90 == pytest.approx(0.1238739, abs=1e-7)
-    assert all(p.ok for c in study.columns for p in c.nominal)
+    assert comparison.model_pressure_90 == pytest.approx(0.1238739, abs=1e-7)
+    assert all(p.ok for c in comparison.columns for p in c.nominal)
 
 
-def test_the_fits(study):
-    exp, fem = study.columns
+def test_the_fits(comparison):
+    exp, fem = comparison.columns
     assert exp.fit_e.ok and exp.fit_both.ok and fem.fit_e.ok
     lo, hi = exp.fit_e.interval[0]
     assert lo < 0.54 < hi  # the paper's tensile-test modulus is consistent with its own experiments
@@ -54,47 +59,56 @@ def test_the_fits(study):
     assert not fem.fit_both.identifiable and any("rho" in w for w in fem.fit_both.warnings)
 
 
-def test_cross_validation_both_ways(study):
-    for col in study.columns:
+def test_cross_validation_both_ways(comparison):
+    for col in comparison.columns:
         unloaded, loaded = col.folds
         assert set(unloaded.train) == set(UNLOADED) and set(loaded.test) == set(UNLOADED)
         assert unloaded.fit.ok and loaded.fit.ok
         # E and rho cannot be told apart from unloaded bends: the exact trade-off
         assert not unloaded.both.identifiable and unloaded.both.ratio < 1e-12
-        assert unloaded.both.direction["E"] / unloaded.both.direction["rho"] == pytest.approx(study.tradeoff, rel=1e-6)
+        assert unloaded.both.direction["E"] / unloaded.both.direction["rho"] == pytest.approx(comparison.tradeoff, rel=1e-6)
         for fold in col.folds:
             assert all(p.ok and math.isfinite(p.sd) and p.sd > 0 for p in fold.predictions)
             for p in fold.predictions:
                 assert fold.band(p) > fold.z * p.sd  # the prediction band adds the training scatter
     # the FEM column's loaded rows cannot see rho at all (every one is at the 90 degree pressure)
-    assert study.columns[1].folds[1].both.ratio < 1e-20
+    assert comparison.columns[1].folds[1].both.ratio < 1e-20
 
 
-def test_modulus_tolerance_first_order_agrees_with_monte_carlo(study):
-    assert study.modulus_agreement.agree, study.modulus_agreement.verdict
-    assert study.modulus_monte_carlo.counts["ok"] == 10_000
+def test_modulus_tolerance_first_order_agrees_with_monte_carlo(comparison):
+    assert comparison.modulus_agreement.agree, comparison.modulus_agreement.verdict
+    assert comparison.modulus_monte_carlo.counts["ok"] == 10_000
 
 
-def test_committed_page_is_fresh_and_names_its_command(study):
+def test_committed_page_is_fresh_and_names_its_command(comparison):
     text = DOC_PATH.read_text(encoding="utf-8")
     assert DOC_COMMAND in text and "figures/experiments.png" in text
-    assert not check_page(DOC_PATH, study), f"docs/experiments.md is stale: run `{DOC_COMMAND}`"
-    assert render(study) == text
+    assert PAGE.check(DOC_PATH, data=comparison).ok, f"docs/experiments.md is stale: run `{DOC_COMMAND}`"
+    assert render(comparison) == text
 
 
-def test_cli_writes_and_checks_the_page(tmp_path, capsys, study, monkeypatch):
-    import esba.calibration.experiments as ex
+def test_cli_writes_and_checks_the_page(tmp_path, capsys, comparison, monkeypatch):
+    import esba.pages.experiments as ep
 
-    monkeypatch.setattr(ex, "run_study", lambda *a, **k: study)  # the study is deterministic; run it once
+    monkeypatch.setattr(ep, "compare_with_paper", lambda *a, **k: comparison)  # the comparison is deterministic; run it once
+    saved = drawn.record_saved(monkeypatch)
     page = tmp_path / "docs" / "experiments.md"
     page.parent.mkdir()  # an output's folder must exist (esba.infra.outputs): esba creates only figures/ beside the page
     assert main(["experiments", "--write-doc", str(page), "--json"]) == EXIT_OK
     d = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert [c["name"] for c in d["columns"]] == list(COLUMNS) and d["page"] == str(page)
-    assert page.exists() and (tmp_path / "docs" / "figures" / "experiments.png").stat().st_size > 10_000
-    import esba.pages.experiments as ep
-
-    monkeypatch.setattr(ep, "run_study", lambda *a, **k: study)
+    figure = tmp_path / "docs" / "figures" / "experiments.png"
+    assert page.exists() and figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the figure: per panel, each column's measured values against the model at 0.54 MPa and fitted
+    axes = saved[figure.resolve()].axes
+    assert [ax.get_xlabel() for ax in axes] == ["measured total angle (deg)", "measured tip position (x and y) (mm)", "measured secant stiffness (N/m)"]
+    for ax, quantities in zip(axes, (("total_angle",), ("tip_x", "tip_y"), ("stiffness",))):
+        series = drawn.errorbars(ax)
+        assert len(series) == 4
+        for col in comparison.columns:
+            for label, preds in ((f"{col.name}, E = 0.54 MPa", col.nominal), (next(k for k in series if k.startswith(f"{col.name}, fitted")), col.fitted)):
+                shown = [[p.measured, p.predicted] for p in preds if p.quantity in quantities and p.ok and math.isfinite(p.predicted)]
+                np.testing.assert_allclose(series[label], shown)
     assert main(["experiments", "--check", str(page)]) == EXIT_OK
     page.write_text("stale\n", encoding="utf-8")
     assert main(["experiments", "--check", str(page)]) == EXIT_FAILED

@@ -26,6 +26,7 @@ from esba.calibration.measurements import (
 )
 from esba.cli import EXIT_OK, EXIT_USAGE, main
 from esba.model.scene import Scene
+from tests.figures import drawn
 from tests.tolerances import FIT_EXACT_REL, FIT_JACOBIAN_RTOL
 
 #: The parameters the synthetic data are made with (the fit starts from Table 1's 0.54 MPa, 10 deg).
@@ -260,7 +261,8 @@ def test_bad_fit_options(kwargs):
         FitOptions(**kwargs)
 
 
-def test_cli_fit_table_json_and_plot(tmp_path, capsys, clean):
+def test_cli_fit_table_json_and_plot(tmp_path, capsys, clean, monkeypatch):
+    saved = drawn.record_saved(monkeypatch)
     path = tmp_path / "synthetic.csv"
     cols = ["label", "pressure_mpa", "target_angle_deg", "payload_n", "payload_angle_deg"] + [UNIT[q] for q in QUANTITIES] + [SD_UNIT[q] for q in QUANTITIES]
     lines = [",".join(cols)]
@@ -272,7 +274,17 @@ def test_cli_fit_table_json_and_plot(tmp_path, capsys, clean):
     assert main(["fit", str(path), "--plot", str(fig)]) == EXIT_OK
     out = capsys.readouterr().out
     assert "E " in out and "rho" in out and "95 % interval" in out and "correlation: E-rho" in out
-    assert fig.exists() and fig.stat().st_size > 10_000
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the figure: a panel per kind of value, the measured values (x) against the start and the fit (y)
+    axes = saved[fig.resolve()].axes
+    assert [ax.get_xlabel() for ax in axes] == ["measured total angle (deg)", "measured tip position (x and y) (mm)", "measured secant stiffness (N/m)"]
+    for ax, quantities in zip(axes, (("total_angle",), ("tip_x", "tip_y"), ("stiffness",))):
+        series = drawn.errorbars(ax)
+        assert [k.split(":")[0] for k in series] == ["start", "fitted"]
+        measured = sorted(v for (_, q), v in clean.items() if q in quantities)
+        fitted = next(v for k, v in series.items() if k.startswith("fitted"))
+        assert sorted(fitted[:, 0]) == pytest.approx(measured)
+        assert fitted[:, 1] == pytest.approx(fitted[:, 0], rel=FIT_EXACT_REL)  # clean data: the fit predicts them
     assert main(["fit", str(path), "--free", "E", "--level", "0.9", "--json"]) == EXIT_OK
     d = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert list(d["parameters"]) == ["E"] and "interval_90" in d["parameters"]["E"] and d["status"] == "ok"

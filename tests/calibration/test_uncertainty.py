@@ -25,6 +25,7 @@ from esba.calibration.uncertainty import (
 from esba.cli import EXIT_OK, EXIT_USAGE, main
 from esba.model.scene import MAIN_JOB, Payload, Scene, load_scene
 from esba.statics.equilibrium import solve
+from tests.figures import drawn
 from tests.tolerances import MC_AGREE_REL
 
 #: Just below the buckling load of a nearly straight actuator pushed along its axis (about 2.9 N).
@@ -206,7 +207,8 @@ def test_monte_carlo_options_are_checked():
 # command line
 
 
-def test_cli_sigma_and_monte_carlo(capsys, tmp_path):
+def test_cli_sigma_and_monte_carlo(capsys, tmp_path, monkeypatch):
+    saved = drawn.record_saved(monkeypatch)
     fig = tmp_path / "u.png"
     code = main(["solve", "--sigma", "E=0.05", "--sigma", "r2=±0.1", "--monte-carlo", "500", "--plot", str(fig), "--json"])
     d = _no_nan(capsys.readouterr().out)
@@ -215,7 +217,18 @@ def test_cli_sigma_and_monte_carlo(capsys, tmp_path):
     assert d["uncertainty"]["tip_ellipse_95"]["semi_axes_mm"][0] > 0
     assert d["monte_carlo"]["counts"]["ok"] == 500 and d["monte_carlo"]["seed"] == 0
     assert isinstance(d["agreement"]["agree"], bool)
-    assert fig.exists() and fig.stat().st_size > 10_000
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the figure: the shapes, the Monte Carlo tips and the first-order 95 % ellipse around the tip
+    (ax,) = saved[fig.resolve()].axes
+    tips = drawn.labelled(ax, "Monte Carlo tips (500)")
+    assert len(drawn.xy(tips)[0]) == 500
+    ellipse = drawn.data(drawn.labelled(ax, "tip, 95 % ellipse (first order)"))
+    x, y = d["tip_mm"]
+    centre = ellipse[:-1].mean(axis=0)  # the closed curve's points, the repeated end left out
+    assert centre == pytest.approx([y, x], abs=1e-6)  # drawn in the paper's frame: y across, x down
+    half = d["uncertainty"]["tip_ellipse_95"]["semi_axes_mm"]
+    radius = np.linalg.norm(ellipse - centre, axis=1)
+    assert radius.max() == pytest.approx(max(half), rel=1e-3) and radius.min() == pytest.approx(min(half), rel=1e-3)
 
 
 def test_cli_scene_file_sigmas_and_table(capsys, tmp_path):

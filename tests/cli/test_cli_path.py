@@ -1,4 +1,4 @@
-"""The command line: esba path (issue 8): special points, branch files, the figure, bad input."""
+"""The command line: esba path: special points, branch files, the figure, bad input."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import pytest
 from esba.cli import EXIT_OK, EXIT_USAGE, main
 from esba.cli.path import _PATH_PARAMETERS, DEFAULT_PATH_FIGURE, DEFAULT_PATH_OUT
 from esba.paths.problem import PARAMETERS
+from tests.figures import drawn
 from tests.tolerances import LOCATE_RTOL
 
 
@@ -23,15 +24,24 @@ def test_parser_knows_every_path_parameter():
     assert set(_PATH_PARAMETERS) == set(PARAMETERS)
 
 
-def test_pressure_path_prints_folds_and_hysteresis(capsys, tmp_path):
+def test_pressure_path_prints_folds_and_hysteresis(capsys, tmp_path, monkeypatch):
+    saved = drawn.record_saved(monkeypatch)
     out_json, fig = tmp_path / "b.json", tmp_path / "b.png"
     code, out, err = run(capsys, "path", "--param", "pressure", "--from", "0", "--to", "0.3", "--payload", "2", "--out", str(out_json), "--plot", str(fig))
     assert code == EXIT_OK, err
     assert out.count("LP fold") == 2 and "hysteresis:" in out and "jumps at the fold" in out
     assert f"wrote {out_json}" in out and f"wrote {fig}" in out
-    assert fig.stat().st_size > 20_000
     data = json.loads(out_json.read_text())
     (main_branch,) = data["branches"]
+    # the figure shows the branch of the file: the parameter against the total angle, stable solid, unstable dashed
+    (ax,) = saved[fig.resolve()].axes
+    assert ax.get_xlabel() == "pressure (MPa)" and ax.get_ylabel() == "total bending angle (deg)"
+    runs = [ln for ln in drawn.lines(ax) if ln.get_linewidth() == 1.8]
+    x, y = drawn.joined(runs)
+    assert x.tolist() == main_branch["lambda"] and y == pytest.approx(main_branch["total_angle_deg"])
+    assert [ln.get_linestyle() for ln in runs] == ["-", "--", "-"]  # stable, the unstable middle, stable
+    assert len([ln for ln in drawn.lines(ax) if ln.get_marker() == "o"]) == 2  # the two folds
+    assert {"branch through the start", "stable", "unstable", "fold (LP)", "loading up", "loading down"} <= set(drawn.legend(ax))
     folds = [sp for sp in main_branch["special_points"] if sp["kind"] == "fold"]
     assert [sp["label"] for sp in folds] == ["LP", "LP"] and all(sp["status"] == "converged" for sp in folds)
     assert data["hysteresis"]["width"] == pytest.approx(folds[0]["lambda"] - folds[1]["lambda"], rel=LOCATE_RTOL)
@@ -76,7 +86,8 @@ def test_bad_input_is_one_line_and_exit_2(capsys, tmp_path, monkeypatch, args, m
     assert not (tmp_path / DEFAULT_PATH_OUT).exists()  # refused before anything was computed or written
 
 
-def test_write_doc_writes_the_page_and_its_figures(capsys, tmp_path):
+def test_write_doc_writes_the_page_and_its_figures(capsys, tmp_path, monkeypatch):
+    saved = drawn.record_saved(monkeypatch)
     page = tmp_path / "docs" / "paths.md"
     page.parent.mkdir()
     code, out, err = run(capsys, "path", "--write-doc", str(page))
@@ -85,9 +96,12 @@ def test_write_doc_writes_the_page_and_its_figures(capsys, tmp_path):
     for heading in ("## Pressure under the 2 N horizontal tip payload", "## Payload direction", "## The straight actuator", "## What a designer"):
         assert heading in text
     assert f"esba path --write-doc {page}" in text
-    for name in ("path-pressure-2N.png", "path-omega-2N.png", "path-column-n4.png"):
-        assert (tmp_path / "docs" / "figures" / name).stat().st_size > 20_000
-        assert f"figures/{name}" in text
+    for name, xlabel in (("path-pressure-2N.png", "pressure (MPa)"), ("path-omega-2N.png", "omega1 (deg)"), ("path-column-n4.png", "payload1 (N)")):
+        file = tmp_path / "docs" / "figures" / name
+        assert file.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"figures/{name}" in text
+        (ax,) = saved[file.resolve()].axes
+        assert ax.get_xlabel() == xlabel and ax.get_ylabel() == "total bending angle (deg)"
+        assert "branch through the start" in drawn.legend(ax)
     assert "nan" not in text.lower()
 
 

@@ -5,15 +5,19 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from esba.cli import EXIT_FAILED, EXIT_OK, EXIT_USAGE, main
 from esba.cli.scenes import DEFAULT_SOLVE_FIGURE
-from esba.pages.validation import DOC_PATH
+from esba.model.scene import MAIN_JOB
+from esba.statics.equilibrium import solve
+from tests.figures import drawn
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+VALIDATION_PAGE = Path(__file__).resolve().parents[2] / "docs" / "validation.md"
 
-#: The JSON keys the issue asks of `esba solve --json`.
+#: The JSON keys `esba solve --json` promises.
 SOLVE_KEYS = {"theta_deg", "total_angle_deg", "tip_mm", "pressure_mpa", "stable", "status", "effects", "segments", "variant", "solve_time_s"}
 
 
@@ -30,14 +34,25 @@ def run_json(capsys, *args: str) -> tuple[int, dict]:
 
 def test_main_job_prints_and_writes_figure(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
+    saved = drawn.record_saved(monkeypatch)
     code, out, err = run(capsys, "solve")
     assert code == EXIT_OK, err
     assert "(-3.29, 7.17, 21.44) deg" in out
     assert "133.238, 10.217 mm" in out
     assert "stable" in out and "Solve_Succeeded" in out
     figure = tmp_path / DEFAULT_SOLVE_FIGURE
-    assert figure.exists() and figure.stat().st_size > 10_000
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert f"wrote {figure}" in out
+    # what it shows: the loaded shape of the main job and the unloaded one, in the paper's frame
+    (ax,) = saved[figure.resolve()].axes
+    assert ax.get_xlabel() == "y (mm)" and ax.get_ylabel() == "x (mm), downwards"
+    r = solve(MAIN_JOB)
+    free = solve(MAIN_JOB.replace(payloads=tuple(p.scaled(0.0) for p in MAIN_JOB.payloads), gravity=False), pressure=r.pressure)
+    loaded = drawn.labelled(ax, f"loaded: {r.total_angle_deg:.1f} deg")
+    np.testing.assert_allclose(drawn.data(loaded), r.centreline[:, [1, 0]], rtol=1e-12, atol=1e-12)
+    unloaded = drawn.labelled(ax, f"unloaded: {free.total_angle_deg:.1f} deg")
+    np.testing.assert_allclose(drawn.data(unloaded), free.centreline[:, [1, 0]], rtol=1e-12, atol=1e-12)
+    assert drawn.legend(ax) == [unloaded.get_label(), loaded.get_label()]
 
 
 def test_main_job_json(capsys, tmp_path, monkeypatch):
@@ -194,7 +209,7 @@ def test_validate_writes_and_checks(capsys, tmp_path):
 
 def test_committed_validation_page_is_fresh(capsys):
     code, _, err = run(capsys, "validate", "--check")
-    assert code == EXIT_OK, f"{DOC_PATH} is stale: run `esba validate` and commit it ({err.strip()})"
+    assert code == EXIT_OK, f"{VALIDATION_PAGE} is stale: run `esba validate` and commit it ({err.strip()})"
 
 
 def test_pressure_table_says_what_the_pressure_is_for(capsys):

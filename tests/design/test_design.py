@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -29,9 +30,10 @@ from esba.design.optimise import (
     term_curvatures,
 )
 from esba.model.scene import Actuator, Scene
-from esba.pages.design import DOC_COMMAND, DOC_PATH
+from esba.pages.design import DOC_COMMAND
 from esba.solvers.pso import PSOOptions
 from esba.statics.equilibrium import pressure_for_angle
+from tests.figures import drawn
 from tests.tolerances import AGREE_MM, AGREE_REL, SAME_K_REL, SENSITIVITY_REL
 
 #: The paper's problem's optimum (n = 3, Table 1, 2 N horizontal, 90 deg), from IPOPT; PSO and the
@@ -326,7 +328,8 @@ def test_cli_json_keys(capsys):
     assert d["active_constraints"][0]["name"] == "d_min"
 
 
-def test_cli_both_with_plot(capsys, tmp_path):
+def test_cli_both_with_plot(capsys, tmp_path, monkeypatch):
+    saved = drawn.record_saved(monkeypatch)
     fig = tmp_path / "design.png"
     code, out, err = _run(
         capsys, "--method", "both", "--objective", "pressure", "--min-stiffness", "40", "--iterations", "30", "--json", "--plot", str(fig)
@@ -336,7 +339,13 @@ def test_cli_both_with_plot(capsys, tmp_path):
     assert d["method"] == "both"
     assert d["ipopt"]["method"] == "ipopt" and d["pso"]["method"] == "pso"
     assert set(d["differences"]) >= {"r2_mm", "d_mm", "objective_rel", "time_ratio_pso_over_ipopt", "agree"}
-    assert fig.exists() and fig.stat().st_size > 10_000
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the figure marks both designs where the JSON says they are, over the stiffness map with K_min
+    ax = drawn.axes(saved[fig.resolve()])[0]
+    for method in ("ipopt", "pso"):
+        (marker,) = drawn.starting(ax, f"{method} ({d[method]['status']}): r2 = ")
+        assert drawn.points(marker) == [[pytest.approx(d[method]["r2_mm"]), pytest.approx(d[method]["d_mm"])]]
+    assert ax.get_xlabel() == "chamber radius r2 (mm)" and ax.texts  # the K_min contour is labelled
 
 
 def test_cli_table(capsys):
@@ -384,22 +393,43 @@ def test_cli_bad_input_exits_2_in_one_line(capsys, argv, needle):
 # figures and the page
 
 
-def test_figures_write_pngs(tmp_path):
+def test_fig13a_shows_the_angle_map_and_the_table1_design():
+    from matplotlib.contour import ContourSet
+
     from esba.figures import design as f
 
-    paths = [
-        f.figure_13a(tmp_path, points=12),
-        f.figure_14(tmp_path, pso_options=PSOOptions(iterations=5)),
-    ]
-    for p in paths:
-        assert p.exists() and p.stat().st_size > 10_000
-    grid, K = f.stiffness_map(points=8)
-    assert grid.shape[0] == K.shape[0] and np.all(np.isfinite(K))
-    assert np.all(grid.sum(axis=1) < 8.0)
+    fig = f.draw_13a(points=12)
+    ax = drawn.axes(fig)[0]
+    assert ax.get_xlabel() == "chamber radius r2 (mm)" and ax.get_ylabel() == "eccentric distance d (mm)"
+    assert drawn.points(drawn.labelled(ax, "Table 1 (r2 = 3, d = 4 mm)")) == [[3.0, 4.0]]
+    assert [[0.0, 0.0], [8.0, 0.0], [0.0, 8.0], [0.0, 0.0]] in [drawn.points(ln) for ln in drawn.lines(ax)]  # the design space
+    filled = [c for c in ax.collections if isinstance(c, ContourSet) and c.filled]
+    assert len(filled) == 1 and list(filled[0].levels) == list(np.arange(0.0, 721.0, 45.0))
+    assert [a.get_ylabel() for a in fig.axes if a is not ax] == ["free bending angle (deg)"]  # the colour bar
+
+
+def test_fig14_shows_the_swarm_it_ran():
+    from matplotlib.collections import PathCollection
+
+    from esba.figures import design as f
+
+    options = PSOOptions(iterations=5)
+    fig = f.draw_14(pso_options=options, map_points=8)
+    run = optimise_pso(DesignProblem(), pso_options=options)  # seeded: the same swarm
+    h = run.pso.history
+    ax, ax2 = drawn.axes(fig)
+    swarm = [c for c in ax.collections if isinstance(c, PathCollection)]
+    assert len(swarm) == h.positions.shape[0]  # one scatter per iteration
+    for c, positions in zip(swarm, h.positions):
+        np.testing.assert_array_equal(c.get_offsets(), positions)
+    np.testing.assert_array_equal(drawn.data(drawn.labelled(ax, "swarm's best so far")), h.best_position)
+    (best,) = drawn.lines(ax2)
+    np.testing.assert_array_equal(drawn.xy(best)[1], -h.best_value)
+    assert ax2.get_xlabel() == "iteration" and ax2.get_ylabel() == "swarm's best stiffness (N/m)"
 
 
 def test_design_page_names_its_command_and_the_optimum():
-    text = DOC_PATH.read_text(encoding="utf-8")
+    text = (Path(__file__).resolve().parents[2] / "docs" / "design.md").read_text(encoding="utf-8")
     assert DOC_COMMAND in text
     assert f"r2 = {OPTIMUM['r2']:.4f} mm, d = 0.0000 mm, K = {OPTIMUM['K']:.4f} N/m" in text
 

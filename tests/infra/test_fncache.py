@@ -1,4 +1,4 @@
-"""Built CasADi Functions kept in the cache (issue 9): read back identical, rebuilt when damaged or
+"""Built CasADi Functions kept in the cache: read back identical, rebuilt when damaged or
 when what built them changed, and a cache that cannot be written costs only the speed."""
 
 from __future__ import annotations

@@ -50,7 +50,7 @@ def test_clean_table2_solve_has_none(capsys, tmp_path, monkeypatch):
 
 
 def test_pressure_5_solves_and_warns(capsys, tmp_path, monkeypatch):
-    """The issue's case: 8968 degrees of bend, exit 0, a warning line per finding and the list in JSON."""
+    """A pressure far outside the model's range: 8968 degrees of bend, exit 0, a warning line per finding and the list in JSON."""
     monkeypatch.chdir(tmp_path)
     assert main(["solve", "--pressure", "5", "--no-plot", "--json"]) == EXIT_OK
     out, err = capsys.readouterr()

@@ -1,4 +1,4 @@
-"""Path following (issue 8): buckling against a closed form, branch switching, folds located two ways
+"""Path following: buckling against a closed form, branch switching, folds located two ways
 and from both directions, Morse indices, hysteresis of quasi-static loading, quadratic correctors.
 """
 
@@ -125,7 +125,7 @@ def test_transcritical_buckling_one_side_folds():
 
 
 def test_99_percent_stays_straight_101_percent_buckles():
-    """The issue's case: n = 4, 3.1733 N along the axis is 99 % of the buckling load."""
+    """Near buckling: n = 4, 3.1733 N along the axis is 99 % of the buckling load."""
     f_cr = column_buckling_load(4)
     assert 3.1733 / f_cr == pytest.approx(0.99, abs=1e-4)
     straight = solve(column(4, 0.99 * f_cr))

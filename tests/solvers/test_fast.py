@@ -1,4 +1,4 @@
-"""The fast paths (issue 9) give the answers of the reference paths: the O(n) structured solves against
+"""The fast paths give the answers of the reference paths: the O(n) structured solves against
 dense LAPACK, the compiled ramp against the adaptive path trace, the NumPy centre-line against the
 generated Function, the combined state call against the single ones, and the BLAS thread setting is
 restored after each call.
@@ -130,7 +130,7 @@ def test_blas_threads_are_restored_after_a_solve():
 
 
 def test_help_imports_no_numerics():
-    """``esba --help`` and every ``esba CMD --help`` start without CasADi, NumPy or SymPy (issue 9)."""
+    """``esba --help`` and every ``esba CMD --help`` start without CasADi, NumPy or SymPy."""
     import subprocess
     import sys
 
@@ -151,19 +151,3 @@ def test_help_imports_no_numerics():
     )
     out = subprocess.run([sys.executable, "-c", script, *names], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]", out
-
-
-def test_the_benchmark_gives_no_ratio_for_a_naive_answer_that_is_wrong():
-    """The naive BFGS at n = 16 stops at theta = 0: its time is not that of a solve, so the table
-    says so instead of a speed-up."""
-    from esba.bench.solve import solve_table
-
-    rows = [
-        {"call": "solve(), Table 2 scene, n = 3", "n": 3, "esba_s": 1e-3, "naive_s": 4e-3, "compiled_s": 4e-5, "ok": True,
-         "naive_result": {"converged": True, "tip_error_mm": 1e-6, "iterations": 7}},
-        {"call": "solve(), Table 2 scene, n = 16", "n": 16, "esba_s": 2e-3, "naive_s": 2e-2, "compiled_s": 8e-5, "ok": True,
-         "naive_result": {"converged": False, "tip_error_mm": 8.4, "iterations": 0}},
-    ]
-    lines = solve_table({"rows": rows, "growth_16_128": None}).splitlines()
-    assert lines[2].split()[-3] == "4x" and lines[3].split()[-3] == "wrong"
-    assert "n = 16: BFGS stops after 0 iterations, its tip 8.4 mm from esba's" in lines[-1]

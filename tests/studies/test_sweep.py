@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 from esba.cli import main
-from esba.figures.sweeps import fig12, sweep_figure
+from esba.figures.sweeps import FIG12_D, FIG12_R2, fig12, sweep_figure
 from esba.model.scene import Actuator, Payload, Scene
 from esba.statics.batch import BatchOptions
 from esba.statics.equilibrium import pressure_for_angle, solve
 from esba.studies.sweep import AXES, SweepError, parse_values, sweep
+from tests.figures import drawn
 from tests.tolerances import BATCH_THETA_ATOL
 
 INTERPRETED = BatchOptions(compile="never")
@@ -90,12 +91,24 @@ def test_fig12_trends_are_the_papers():
     by_r2 = sweep(Scene(pressure=0.2), r2=[2.0, 4.0], d=2.0, options=INTERPRETED).total_angle_deg
     by_d = sweep(Scene(pressure=0.2), r2=2.0, d=[2.0, 4.0], options=INTERPRETED).total_angle_deg
     assert by_r2[1] - by_r2[0] > by_d[1] - by_d[0] > 0
-    assert len(fig.axes) == 2
+    # the figure shows each sweep: (a) the angle against r2 per d, (b) against d per r2
+    ax_a, ax_b = fig.axes
+    assert ax_a.get_xlabel() == "chamber radius r2 (mm)" and ax_b.get_xlabel() == "eccentric distance d (mm)"
+    for ax, axis, group, name, values in ((ax_a, "r2", sweeps["r2"], "d", FIG12_D), (ax_b, "d", sweeps["d"], "r2", FIG12_R2)):
+        assert drawn.legend(ax) == [f"{name} = {v:g} mm" for v in values]
+        for line, s in zip(drawn.lines(ax), group):
+            np.testing.assert_array_equal(drawn.xy(line)[0], s.points[axis])
+            np.testing.assert_array_equal(drawn.xy(line)[1], s.total_angle_deg)
 
 
 def test_sweep_figure(tmp_path):
     s = sweep(Scene(pressure=0.1), payload=[0.0, 1.0, 2.0], payload_angle=[0.0, 90.0], options=INTERPRETED)
-    assert len(sweep_figure(s, traced=False).axes[0].lines) == 2  # one line per curve
+    flat = sweep_figure(s, traced=False).axes[0]
+    assert len(flat.lines) == 2  # one line per curve: the angle against the payload, per payload angle
+    for line, omega in zip(flat.lines, (0.0, 90.0)):
+        at = np.isclose(s.points["payload_angle"], omega)
+        np.testing.assert_array_equal(drawn.xy(line)[0], s.points["payload"][at])
+        np.testing.assert_array_equal(drawn.xy(line)[1], s.total_angle_deg[at])
     fig = sweep_figure(s)  # each curve a traced branch, the grid points as markers
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert labels[:2] == ["payload_angle = 0 deg", "payload_angle = 90 deg"]
@@ -144,11 +157,16 @@ def test_cli_sweep_usage_errors(capsys):
     assert main(["sweep", "--pressure", "0.1", "--out", "x.txt", "--no-compile", "--no-progress"]) == 2
 
 
-def test_cli_fig12(tmp_path, capsys):
+def test_cli_fig12(tmp_path, capsys, monkeypatch):
+    saved = drawn.record_saved(monkeypatch)
     out = tmp_path / "fig12.png"
     assert main(["sweep", "--fig12", str(out), "--no-compile", "--no-progress"]) == 0
-    assert out.stat().st_size > 10_000
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "7 curves" in capsys.readouterr().out
+    ax_a, ax_b = saved[out.resolve()].axes
+    assert len(drawn.lines(ax_a)) == len(FIG12_D) and len(drawn.lines(ax_b)) == len(FIG12_R2)
+    for line, d in zip(drawn.lines(ax_a), FIG12_D):  # each curve runs to the design-space edge
+        assert drawn.xy(line)[0][-1] == pytest.approx(8.0 - d - 0.05) and np.all(np.isfinite(drawn.xy(line)[1]))
 
 
 @pytest.mark.slow

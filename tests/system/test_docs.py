@@ -109,3 +109,21 @@ def test_every_package_of_the_source_is_installed():
     listed = set(data["tool"]["setuptools"]["packages"])
     found = {".".join(p.parent.relative_to(ROOT).parts) for top in ("esba", "derive") for p in (ROOT / top).rglob("__init__.py")}
     assert found <= listed, f"add {sorted(found - listed)} to [tool.setuptools] packages"
+
+
+def test_architecture_page_draws_the_floors_of_the_layer_test_and_is_linked():
+    from tests.system.test_layers import FLOORS
+
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    assert "(docs/architecture.md)" in README
+    drawn = {}
+    for floor, names in re.findall(r"^ +(\d+) +([a-z]+(?: +[a-z]+)?) {2,}", text, flags=re.M):
+        for name in names.split():
+            drawn[name] = int(floor)
+    assert drawn == FLOORS
+    for name in FLOORS:  # a row of the package table each
+        assert f"\n| `{name}` |" in text, name
+    covered = set()
+    for a, b in re.findall(r"^\| Eq\. (\d+)(?:-(\d+))? \|", text, flags=re.M):
+        covered |= set(range(int(a), int(b or a) + 1))
+    assert covered == set(range(1, 20)), sorted(set(range(1, 20)) - covered)  # every equation of the paper has a row

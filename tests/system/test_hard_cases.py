@@ -1,8 +1,8 @@
-"""Hard cases stay numerically stable (issue 5).
+"""Hard cases stay numerically stable.
 
 Each returns a finite, stability-flagged equilibrium or a clear error; none gives NaN or a silent
 wrong answer. The batch path (:mod:`esba.statics.batch`) is checked against :func:`esba.statics.equilibrium.solve`
-on the same scenes. n = 128 and the 10 N load paths in every direction are slow studies.
+on the same scenes. n = 128 and the 10 N load paths in every direction are slow tests.
 """
 
 from __future__ import annotations
@@ -14,9 +14,10 @@ import pytest
 from scipy.optimize import brentq
 
 from esba.model.scene import Actuator, Payload, Scene
+from esba.paths.loading import history
+from esba.paths.problem import PathProblem
 from esba.statics.batch import BatchOptions, solve_scenes
 from esba.statics.equilibrium import EquilibriumError, solve
-from esba.studies.sweep import load_path
 from tests.tolerances import (
     BATCH_THETA_ATOL,
     EQUILIBRIUM_GRAD_ATOL,
@@ -234,41 +235,55 @@ def test_bistable_directions_show_hysteresis():
     assert on.ok and np.linalg.norm(on.tip[:2] - by_load.tip[:2]) < 10.0
 
 
+def _load_ramp(scene):
+    """The scene's payloads raised from 0 to full at its pressure (:func:`esba.paths.loading.history`):
+    the ramp and, over its stable pieces, the load factors, angles, smallest Hessian eigenvalues and kinds."""
+    unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False))
+    assert unloaded.ok, unloaded.message
+    problem = PathProblem.from_scene(scene, "load", pressure=unloaded.pressure)
+    (ramp,) = history(problem, unloaded.theta, 0.0, [1.0])
+    factors = np.concatenate([b.lam for b in ramp.pieces])
+    theta = np.vstack([b.theta for b in ramp.pieces])
+    min_eigenvalue = np.concatenate([b.eigenvalues[:, 0] for b in ramp.pieces])
+    kind = np.concatenate([b.kind for b in ramp.pieces])
+    return ramp, factors, theta, min_eigenvalue, kind
+
+
 def test_load_reverses_the_bend_continuously():
     """10 N horizontal on the 90 degree actuator: the bend reverses (total angle < 0) without a jump."""
     scene = TABLE2.replace(payloads=(Payload(10.0, 90.0),))
-    path = load_path(scene)
-    assert path.ok and path.continuous, path.jumps
-    total = np.degrees(path.theta.sum(axis=1))
+    ramp, _, theta, min_eigenvalue, _ = _load_ramp(scene)
+    assert ramp.reached and not ramp.jumps, ramp.jumps
+    total = np.degrees(theta.sum(axis=1))
     assert total[0] == pytest.approx(90.0, abs=1e-6) and total[-1] < -40.0
     assert np.all(np.diff(total) < 0)  # monotonic through zero
-    assert np.all(path.min_eigenvalue > 0)
-    np.testing.assert_allclose(solve(scene).theta, path.theta[-1], atol=BATCH_THETA_ATOL)
+    assert np.all(min_eigenvalue > 0)
+    np.testing.assert_allclose(solve(scene).theta, theta[-1], atol=BATCH_THETA_ATOL)
 
 
 def test_snap_through_is_reported():
     """A nearly straight actuator pushed along its axis buckles: the path jumps, and says where."""
     scene = Scene(pressure=1e-3, payloads=(Payload(10.0, 180.0),))
-    path = load_path(scene)
-    assert path.ok and not path.continuous
-    (jump,) = path.jumps
-    assert 0.25 < jump["from_factor"] < 0.33  # about 2.9 N
-    assert jump["distance_mm"] > 50.0
-    before = path.min_eigenvalue[path.factors <= jump["from_factor"]]
+    ramp, factors, theta, min_eigenvalue, _ = _load_ramp(scene)
+    assert ramp.reached and ramp.jumps
+    (jump,) = ramp.jumps
+    assert 0.25 < jump.lam < 0.33  # about 2.9 N
+    assert jump.distance_mm > 50.0
+    before = min_eigenvalue[factors <= jump.lam]
     assert before[-1] < 0.05 * before[0]  # the stiffness was vanishing: a fold, not a solver hiccup
     r = solve(scene)  # solve() follows the same snap and notes it
     assert r.ok and any("jump" in note for note in r.notes)
-    np.testing.assert_allclose(r.theta, path.theta[-1], atol=BATCH_THETA_ATOL)
+    np.testing.assert_allclose(r.theta, theta[-1], atol=BATCH_THETA_ATOL)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("omega", [pytest.param(om, marks=pytest.mark.ci) if om % 90 == 0 else om for om in range(0, 360, 15)])
 def test_large_load_in_every_direction(omega):
     """10 N from every direction: each path is continuous, or its jumps are reported; never NaN."""
-    path = load_path(TABLE2.replace(payloads=(Payload(10.0, float(omega)),)))
-    assert path.ok, path.message
-    held = path.kind != "fold"  # a fold is where the stable state ends: its critical eigenvalue is 0
-    assert np.all(np.isfinite(path.theta)) and np.all(path.min_eigenvalue[held] > 0)
-    assert np.all(np.abs(path.min_eigenvalue[~held]) < 1e-6 * np.max(path.min_eigenvalue))
-    for j in path.jumps:
-        assert j["distance_mm"] > 2.0 and 0.0 <= j["from_factor"] < j["to_factor"] <= 1.0
+    ramp, _, theta, min_eigenvalue, kind = _load_ramp(TABLE2.replace(payloads=(Payload(10.0, float(omega)),)))
+    assert ramp.reached, ramp.message
+    held = kind != "fold"  # a fold is where the stable state ends: its critical eigenvalue is 0
+    assert np.all(np.isfinite(theta)) and np.all(min_eigenvalue[held] > 0)
+    assert np.all(np.abs(min_eigenvalue[~held]) < 1e-6 * np.max(min_eigenvalue))
+    for j in ramp.jumps:
+        assert j.distance_mm > 2.0 and 0.0 <= j.lam < j.lam_after <= 1.0

@@ -1,4 +1,4 @@
-"""Property-based tests over the parameter box (issue 5), with hypothesis.
+"""Property-based tests over the parameter box, with hypothesis.
 
 The box: r2 in [0.05, 7] mm with d up to r1 - r2 - 0.05 mm, rho in [0, 40] deg, P in [0, 0.2] MPa,
 one payload of 0-3 N in any direction anywhere along the actuator, n in {1, 2, 3, 5, 8}. The

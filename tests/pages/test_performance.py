@@ -1,0 +1,101 @@
+"""docs/performance.md (esba.pages.performance): its sections, rendered from benchmark data, checked times aside.
+
+The benchmarks themselves take minutes; these tests feed the renderers data of the benchmarks'
+shape, and check the committed page's structure. ``esba docs --check performance`` reruns them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from esba.bench.path import PathBenchRow
+from esba.bench.timing import GenerationRow
+from esba.pages.page import MASK, TIMES, matches
+from esba.pages.performance import PAGE, SECTIONS, PathSettings, SolveSettings, path_table, solve_table
+from esba.pages.sections import read_sections
+
+ROOT = Path(__file__).resolve().parents[2]
+
+SOLVE_ROWS = [
+    {"call": "solve(), Table 2 scene, n = 3", "n": 3, "esba_s": 1e-3, "naive_s": 4e-3, "compiled_s": 4e-5, "ok": True,
+     "naive_result": {"converged": True, "tip_error_mm": 1e-6, "iterations": 7}},
+    {"call": "solve(), Table 2 scene, n = 16", "n": 16, "esba_s": 2e-3, "naive_s": 2e-2, "compiled_s": 8e-5, "ok": True,
+     "naive_result": {"converged": False, "tip_error_mm": 8.4, "iterations": 0}},
+]
+
+
+def _slower(rows: list[dict], factor: float) -> list[dict]:
+    """The same rows with every time multiplied: another run of the same benchmark."""
+    out = []
+    for r in rows:
+        r = dict(r)
+        for k in ("esba_s", "naive_s", "compiled_s"):
+            if r[k] is not None:
+                r[k] *= factor
+        out.append(r)
+    return out
+
+
+def test_the_benchmark_gives_no_ratio_for_a_naive_answer_that_is_wrong():
+    """The naive BFGS at n = 16 stops at theta = 0: its time is not that of a solve, so the table
+    says so instead of a speed-up."""
+    lines = solve_table({"rows": SOLVE_ROWS, "growth_16_128": None}).splitlines()
+    assert lines[2].split()[-3] == "4x" and lines[3].split()[-3] == "wrong"
+    assert "n = 16: BFGS stops after 0 iterations, its tip 8.4 mm from esba's" in lines[-1]
+
+
+def test_a_section_is_checked_times_aside():
+    """Another run's times (other widths too) pass the check; another answer of the naive script does not."""
+    settings = SolveSettings()
+    data = {"rows": SOLVE_ROWS, "growth_16_128": 0.73}
+    template = PAGE.section("solve", data, settings, MASK)
+    for factor in (1.0, 3.7, 140.0):
+        other = {"rows": _slower(SOLVE_ROWS, factor), "growth_16_128": 0.91}
+        assert matches(template, PAGE.section("solve", other, settings, TIMES)), factor
+    wrong = [dict(r) for r in SOLVE_ROWS]
+    wrong[1] = dict(wrong[1], naive_result={"converged": False, "tip_error_mm": 9.1, "iterations": 0})
+    assert not matches(template, PAGE.section("solve", {"rows": wrong, "growth_16_128": 0.73}, settings, TIMES))
+    # the command a section names is content
+    other_command = dataclasses.replace(settings, command="esba bench solve --repeat 3 --markdown docs/performance.md")
+    assert not matches(template, PAGE.section("solve", data, other_command, TIMES))
+
+
+def test_path_section_checks_the_counts_not_the_times():
+    row = PathBenchRow(n=3, points=34, folds=2, evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=0.2, compiled_eval_us=1.2)
+    template = PAGE.section("path", [row], PathSettings(), MASK)
+    faster = dataclasses.replace(row, trace_s=0.0012, ipopt_s=0.5, naive_s=12.0, compiled_eval_us=0.9)
+    assert matches(template, PAGE.section("path", [faster], PathSettings(), TIMES))
+    assert not matches(template, PAGE.section("path", [dataclasses.replace(row, evaluations=146)], PathSettings(), TIMES))
+    assert "   3     34     2    145" in path_table([row])
+
+
+def test_writing_a_section_keeps_the_others(tmp_path):
+    page = tmp_path / "performance.md"
+    PAGE.write_section(page, "solve", {"rows": SOLVE_ROWS, "growth_16_128": None}, SolveSettings())
+    row = PathBenchRow(n=3, points=34, folds=2, evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=None, compiled_eval_us=None)
+    PAGE.write_section(page, "path", [row], PathSettings())
+    PAGE.write_section(page, "solve", {"rows": _slower(SOLVE_ROWS, 2.0), "growth_16_128": None}, SolveSettings())
+    _, sections = read_sections(page.read_text())
+    assert [k for k, _ in sections] == ["solve", "path"]
+    assert "  3     34     2    145" in dict(sections)["path"]
+
+
+def test_the_whole_page_renders_its_sections_in_order():
+    gen = GenerationRow(n=16, derive_s=0.5, emit_s=0.2, total_s=0.7, assignments=100, instructions={"energy": 2318, "gradient": 3987, "hessian": 6510},
+                        ad_hessian_instructions=6585, naive_s=3.5, call_us={"energy": 43.0, "gradient": 46.2, "hessian": 49.4})
+    row = PathBenchRow(n=3, points=34, folds=2, evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=None, compiled_eval_us=None)
+    data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row]}
+    text = PAGE.render(data, PAGE.settings(), ROOT / "docs" / "performance.md").text
+    _, sections = read_sections(text)
+    assert tuple(k for k, _ in sections) == SECTIONS
+    assert "2318       3987       6510     6585" in text
+
+
+def test_the_committed_page_has_every_section_written_by_its_command():
+    text = (ROOT / "docs" / "performance.md").read_text(encoding="utf-8")
+    _, sections = read_sections(text)
+    assert tuple(k for k, _ in sections) == SECTIONS
+    settings = PAGE.settings()
+    for key, block in sections:
+        assert f"<!-- Written by `{settings[key].command}`; rerun it to refresh. -->" in block
