@@ -30,7 +30,7 @@ import numpy as np
 from derive.effects import EffectSet
 from esba.model.closed_form import unloaded_pressure
 from esba.model.generated import Model, load_model
-from esba.solvers.newton import Acceptance, natural_expression, newton_correction, newton_parts
+from esba.solvers.newton import Acceptance, correction_function, natural_expression, parts_function
 
 from .problem import DEFAULT_DESIGN_OPTIONS, DesignOptions, DesignProblem
 
@@ -85,6 +85,21 @@ class DesignModel:
         (:func:`esba.model.closed_form.unloaded_pressure`)."""
         return unloaded_pressure(self.model, Theta, self.values(r2, d, 0.0, 0.0))
 
+    def kernels(self) -> tuple[ca.Function, ca.Function]:
+        """The engine's Newton kernels (:func:`esba.solvers.newton.parts_function`,
+        :func:`~esba.solvers.newton.correction_function`) of this design's model, in z = (r2, d, P, F):
+        the fixed parameters are constants of the graph, so CasADi folds them (a swarm evaluates
+        thousands of designs)."""
+
+        def build() -> tuple[ca.Function, ca.Function]:
+            th = ca.SX.sym("theta", self.n)
+            z = ca.SX.sym("z", 4)
+            G = ca.Function("G", [th, z], [self.grad(th, z[0], z[1], z[2], z[3])])
+            H = ca.Function("H", [th, z], [self.hess(th, z[0], z[1], z[2], z[3])])
+            return parts_function(G, H, "design_parts"), correction_function(G, H, "design_correction")
+
+        return self.model.derived("design_kernels", build, settings=design_model_key(self.problem), persist=False)
+
     def stiffness_expr(self, theta_s, theta_l):
         """K = 1000 F / delta (N/m), delta = tip displacement along the payload (mm)."""
         delta = ca.dot(ca.DM(self.u), self.tip(theta_l) - self.tip(theta_s))
@@ -124,16 +139,15 @@ class _Evaluator:
     def _single(self, steps: int) -> ca.Function:
         """One design -> P, loaded theta, K, residual, loaded Hessian, smallest pivot, worst contraction, worst jump."""
         pc, n, F = self.pieces, self.pieces.n, self.problem.payload_n
-        model = pc.model
         x = ca.MX.sym("x", 2)
         r2, d = x[0], x[1]
         start = math.radians(self.problem.start_angle_deg)
         P = pc.pressure_closed(start, r2, d)
         theta_s = ca.DM.ones(n) * (start / n)
-        p0 = pc.params(r2, d, P, 0.0)
+        parts, correction = pc.kernels()
         # the payload ramp from the unloaded state on the engine: accepted by the one rule, or refused
         theta, g, low, contraction, _, jump = natural_expression(
-            newton_parts(model), ca.MX(theta_s), p0, pc.params(r2, d, P, F) - p0, 1.0, steps, self.options.newton_steps, 2, newton_correction(model)
+            parts, ca.MX(theta_s), ca.vertcat(r2, d, P, 0.0), ca.vertcat(0.0, 0.0, 0.0, F), 1.0, steps, self.options.newton_steps, 2, correction
         )
         K = pc.stiffness_expr(theta_s, theta)
         hess = pc.hess(theta, r2, d, P, F)

@@ -127,7 +127,7 @@ class Branch:
     theta : ndarray, shape (m, n)
         Segment angles, rad.
     tip : ndarray, shape (m, 3)
-        Tip x, y (mm) and orientation (rad).
+        Tip x, y (mm) and orientation (rad), computed on first use (``tips``).
     arclength : ndarray, shape (m,)
         Scaled arclength from the start.
     eigenvalues : ndarray, shape (m, n)
@@ -161,7 +161,7 @@ class Branch:
     unit: str
     lam: np.ndarray
     theta: np.ndarray
-    tip: np.ndarray
+    tips: Callable[[], np.ndarray] = field(repr=False)
     arclength: np.ndarray
     spectrum: Callable[[], np.ndarray] = field(repr=False)
     min_pivot: np.ndarray
@@ -179,6 +179,11 @@ class Branch:
 
     def __len__(self) -> int:
         return len(self.lam)
+
+    @cached_property
+    def tip(self) -> np.ndarray:
+        """Tip x, y (mm) and orientation (rad) per point, shape (m, 3) (computed on first use)."""
+        return np.asarray(self.tips(), dtype=float).reshape(len(self), 3)
 
     @cached_property
     def eigenvalues(self) -> np.ndarray:

@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -565,7 +566,7 @@ def _branch(
         unit=prob.unit,
         lam=lam,
         theta=theta,
-        tip=prob.tips(theta, lam) if m else np.zeros((0, 3)),
+        tips=(lambda: prob.tips(theta, lam)) if m else (lambda: np.zeros((0, 3))),
         arclength=np.array(arclength, dtype=float),
         spectrum=_spectrum_of(prob, theta, lam, known),
         min_pivot=np.array([pt.min_pivot for pt in points], dtype=float),
@@ -650,6 +651,7 @@ class PALC:
             raise PathError(f"options={self.options!r}: expected a PathOptions")
 
 
+@single_threaded
 def continuation(
     problem: PathProblem,
     theta0: Sequence[float],
@@ -693,11 +695,18 @@ def continuation(
     lam0 = checks.finite("lam0", lam0, PathError)
     theta0 = _check_vector("theta0", theta0, problem.n)
     _interval(problem, lam0, to, None)
-    return _natural(problem, theta0, lam0, float(to), algorithm, label)
+    return natural_branch(problem, theta0, lam0, float(to), algorithm, label)
 
 
-@single_threaded
-def _natural(problem: PathProblem, theta0: np.ndarray, lam0: float, to: float, alg: Natural, label: str) -> Branch:
+@lru_cache(maxsize=64)
+def _natural_kinds(m: int) -> np.ndarray:
+    out = np.array(["start"] + ["regular"] * (m - 2) + ["end"], dtype=str)
+    out.flags.writeable = False
+    return out
+
+
+def natural_branch(problem: PathProblem, theta0: np.ndarray, lam0: float, to: float, alg: Natural, label: str = "") -> Branch:
+    """:func:`continuation` with :class:`Natural` on checked inputs (``theta0`` the equilibrium at ``lam0``)."""
     model = problem.model
     run = run_natural(model, theta0, problem.params(lam0), problem.dp, to - lam0, alg.steps, alg.newton, alg.final)
     lam = lam0 + (to - lam0) * np.arange(alg.steps + 1) / alg.steps
@@ -722,18 +731,17 @@ def _natural(problem: PathProblem, theta0: np.ndarray, lam0: float, to: float, a
     iterations = np.full(m, alg.newton, dtype=int)
     iterations[0] = 0
     iterations[-1] += alg.final
-    kinds = ["start"] + ["regular"] * (m - 2) + ["end"]
     return Branch(
         name=problem.name,
         unit=problem.unit,
         lam=lam,
         theta=theta,
-        tip=problem.tips(theta, lam) if finite else np.full((m, 3), np.nan),
+        tips=(lambda: problem.tips(theta, lam)) if finite else (lambda: np.full((m, 3), np.nan)),
         arclength=np.abs(lam - lam0) / max(abs(to - lam0), 1e-300),
         spectrum=_spectrum_of(problem, theta, lam, {}),
         min_pivot=rel,
         morse=morse,
-        kind=np.array(kinds, dtype=str),
+        kind=_natural_kinds(m),
         special=(),
         stopped=stopped,
         stop_reason=reason,

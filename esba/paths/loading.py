@@ -44,7 +44,7 @@ from esba.model.generated import near_domain_bound
 from esba.model.stability import morse_index
 from esba.solvers.minimise import minimise
 
-from .continuation import DEFAULT_PATH_OPTIONS, Branch, Natural, PathError, PathOptions, PathProblem, SpecialPoint, continuation, crossing_start, trace
+from .continuation import DEFAULT_PATH_OPTIONS, Branch, Natural, PathError, PathOptions, PathProblem, SpecialPoint, crossing_start, natural_branch, trace
 from .corrector import Corrector
 
 __all__ = ["Jump", "Ramp", "follow", "history"]
@@ -280,7 +280,7 @@ def follow(
     if natural is not None:
         if not isinstance(natural, Natural):
             raise PathError(f"natural={natural!r}: expected a Natural() or None")
-        fast = continuation(problem, theta, lam, to=to, algorithm=natural, label="stable")
+        fast = natural_branch(problem, theta, lam, to, natural, "stable")
         if fast.stopped == "bound":
             return Ramp(problem, float(lam0), to, to, fast.theta[-1].copy(), True, (), (), (fast,), "", 0, "Natural")
     direction = 1.0 if to >= lam else -1.0

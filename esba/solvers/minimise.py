@@ -28,7 +28,7 @@ import numpy as np
 
 from esba.model.generated import Model
 
-from .newton import newton_parts
+from .newton import newton_correction
 
 __all__ = ["Minimum", "minimise", "ipopt_solver", "LINEAR_SOLVERS"]
 
@@ -98,10 +98,9 @@ class Minimum:
 def polish(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, steps: int = 4) -> np.ndarray:
     """A few Newton steps on the exact Hessian while it is positive definite, inside the domain and
     each step reduces max |dU/dtheta| (one call per step: g, the step and the smallest pivot, solved
-    in O(n) from the Hessian's structure, :func:`esba.solvers.newton.newton_parts`)."""
-    parts = newton_parts(model)
-    zero = np.zeros(len(pv))
-    g, step, _, pivot, _, _ = (np.asarray(v, dtype=float).ravel() for v in parts(theta, pv, zero))
+    in O(n) from the Hessian's structure, :func:`esba.solvers.newton.newton_correction`)."""
+    correction = newton_correction(model)
+    g, step, pivot = (v.full().ravel() for v in correction(theta, pv))
     for _ in range(steps):
         gnorm = float(np.max(np.abs(g)))
         if not gnorm >= 1e-13 or not pivot[0] > 0:  # stationary to round-off, not finite, or not convex here
@@ -109,7 +108,7 @@ def polish(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, ste
         new = theta - step
         if np.any(new <= lbx) or not np.all(np.isfinite(new)):
             break
-        g2, step2, _, pivot2, _, _ = (np.asarray(v, dtype=float).ravel() for v in parts(new, pv, zero))
+        g2, step2, pivot2 = (v.full().ravel() for v in correction(new, pv))
         if not float(np.max(np.abs(g2))) < gnorm:
             break
         theta, g, step, pivot = new, g2, step2, pivot2

@@ -339,10 +339,12 @@ def run_natural(model: Model, theta0: np.ndarray, p0: np.ndarray, dp: np.ndarray
     fun = natural_function(model, steps, newton, final)
     with np.errstate(invalid="ignore"):
         theta, g, low, worst, states, jump = fun(np.asarray(theta0, dtype=float), p0, dp, float(lam1))
-    theta = np.asarray(theta, dtype=float).ravel()
-    g = np.asarray(g, dtype=float).ravel()
-    gnorm = float(np.max(np.abs(g))) if np.all(np.isfinite(g)) else float("inf")
-    return NaturalRun(theta, gnorm, float(low), float(worst), np.asarray(states, dtype=float).T.reshape(steps, model.n), float(jump))
+    theta = theta.full().ravel()
+    g = g.full().ravel()
+    gnorm = float(np.max(np.abs(g)))
+    if not gnorm < math.inf:
+        gnorm = math.inf
+    return NaturalRun(theta, gnorm, float(low), float(worst), states.full().T, float(jump))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -45,7 +45,7 @@ from esba.infra import checks
 from esba.infra.errors import EquilibriumError, InputError
 from esba.infra.threads import single_threaded
 from esba.model import resolution
-from esba.model.closed_form import pressure_for_angle
+from esba.model.closed_form import load_parameter, pressure_for_angle
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Scene, SceneError, check_pressure
 from esba.model.stability import STABILITY, stability_verdict, stability_verdicts
@@ -508,6 +508,13 @@ class LoadHistory:
         return sum(r.points + len(r.jumps) for _, r in self.ramps)
 
 
+def _unloaded(model: Model, pv_full: np.ndarray) -> np.ndarray:
+    """The parameter vector with every load (payload forces, g) at 0."""
+    out = np.array(pv_full, dtype=float)
+    out[[i for i, k in enumerate(model.parameters) if load_parameter(k)]] = 0.0
+    return out
+
+
 def load_history(
     model: Model,
     pressure: float,
@@ -528,7 +535,7 @@ def load_history(
     n = model.n
     natural = Natural() if options.fast else None
     names = model.parameters
-    pv_unloaded = np.array([0.0 if (k.startswith("F") and k[1:].isdigit()) or k == "g" else v for k, v in zip(names, pv_full)])
+    pv_unloaded = _unloaded(model, pv_full)
     ramps: list[tuple[str, Ramp]] = []
     if unloaded is not None:
         theta = np.asarray(unloaded, dtype=float)
@@ -625,7 +632,7 @@ def solve(
         history = load_history(model, pressure, pv_full, known_unloaded, options)
         theta = history.theta
     message = history.message if history is not None else ""
-    loaded = bool(np.any(pv_full != model.param_vector(scene.parameters(pressure, load_factor=0.0))))
+    loaded = bool(np.any(pv_full != _unloaded(model, pv_full)))
     traced = (history is not None and history.ramps) or (known_unloaded is not None and theta0 is None and not loaded)
     final = minimise(
         model,

@@ -61,30 +61,31 @@ def test_a_section_is_checked_times_aside():
     assert not matches(template, PAGE.section("solve", data, other_command, TIMES))
 
 
-def test_path_section_checks_the_counts_not_the_times():
-    row = PathBenchRow(n=3, points=34, folds=2, evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=0.2, compiled_eval_us=1.2)
+def test_path_section_checks_the_points_and_folds_not_the_times():
+    row = PathBenchRow(n=3, points=34, folds=(0.1735354955, 0.1636017804), evaluations=145, trace_s=0.0022, ipopt_s=0.044, naive_s=0.2, newton_step_us=2.3)
     template = PAGE.section("path", [row], PathSettings(), MASK)
-    faster = dataclasses.replace(row, trace_s=0.0012, ipopt_s=0.5, naive_s=12.0, compiled_eval_us=0.9)
+    faster = dataclasses.replace(row, trace_s=0.0012, ipopt_s=0.5, naive_s=12.0, newton_step_us=0.9)
     assert matches(template, PAGE.section("path", [faster], PathSettings(), TIMES))
-    assert not matches(template, PAGE.section("path", [dataclasses.replace(row, evaluations=146)], PathSettings(), TIMES))
-    assert "   3     34     2    145" in path_table([row])
+    assert not matches(template, PAGE.section("path", [dataclasses.replace(row, points=35)], PathSettings(), TIMES))
+    assert not matches(template, PAGE.section("path", [dataclasses.replace(row, folds=(0.17354, 0.1636))], PathSettings(), TIMES))
+    assert "   3     34" in path_table([row]) and "folds at n = 3: 0.173535495500 MPa, 0.163601780400 MPa" in path_table([row])
 
 
 def test_writing_a_section_keeps_the_others(tmp_path):
     page = tmp_path / "performance.md"
     PAGE.write_section(page, "solve", {"rows": SOLVE_ROWS, "growth_16_128": None}, SolveSettings())
-    row = PathBenchRow(n=3, points=34, folds=2, evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=None, compiled_eval_us=None)
+    row = PathBenchRow(n=3, points=34, folds=(0.17354, 0.16360), evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=None, newton_step_us=None)
     PAGE.write_section(page, "path", [row], PathSettings())
     PAGE.write_section(page, "solve", {"rows": _slower(SOLVE_ROWS, 2.0), "growth_16_128": None}, SolveSettings())
     _, sections = read_sections(page.read_text())
     assert [k for k, _ in sections] == ["solve", "path"]
-    assert "  3     34     2    145" in dict(sections)["path"]
+    assert "   3     34" in dict(sections)["path"]
 
 
 def test_the_whole_page_renders_its_sections_in_order():
     gen = GenerationRow(n=16, derive_s=0.5, emit_s=0.2, total_s=0.7, assignments=100, instructions={"energy": 2318, "gradient": 3987, "hessian": 6510},
                         ad_hessian_instructions=6585, naive_s=3.5, call_us={"energy": 43.0, "gradient": 46.2, "hessian": 49.4})
-    row = PathBenchRow(n=3, points=34, folds=2, evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=None, compiled_eval_us=None)
+    row = PathBenchRow(n=3, points=34, folds=(0.17354, 0.16360), evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=None, newton_step_us=None)
     data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row]}
     text = PAGE.render(data, PAGE.settings(), ROOT / "docs" / "performance.md").text
     _, sections = read_sections(text)
