@@ -64,7 +64,7 @@ FIT_EXACT_REL = 1e-6
 #: truncation ~1e-10, solve round-off ~1e-12 / 1e-5
 FIT_JACOBIAN_RTOL = 1e-5
 
-#: the exported C (issue 19) against Python's solve(): both run Newton to round-off on the same
+#: the exported C against Python's solve(): both run Newton to round-off on the same
 #: generated gradient (measured <= 3e-15 rad), so 1e-9 rad (the issue's figure) leaves a margin
 EXPORT_THETA_ATOL = 1e-9
 #: the exported inverse against pressure_for_target (esba pressure --total-angle): the NLP stops at

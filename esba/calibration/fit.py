@@ -271,6 +271,9 @@ class _FitNLP:
     scale: np.ndarray
 
 
+#: Fit NLPs kept for reuse, one per layout of a data set (its rows' scenes and measured quantities):
+#: a cache of the data, not of a model (a model's derived Functions live in its registry,
+#: :meth:`esba.model.generated.Model.derived`), so it is bounded and forgets the oldest.
 _NLPS: dict[tuple, _FitNLP] = {}
 
 #: Solvers and row functions kept for reuse (the oldest go first): one per layout of the data.
