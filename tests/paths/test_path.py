@@ -102,22 +102,26 @@ def test_column_buckles_at_the_closed_form_load(n):
             assert fold.status == "converged" and abs(fold.morse_after - fold.morse_before) == 1
             g, _, _ = problem.ghl(fold.theta, fold.lam)
             assert np.max(np.abs(g)) <= EQUILIBRIUM_GRAD_ATOL
-    assert any(side.folds for side in sides)  # the side bending towards the chamber folds back (transcritical)
+    assert any(side.folds for side in sides)  # the side bending away from the chamber (theta > 0) folds back (transcritical)
     assert signs[0] == -signs[1]  # one branch to each side of the straight state
     # the eccentric chamber makes U not even in theta: the two sides differ
     assert not np.allclose(sides[0].lam[:5], sides[1].lam[:5])
 
 
 def test_transcritical_buckling_one_side_folds():
-    """n = 2: bending towards the chamber side loses load (unstable) until a fold at about 2.72 N,
-    where it turns stable; the other side carries more load and is stable from the start."""
+    """n = 2: bending away from the chamber (theta > 0: the chamber on the convex side) loses load
+    (unstable) until a fold at about 2.72 N, where it turns stable; bending towards the chamber carries
+    more load and is stable from the start. The branch point is transcritical, and each side is
+    labelled by the way it bends."""
     f_cr = column_buckling_load(2)
     problem = PathProblem.from_scene(column(2, 1.0), "payload")
     b = trace(problem, np.zeros(2), 1.0, to=12.0)
     sides = bifurcating_branches(problem, b.branch_points[0], bounds=(1.0, 12.0))
     plus = next(side for side in sides if side.folds)
     minus = next(side for side in sides if side is not plus)
-    assert np.sum(plus.theta[1]) > 0 > np.sum(minus.theta[1])  # towards the chamber side, and away
+    assert np.sum(plus.theta[1]) > 0 > np.sum(minus.theta[1])  # away from the chamber, and towards it
+    assert (plus.label, minus.label) == ("bifurcating away from chamber", "bifurcating towards chamber")
+    assert b.branch_points[0].bifurcation == "transcritical"
     (fold,) = plus.folds
     assert 2.70 < fold.lam < 2.75 and (fold.morse_before, fold.morse_after) == (1, 0)
     assert plus.morse[1] == 1 and np.all(plus.lam[1:5] < f_cr)  # subcritical: unstable, less load
