@@ -67,7 +67,11 @@ def _sensitivity_rows(d: dict) -> list[tuple[str, str]]:
     s = d["sensitivities"]
     if s["status"] != "ok":
         return [("sensitivity", s["message"])]
-    rows = [("sensitivity", "per unit of each parameter (implicit function theorem, exact AD); fold: linear estimate of the change that reaches it")]
+    rows = [("sensitivity", "per unit of each parameter, the others held (implicit function theorem, exact AD); fold: linear estimate of the change that reaches it")]
+    if s.get("held_fixed"):
+        rows.append(("held fixed", s["held_fixed"]["meaning"]))
+    if s.get("round_off"):
+        rows.append(("round-off", s["round_off"]))
     rows.append(("", f"{'parameter':<14} {'value':>10} {'unit':<6} {'d angle (deg)':>14} {'d tip x (mm)':>13} {'d tip y (mm)':>13} {'fold':>10}"))
     for name, r in s["parameters"].items():
         fold = "-" if r["fold_distance"] is None else f"{r['fold_distance']:+.3g}"
