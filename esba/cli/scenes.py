@@ -84,14 +84,15 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
     u = d["uncertainty"]
     given = ", ".join(f"{s['name']} {s['sigma']:.4g} {s['unit']}" + (" (uniform)" if s["distribution"] == "uniform" else "") for s in u["sigmas"])
     rows = [("sigmas", given)]
-    if u["std_total_angle_deg"] is None:
+    first = u["std_total_angle_deg"] is not None
+    if not first:  # first order refuses (near a fold): the Monte Carlo, when run, is still reported below
         rows.append(("uncertainty", f"{u['status']}: {u['message']}"))
-        return rows
-    e = u["tip_ellipse_95"]
-    rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
-                                f"95 % tip ellipse {e['semi_axes_mm'][0]:.3g} x {e['semi_axes_mm'][1]:.3g} mm at {e['angle_deg']:.1f} deg from x"))
-    if u["status"] != "ok":
-        rows.append(("NOT LINEAR", u["message"]))
+    else:
+        e = u["tip_ellipse_95"]
+        rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
+                                    f"95 % tip ellipse {e['semi_axes_mm'][0]:.3g} x {e['semi_axes_mm'][1]:.3g} mm at {e['angle_deg']:.1f} deg from x"))
+        if u["status"] != "ok":
+            rows.append(("NOT LINEAR", u["message"]))
     mc = d.get("monte_carlo")
     if mc:
         c = mc["counts"]
@@ -107,7 +108,10 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
         if st:
             where = f"; samples in {st['out']}" + (f" (resumed at sample {st['resumed_from_sample']})" if st.get("resumed_from_sample") else "") if st.get("out") else ""
             rows.append(("solved", f"{st['runner']} in {st['seconds']:.1f} s{where}"))
-        rows.append(("agreement", d["agreement"]["verdict"]))
+        if first:
+            rows.append(("agreement", d["agreement"]["verdict"]))
+        else:
+            rows.append(("agreement", f"none to judge: first order gives no answer ({u['status']}, above); the Monte Carlo is the estimate"))
     return rows
 
 

@@ -219,3 +219,18 @@ def test_pressure_table_says_what_the_pressure_is_for(capsys):
     assert "{" not in out  # no raw dict
     code, out, _ = run(capsys, "pressure", "--tip-y", "50")
     assert code == EXIT_OK and "target: the pressure that puts the loaded actuator's tip at y = 50 mm" in out
+
+
+def test_monte_carlo_is_in_the_text_when_first_order_refuses_near_a_fold(capsys):
+    """Issue 21: at F = 1.78 N, Omega = 122.2 deg first order refuses (next to a fold); the Monte Carlo
+    still ran, and its result was only in --json. The text shows it, and says there is no agreement to judge."""
+    args = ["solve", "--payload", "1.78", "--payload-angle", "122.2", "--sigma", "E=0.01", "--monte-carlo", "50", "--no-plot"]
+    code, out, err = run(capsys, *args)
+    assert code == EXIT_OK, err
+    assert "uncertainty: near_fold:" in out
+    line = next(ln for ln in out.splitlines() if ln.strip().startswith("Monte Carlo:"))
+    code, d = run_json(capsys, *args)
+    std = d["monte_carlo"]["std"]
+    assert d["uncertainty"]["std_total_angle_deg"] is None and std["total_angle"] > 0
+    assert f"std total angle {std['total_angle']:.4g} deg" in line and "50 samples" in line
+    assert "agreement: none to judge: first order gives no answer (near_fold" in out
