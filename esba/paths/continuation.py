@@ -22,7 +22,7 @@ BifurcationKit), with the model's exact derivatives:
   [[H, dg/dlambda], [t^T]] with the arclength ds^2 = w |dtheta|^2 + (dlambda / sigma)^2 (w = n, so
   that a step means about the same change of the total angle whatever n is; sigma a typical size of
   lambda), adaptive step (grown or shrunk towards ``target_iterations`` corrector iterations,
-  rejected and halved on a failed corrector, a sharp turn, a corrected point far from its predictor,
+  rejected and halved on a failed corrector, a sharp turn, a chord far steeper than the turn (a landing on another branch),
   two eigenvalue crossings in one step, or a change of stability that is neither a turn of lambda
   (a fold) nor a branch point by the extended system: the step left the branch),
   stops exactly at the parameter bounds, at a step count, a total-angle or user event, at the
@@ -385,10 +385,12 @@ def trace(
             # this branch, or the step landed on another one
             res = b.residuals
             slack = len(res) >= 3 and res[1] > 1e3 * opts.tol and res[2] > CORRECTOR_CONTRACTION * res[1]
-            # the corrector moved far from the predictor: on a smooth arc that turns by at most
-            # max_turn_deg the offset is about ds * turn / 2, so a larger one is a landing elsewhere
-            offset = corr.norm(b.x - a.x - ds * a.tangent) > MAX_OFFSET * ds
-            reject = (sharp or double or hidden or slack or offset) and ds > opts.ds_min * 1.0000001
+            # the corrector moved far from the predictor: on a smooth arc the chord from a to b leaves
+            # a's tangent by about half the turn between the two tangents (exactly half on a circle);
+            # a chord much steeper than that landed on a neighbouring branch running alongside
+            chord = math.atan2(corr.norm(b.x - a.x - ds * a.tangent), ds)
+            elsewhere = chord > max(CHORD_FACTOR * 0.5 * turn, CHORD_FLOOR)
+            reject = (sharp or double or hidden or slack or elsewhere) and ds > opts.ds_min * 1.0000001
         found = []
         if not reject:
             found = _events_on_segment(corr, a, b, ds, lo, hi, marks, events, opts)
@@ -458,9 +460,13 @@ def trace(
 #: Newton iteration from a predictor inside its region of convergence contracts far faster).
 CORRECTOR_CONTRACTION = 0.25
 
-#: A step whose corrected point lies farther than this many step lengths from its predictor is
-#: rejected (the arc from a smooth branch stays within about ds * max_turn / 2 <= 0.22 ds of it).
-MAX_OFFSET = 0.5
+#: A step is rejected when the angle between its chord and the tangent it started along is more
+#: than CHORD_FACTOR times half the turn between the tangents at its ends (the angle on a smooth
+#: arc) and more than CHORD_FLOOR (radians: below it a nearly straight step is not judged): it landed
+#: on another branch. Halving a step on a smooth arc brings the two angles together, so the rule
+#: cannot stall a trace.
+CHORD_FACTOR = 3.0
+CHORD_FLOOR = math.radians(2.0)
 
 #: The smallest eigenvalue is watched for a hidden sign change (two crossings inside one step) when it
 #: is below this fraction of the largest at both ends of the step.

@@ -55,3 +55,19 @@ def test_either_side_of_the_window_is_monotonic(omega, bends):
     assert bool(run.main.stable.all())
     end = float(run.main.total_angle_deg[-1])
     assert (end < 0.0) if bends == "towards" else (end > 200.0)
+
+
+@pytest.mark.parametrize("guard", ["branch point test", "chord test"])
+def test_either_guard_alone_keeps_the_trace_on_its_branch(monkeypatch, guard):
+    """Two guards reject the step that lands on the neighbouring branch: the extended system's verdict
+    on a change of stability (dg/dlambda not orthogonal to the null vector: a fold, where lambda did
+    not turn) and the chord far steeper than the turn between the tangents. Each alone suffices."""
+    import esba.paths.continuation as continuation
+
+    if guard == "branch point test":  # switch off the other one
+        monkeypatch.setattr(continuation, "CHORD_FLOOR", 10.0)
+    else:
+        monkeypatch.setattr(continuation, "BRANCH_ORTHOGONALITY", float("inf"))
+    for omega, fold in ((122.19, 1.794243), (122.179, 1.808891)):
+        main = window(omega).main
+        assert main.branch_points == () and round(main.folds[0].lam, 6) == fold
