@@ -845,20 +845,27 @@ def crossing_start(corr: Corrector, point: SpecialPoint, sign: float, traced_tan
     """The first point of the crossing branch off a branch point on side ``sign`` (+1 or -1), with its
     tangent and spectrum; None when the corrector cannot land on the new branch.
 
-    The step is halved until the point lands on the new branch, not back on the traced one (its
-    component along the null vector at least half the predicted one).
+    The step is halved until the point lands on the new branch, not back on the traced one: its
+    offset from the branch point lies nearer the new branch's tangent line than half its distance
+    from the traced one's. (That holds whichever of the two crosses the other: leaving the straight
+    column for a bent branch, and leaving a bent branch for the straight column, whose tangent has
+    no component along the null vector.)
     """
-    direction = sign * bifurcation_tangents(corr.prob, point, _branch_tangent(corr.prob, point, traced_tangent), corr.w, corr.sigma)
-    phi = point.eigenvector / np.linalg.norm(point.eigenvector)
+    traced = _branch_tangent(corr.prob, point, traced_tangent)
+    direction = sign * bifurcation_tangents(corr.prob, point, traced, corr.w, corr.sigma)
     anchor = corr.point(point.theta.copy(), point.lam)
     anchor.tangent = direction
+
+    def off_line(d: np.ndarray, t: np.ndarray) -> float:
+        t = t / corr.norm(t)
+        return corr.norm(d - corr.dot(d, t) * t)
+
     ds = corr.opts.ds
     while ds >= corr.opts.ds_min:
         start = corr.on_segment(anchor, ds)
         if start is not None:
-            moved = float((start.theta - point.theta) @ phi)
-            predicted = float(ds * direction[:-1] @ phi)
-            if predicted != 0 and moved / predicted > 0.5:
+            d = start.x - anchor.x
+            if off_line(d, direction) < 0.5 * off_line(d, traced):
                 start.tangent = corr.tangent(start, anchor.tangent)
                 if start.tangent is not None:
                     corr.spectrum(start)

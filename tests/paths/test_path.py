@@ -128,6 +128,22 @@ def test_transcritical_buckling_one_side_folds():
     assert np.all(minus.morse == 0) and np.all(minus.lam[1:] > f_cr)  # supercritical: stable
 
 
+def test_unloading_a_buckled_column_returns_straight_through_the_branch_point():
+    """n = 4, 1 -> 6.4 N and back: loading buckles smoothly towards the chamber at the branch point, and
+    unloading comes back along that branch to the branch point and goes on straight (stable below it).
+    It used to report a snap at the branch point to the far side (0 -> 110 deg) and one back at the
+    far side's fold: the step off the branch point onto the straight branch was refused, because that
+    branch does not move along the null vector."""
+    f_cr = column_buckling_load(4)
+    problem = PathProblem.from_scene(column(4, 1.0), "payload")
+    start = solve(column(4, 1.0)).theta  # straight to round-off (1e-14 rad), as esba path starts
+    up, down = history(problem, start, 1.0, [6.4, 1.0], PathOptions(ds_max=0.1))  # esba path's steps
+    assert up.reached and down.reached and up.jumps == () and down.jumps == ()
+    assert float(np.sum(up.theta)) < 0.0  # buckled towards the chamber (theta < 0)
+    assert [round(bp.lam / f_cr, 9) for bp in down.branch_points] == [1.0]
+    assert np.max(np.abs(down.theta)) < 1e-8  # straight again at 1 N
+
+
 def test_99_percent_stays_straight_101_percent_buckles():
     """Near buckling: n = 4, 3.1733 N along the axis is 99 % of the buckling load."""
     f_cr = column_buckling_load(4)
