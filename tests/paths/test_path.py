@@ -155,7 +155,7 @@ def test_99_percent_stays_straight_101_percent_buckles():
     assert buckled.ok and np.max(np.abs(buckled.theta)) > 1e-3
     (bp,) = buckled.branch_points
     assert bp.kind == "branch point" and bp.lam == pytest.approx(1 / 1.01, rel=LOCATE_RTOL)
-    assert any("branch point" in note for note in buckled.notes)
+    assert any("transcritical branch point" in note for note in buckled.notes)  # its type, computed
     assert buckled.jumps == ()  # it goes on along the stable side, no snap
 
 
