@@ -67,7 +67,11 @@ def _sensitivity_rows(d: dict) -> list[tuple[str, str]]:
     s = d["sensitivities"]
     if s["status"] != "ok":
         return [("sensitivity", s["message"])]
-    rows = [("sensitivity", "per unit of each parameter (implicit function theorem, exact AD); fold: linear estimate of the change that reaches it")]
+    rows = [("sensitivity", "per unit of each parameter, the others held (implicit function theorem, exact AD); fold: linear estimate of the change that reaches it")]
+    if s.get("held_fixed"):
+        rows.append(("held fixed", s["held_fixed"]["meaning"]))
+    if s.get("round_off"):
+        rows.append(("round-off", s["round_off"]))
     rows.append(("", f"{'parameter':<14} {'value':>10} {'unit':<6} {'d angle (deg)':>14} {'d tip x (mm)':>13} {'d tip y (mm)':>13} {'fold':>10}"))
     for name, r in s["parameters"].items():
         fold = "-" if r["fold_distance"] is None else f"{r['fold_distance']:+.3g}"
@@ -80,14 +84,15 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
     u = d["uncertainty"]
     given = ", ".join(f"{s['name']} {s['sigma']:.4g} {s['unit']}" + (" (uniform)" if s["distribution"] == "uniform" else "") for s in u["sigmas"])
     rows = [("sigmas", given)]
-    if u["std_total_angle_deg"] is None:
+    first = u["std_total_angle_deg"] is not None
+    if not first:  # first order refuses (near a fold): the Monte Carlo, when run, is still reported below
         rows.append(("uncertainty", f"{u['status']}: {u['message']}"))
-        return rows
-    e = u["tip_ellipse_95"]
-    rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
-                                f"95 % tip ellipse {e['semi_axes_mm'][0]:.3g} x {e['semi_axes_mm'][1]:.3g} mm at {e['angle_deg']:.1f} deg from x"))
-    if u["status"] != "ok":
-        rows.append(("NOT LINEAR", u["message"]))
+    else:
+        e = u["tip_ellipse_95"]
+        rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
+                                    f"95 % tip ellipse {e['semi_axes_mm'][0]:.3g} x {e['semi_axes_mm'][1]:.3g} mm at {e['angle_deg']:.1f} deg from x"))
+        if u["status"] != "ok":
+            rows.append(("NOT LINEAR", u["message"]))
     mc = d.get("monte_carlo")
     if mc:
         c = mc["counts"]
@@ -103,7 +108,10 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
         if st:
             where = f"; samples in {st['out']}" + (f" (resumed at sample {st['resumed_from_sample']})" if st.get("resumed_from_sample") else "") if st.get("out") else ""
             rows.append(("solved", f"{st['runner']} in {st['seconds']:.1f} s{where}"))
-        rows.append(("agreement", d["agreement"]["verdict"]))
+        if first:
+            rows.append(("agreement", d["agreement"]["verdict"]))
+        else:
+            rows.append(("agreement", f"none to judge: first order gives no answer ({u['status']}, above); the Monte Carlo is the estimate"))
     return rows
 
 
@@ -273,12 +281,16 @@ def _stiffness_table(d: dict) -> str:
     for f, dl, k, tip in zip(d["payloads_n"], d["displacement_mm"], d["stiffness_n_per_m"], d["tip_mm"]):
         lines.append(f"{f:8.3f} {dl:11.3f} {k:9.3f} {tip[0]:8.2f}, {tip[1]:7.2f}")
     t = d["tangent"]
-    lines.append(f"tangent at F = 0: horizontal {t['horizontal_n_per_m']:.3f} N/m, vertical {t['vertical_n_per_m']:.3f} N/m")
+    lines.append(f"tangent stiffness of the unloaded state (F = 0, {d['initial_angle_deg']:.2f} deg), where every secant K starts "
+                 "(C = J H^-1 J^T the tip's compliance there):")
+    lines.append(f"  along the force, the tip free to move across it, 1 / (u^T C u) (the limit of K as F -> 0): "
+                 f"horizontal {t['horizontal_n_per_m']:.3f} N/m, vertical {t['vertical_n_per_m']:.3f} N/m")
     if t["matrix_n_per_m"] is not None:
         m = t["matrix_n_per_m"]
-        lines.append(f"K_tip (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]")
+        lines.append(f"  K_tip = C^-1 (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]: "
+                     "each diagonal entry holds the tip still in the other direction, so it is stiffer than the value above")
     else:
-        lines.append("K_tip: singular (one segment moves the tip along one direction only)")
+        lines.append("  K_tip: singular (one segment moves the tip along one direction only)")
     for msg in d["messages"]:
         lines.append(f"NOT OK: {msg}")
     return "\n".join(lines)

@@ -492,7 +492,8 @@ class LoadHistory:
         for name, r in self.ramps:
             for sp in r.branch_points:
                 out.append(
-                    f"the straight-through branch loses stability at a branch point at {_load_value(model, pv_full, pressure, name, sp.lam)}: "
+                    f"the straight-through branch loses stability at a {sp.bifurcation + ' ' if sp.bifurcation else ''}branch point at "
+                    f"{_load_value(model, pv_full, pressure, name, sp.lam)}: "
                     f"the state goes on along the stable crossing branch (buckling)"
                 )
             for j in r.jumps:
