@@ -45,14 +45,16 @@ from esba.infra import checks
 from esba.infra.errors import EquilibriumError, InputError
 from esba.infra.threads import single_threaded
 from esba.model import resolution
-from esba.model.closed_form import load_parameter, pressure_for_angle
+from esba.model.closed_form import pressure_for_angle
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Scene, SceneError, check_pressure
 from esba.model.stability import STABILITY, stability_verdict, stability_verdicts
 from esba.model.validity import Finding, assess
-from esba.paths.continuation import Natural, PathOptions, PathProblem, SpecialPoint
-from esba.paths.loading import Jump, Ramp, follow
+from esba.paths.continuation import PathOptions, SpecialPoint
+from esba.paths.loading import Jump
 from esba.solvers.minimise import LINEAR_SOLVERS, minimise
+
+from .history import _unloaded, load_history
 
 __all__ = [
     "SolverOptions",
@@ -445,122 +447,6 @@ def evaluate(
         certificate=certificate,
         validity=assess(scene, theta, pressure, state["tip"]),
     )
-
-
-def _load_value(model: Model, pv_full: np.ndarray, pressure: float, name: str, lam: float) -> str:
-    """Where on a ramp of the load history lambda lies, in the scene's terms (its payloads' forces and
-    weight, from the full load's parameter vector)."""
-    if name == "pressure":
-        return f"P = {lam:.6g} MPa (unloaded)"
-    names = model.parameters
-    forces = [pv_full[i] for i, k in enumerate(names) if k.startswith("F") and k[1:].isdigit()]
-    parts = [f"payload {k} = {f * lam:.6g} N" for k, f in enumerate(forces, start=1)]
-    if "g" in names:
-        parts.append(f"weight {100 * lam:.4g} %")
-    return f"{100 * lam:.6g} % of the loads ({', '.join(parts)}) at P = {pressure:.6g} MPa"
-
-
-@dataclass(frozen=True, eq=False)
-class LoadHistory:
-    """What the quasi-static load history did: inflate (unless the unloaded state is known), then load.
-
-    Attributes
-    ----------
-    theta : ndarray
-        The state reached, rad.
-    ramps : tuple of (str, Ramp)
-        Each ramp (``pressure``, ``load``) and what it did (:class:`esba.paths.loading.Ramp`).
-    message : str
-        Why the history did not reach the full load (empty when it did).
-    """
-
-    theta: np.ndarray
-    ramps: tuple[tuple[str, Ramp], ...]
-    message: str = ""
-
-    @property
-    def jumps(self) -> tuple[Jump, ...]:
-        return tuple(j for _, r in self.ramps for j in r.jumps)
-
-    @property
-    def branch_points(self) -> tuple[SpecialPoint, ...]:
-        return tuple(sp for _, r in self.ramps for sp in r.branch_points)
-
-    def notes(self, model: Model, pv_full: np.ndarray, pressure: float) -> list[str]:
-        """One sentence per buckling and per snap-through on the way, in the scene's terms."""
-        out = []
-        for name, r in self.ramps:
-            for sp in r.branch_points:
-                out.append(
-                    f"the straight-through branch loses stability at a branch point at {_load_value(model, pv_full, pressure, name, sp.lam)}: "
-                    f"the state goes on along the stable crossing branch (buckling)"
-                )
-            for j in r.jumps:
-                out.append(j.describe(_load_value(model, pv_full, pressure, name, j.lam)))
-        return out
-
-    @property
-    def iterations(self) -> int:
-        return sum(r.corrector_iterations + r.ipopt_iterations for _, r in self.ramps)
-
-    @property
-    def points(self) -> int:
-        return sum(r.points + len(r.jumps) for _, r in self.ramps)
-
-
-def _unloaded(model: Model, pv_full: np.ndarray) -> np.ndarray:
-    """The parameter vector with every load (payload forces, g) at 0."""
-    out = np.array(pv_full, dtype=float)
-    out[[i for i, k in enumerate(model.parameters) if load_parameter(k)]] = 0.0
-    return out
-
-
-def load_history(
-    model: Model,
-    pressure: float,
-    pv_full: np.ndarray,
-    unloaded: np.ndarray | None = None,
-    options: SolverOptions | None = None,
-) -> LoadHistory:
-    """The state an actuator reaches along its load history, on the continuation engine.
-
-    From the unloaded state at ``pressure`` (``unloaded`` when it is known, e.g. exact for a target
-    angle; else the pressure is raised from 0 at theta = 0), the payloads and weight are raised
-    together from 0 to ``pv_full``. Each ramp is :func:`esba.paths.loading.follow`: natural
-    continuation first when ``options.fast`` (compiled, O(n), accepted by the one rule), else and
-    otherwise pseudo-arclength continuation through its folds and branch points, snapping where the
-    stable branch ends. The batch (:mod:`esba.statics.batch`) hands its refused elements here.
-    """
-    options = DEFAULT_OPTIONS if options is None else options
-    n = model.n
-    natural = Natural() if options.fast else None
-    names = model.parameters
-    pv_unloaded = _unloaded(model, pv_full)
-    ramps: list[tuple[str, Ramp]] = []
-    if unloaded is not None:
-        theta = np.asarray(unloaded, dtype=float)
-    else:
-        i = names.index("P")
-        p_zero = pv_unloaded.copy()
-        p_zero[i] = 0.0
-        dp = np.zeros(len(names))
-        dp[i] = 1.0  # U is linear in P
-        problem = PathProblem(model, p_zero, dp, "pressure", "MPa", (0.0, math.inf), 0.1, what="pressure")
-        r = follow(problem, np.zeros(n), 0.0, pressure, options.path, ipopt_tol=options.tol, natural=natural)
-        ramps.append(("pressure", r))
-        theta = r.theta
-        if not r.reached:
-            where = _load_value(model, pv_full, pressure, "pressure", r.lam)
-            return LoadHistory(theta, tuple(ramps), f"the pressure ramp from P = 0 stopped at {where}: {r.message}")
-    if np.any(pv_full != pv_unloaded):  # payloads of 0 N and no weight leave nothing to ramp
-        problem = PathProblem.homotopy(model, pv_unloaded, pv_full, name="load", what="payloads and weight")
-        r = follow(problem, theta, 0.0, 1.0, options.path, ipopt_tol=options.tol, natural=natural)
-        ramps.append(("load", r))
-        theta = r.theta
-        if not r.reached:
-            where = _load_value(model, pv_full, pressure, "load", r.lam)
-            return LoadHistory(theta, tuple(ramps), f"the load ramp from the unloaded state stopped at {where}: {r.message}")
-    return LoadHistory(theta, tuple(ramps))
 
 
 @single_threaded
