@@ -46,12 +46,12 @@ Examples
 >>> from esba.model.scene import Scene, Payload
 >>> res = equilibria(Scene(pressure=0.17, payloads=(Payload(force=2, angle_deg=90),)))
 >>> [(round(s.total_angle_deg, 2), s.morse_index) for s in res.states]
-[(212.84, 0), (83.9, 0), (144.29, 1)]
+[(212.84, 0), (83.9, 0), (138.84, 1)]
 >>> res.complete, res.multistable
 (True, True)
 >>> b = res.barriers[0]
 >>> round(b.from_a, 2), round(b.from_b, 2)
-(0.83, 0.86)
+(8.09, 3.42)
 """
 
 from __future__ import annotations
@@ -670,3 +670,100 @@ def _with_history(res: Equilibria, index: int | None) -> Equilibria:
 
 def _with_time(res: Equilibria, seconds: float) -> Equilibria:
     return Equilibria(**{**res.__dict__, "time_s": seconds})
+
+
+# ---------------------------------------------------------------------------------------------
+# the check that solve() makes
+
+#: The search ``solve`` makes by default: fewer starts and iterations than :func:`equilibria`, no
+#: completeness check, no barriers, no history of its own (it passes the state it reached); at
+#: n = 3 it costs about as much as the solve (docs/performance.md).
+SOLVE_CHECK = EquilibriaOptions(starts=13, max_iter=30, history=False, check=False, connect=False)
+#: ``multistability="auto"`` checks up to this many segments: beyond it the search costs
+#: several solves (docs/performance.md, the solve benchmark's "multistability check" line).
+AUTO_MAX_SEGMENTS = 16
+#: The values of ``SolverOptions.multistability``.
+MULTISTABILITY = ("auto", "always", "never")
+
+
+@dataclass(frozen=True, eq=False)
+class Multistability:
+    """What ``solve`` found about the other stable states of its scene.
+
+    Attributes
+    ----------
+    looked : bool
+        The search ran.
+    stable : tuple of State
+        Every stable state found (least energy first), the one reached among them.
+    reached : int or None
+        Index in ``stable`` of the state the history reached (None: not among them).
+    message : str
+        One line: whether the scene is multistable, which state the history reached and why,
+        and the others; or why the search did not run.
+    search_time_s : float
+    """
+
+    looked: bool
+    stable: tuple[State, ...] = ()
+    reached: int | None = None
+    message: str = ""
+    search_time_s: float = 0.0
+
+    @property
+    def multistable(self) -> bool | None:
+        """True or False when looked, None when not."""
+        return len(self.stable) > 1 if self.looked else None
+
+    @property
+    def others(self) -> tuple[State, ...]:
+        """The stable states other than the one reached."""
+        return tuple(s for k, s in enumerate(self.stable) if k != self.reached)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "looked": self.looked,
+            "multistable": self.multistable,
+            "message": self.message,
+            "warning": self.message if self.multistable else "",
+            "stable_states": [s.to_dict() for s in self.stable],
+            "reached": self.reached,
+            "other_stable_states": [
+                {"theta_deg": s.theta_deg, "total_angle_deg": s.total_angle_deg, "energy_nmm": s.energy, "tip_mm": [float(s.tip[0]), float(s.tip[1])]}
+                for s in self.others
+            ],
+            "search_time_s": self.search_time_s,
+        }
+
+
+def not_looked(why: str) -> Multistability:
+    """A :class:`Multistability` that says why the search did not run."""
+    return Multistability(False, message=f"not checked for other stable states: {why}")
+
+
+def check_multistability(scene: Scene, model: Model, pressure: float, reached: np.ndarray, history: str, why: str) -> Multistability:
+    """The :data:`SOLVE_CHECK` search around a solve's result, and the one line that says what it found.
+
+    ``history`` names the load history, ``why`` says why it reached ``reached`` (it followed one
+    branch, it snapped at a fold).
+    """
+    res = search(scene, pressure, SOLVE_CHECK, (), model, reached)
+    stable = res.stable
+    k = None
+    for j, s in enumerate(stable):
+        if float(np.max(np.abs(s.theta - reached))) <= 1e-4:
+            k = j
+    if len(stable) <= 1:
+        message = f"one stable state in the search ({res.describe_domain()})"
+        return Multistability(True, stable, k, message, res.time_s)
+    here = stable[k] if k is not None else None
+    if here is None:
+        head = f"multistable: {len(stable)} stable states, and the load history ({history}) reached none of them"
+    else:
+        least = "the least energy" if k == 0 else f"not the least energy ({stable[0].energy:.4g} N mm)"
+        head = (
+            f"multistable: {len(stable)} stable states; the load history ({history}) reached {here.total_angle_deg:.2f} deg "
+            f"(U = {here.energy:.4g} N mm, {least}) because {why}"
+        )
+    others = "; ".join(f"{s.total_angle_deg:.2f} deg (U = {s.energy:.4g} N mm)" for j, s in enumerate(stable) if j != k)
+    return Multistability(True, stable, k, f"{head}; other stable states: {others}", res.time_s)

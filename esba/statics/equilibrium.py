@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -54,7 +54,8 @@ from esba.paths.continuation import PathOptions, SpecialPoint
 from esba.paths.loading import Jump
 from esba.solvers.minimise import LINEAR_SOLVERS, minimise
 
-from .history import _unloaded, load_history
+from .equilibria import AUTO_MAX_SEGMENTS, MULTISTABILITY, Multistability, check_multistability, not_looked
+from .history import DEFAULT_HISTORY, HistoryError, LoadHistory, _unloaded, history_name, history_steps, load_history
 
 __all__ = [
     "SolverOptions",
@@ -67,6 +68,10 @@ __all__ = [
     "stability_verdict",
     "stability_verdicts",
     "STABILITY",
+    "LoadHistory",
+    "load_history",
+    "HistoryError",
+    "Multistability",
 ]
 
 
@@ -123,6 +128,13 @@ class SolverOptions:
         absolute value) of zero is ``critical``; below that ``unstable``, above ``stable``.
     samples_per_segment : int
         Centre-line samples per segment in the result (>= 1).
+    history : str or sequence of (float, float)
+        The load history (:mod:`esba.statics.history`): ``inflate-then-load`` (the default),
+        ``load-then-inflate``, ``together``, or a list of (pressure, load) fraction steps ending
+        at (1, 1). Where the scene is multistable it decides the state reached.
+    multistability : str
+        Look for other stable states of the scene (:func:`esba.statics.equilibria.check_multistability`):
+        ``auto`` (when n <= 16, where the search costs about a solve), ``always`` or ``never``.
 
     Examples
     --------
@@ -144,6 +156,8 @@ class SolverOptions:
     stationarity_tol: float = 1e-7
     critical_tol: float = 1e-9
     samples_per_segment: int = 20
+    history: Any = DEFAULT_HISTORY
+    multistability: str = "auto"
 
     def __post_init__(self) -> None:
         _check_pos("tol", self.tol, 1.0)
@@ -158,6 +172,14 @@ class SolverOptions:
         _check_pos("stationarity_tol", self.stationarity_tol)
         _check_pos("critical_tol", self.critical_tol, 1.0)
         _check_int("samples_per_segment", self.samples_per_segment, 1, MAX_SAMPLES_LIMIT)
+        try:
+            steps = history_steps(self.history)
+        except HistoryError as exc:
+            raise SolverOptionsError(str(exc)) from None
+        if not isinstance(self.history, str):
+            object.__setattr__(self, "history", steps)  # hashable, as the frozen options are
+        if self.multistability not in MULTISTABILITY:
+            raise SolverOptionsError(f"multistability={self.multistability!r}: allowed are {', '.join(MULTISTABILITY)}")
 
 
 DEFAULT_OPTIONS = SolverOptions()
@@ -226,6 +248,11 @@ class Equilibrium:
         Where the result leaves the range the paper's model describes (strains past 1, a bend past
         360 deg, the tip behind the base, loads far outside the paper's): see :mod:`esba.model.validity`.
         Empty when it is inside; a result can be ``ok`` and still outside.
+    history : str
+        The load history followed (its name or steps), or how the state was found without one.
+    multistability : Multistability or None
+        The other stable states of the scene, which one the history reached and why, or why
+        ``solve`` did not look (:mod:`esba.statics.equilibria`); None for :func:`evaluate`.
     """
 
     scene: Scene
@@ -250,6 +277,18 @@ class Equilibrium:
     branch_points: tuple[SpecialPoint, ...] = ()
     certificate: str = ""
     validity: tuple[Finding, ...] = ()
+    history: str = ""
+    multistability: Multistability | None = None
+
+    @property
+    def multistable(self) -> bool | None:
+        """True when the scene has other stable states, False when the search found none, None when it did not look."""
+        return None if self.multistability is None else self.multistability.multistable
+
+    @property
+    def other_stable_states(self) -> tuple:
+        """The other stable states found (:class:`esba.statics.equilibria.State`), empty when none or not looked."""
+        return () if self.multistability is None else self.multistability.others
 
     @property
     def ok(self) -> bool:
@@ -310,6 +349,9 @@ class Equilibrium:
             ],
             "certificate": self.certificate,
             "validity": [f.to_dict() for f in self.validity],
+            "history": self.history,
+            "multistable": self.multistable,
+            "multistability": None if self.multistability is None else self.multistability.to_dict(),
             "iterations": self.iterations,
             "steps": self.steps,
             "gradient_norm": self.gradient_norm,
@@ -548,7 +590,7 @@ def solve(
             message = f"IPOPT did not converge: {final.status}"
     iterations = final.iterations + (history.iterations if history is not None else 0)
     steps = 1 + (history.points if history is not None else 0)
-    return evaluate(
+    result = evaluate(
         scene,
         final.theta,
         pressure,
@@ -564,3 +606,34 @@ def solve(
         branch_points=history.branch_points if history is not None else (),
         certificate=certificate,
     )
+    if history is not None:
+        how = history_name(options.history)
+    elif theta0 is not None:
+        how = "none (one IPOPT solve from the given theta0)"
+    else:
+        how = "none (one IPOPT solve at the full load)"
+    multistability = _multistability(scene, model, result, how, history, options)
+    return replace(result, history=how, multistability=multistability)
+
+
+def _multistability(scene: Scene, model: Model, result: Equilibrium, how: str, history: LoadHistory | None, options: SolverOptions) -> Multistability:
+    """Look for the scene's other stable states when ``options.multistability`` says so."""
+    n = scene.segments
+    if options.multistability == "never":
+        return not_looked("SolverOptions(multistability='never')")
+    if options.multistability == "auto" and n > AUTO_MAX_SEGMENTS:
+        return not_looked(
+            f"n = {n} > {AUTO_MAX_SEGMENTS} segments, where the search costs several solves (docs/performance.md); "
+            "multistability='always' (esba solve --multistability always, or esba equilibria) looks"
+        )
+    if not result.ok:
+        return not_looked("the solve did not reach a stable equilibrium")
+    if history is None:
+        why = "IPOPT converged there from its start"
+    elif history.jumps:
+        why = "its stable branch ended at a fold on the way and it snapped to this state"
+    elif history.branch_points:
+        why = "it buckled at a branch point onto this branch and followed it"
+    else:
+        why = "it followed one stable branch from the straight, unloaded state"
+    return check_multistability(scene, model, result.pressure, result.theta, how, why)
