@@ -297,7 +297,7 @@ def add_solve(sub) -> None:
         "--multistability",
         choices=("auto", "always", "never"),
         default="auto",
-        help="look for other stable states (auto: when n <= 16, where it costs about a solve)",
+        help="look for other stable states (auto: when n <= 8, where it costs about a solve)",
     )
     p.add_argument("--sensitivities", action="store_true", help="d(angles, tip)/d(parameter) for every scene parameter (exact, implicit function theorem)")
     p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="uncertain parameter: E=0.05 (in its unit), E=10%%, r2=±0.1 (a tolerance); repeatable; propagated to first order")

@@ -409,16 +409,78 @@ def _deflated_newton(kernel, pv: np.ndarray, starts: np.ndarray, roots: np.ndarr
     return x, done, iterations
 
 
+#: Found equilibria one compiled round deflates (more: the rounds go on in NumPy, one kernel call per iteration).
+ROUND_ROOTS = 16
+
+
+def _round_function(model: Model, opts: EquilibriaOptions, lb: float, columns: int):
+    """One deflation round compiled: (starts n x m, roots n x K, mask 1 x K, p) -> (theta, |g|, iterations),
+    ``opts.max_iter`` deflated Newton steps unrolled around the O(n) kernel (as :func:`_deflated_newton`,
+    a converged column stops moving), mapped over the m columns; a CasADi graph, one call from Python."""
+    import casadi as ca
+
+    def build():
+        n, npar = model.n, len(model.parameters)
+        kernel = newton_correction(model)
+        x0 = ca.MX.sym("theta", n)
+        roots = ca.MX.sym("roots", n, ROUND_ROOTS)
+        mask = ca.MX.sym("mask", 1, ROUND_ROOTS)
+        pv = ca.MX.sym("p", npar)
+        low = ca.MX.sym("lb")
+        cap = math.radians(opts.max_step_deg) / math.sqrt(n)
+        p, sigma = opts.power, opts.shift
+        x = x0
+        active = ca.MX(0)
+        for _ in range(opts.max_iter):
+            g, step, _ = kernel(x, pv)
+            gnorm = ca.mmax(ca.fabs(g))
+            delta = -step
+            e = ca.repmat(x, 1, ROUND_ROOTS) - roots
+            d2 = ca.fmax(ca.sum1(e * e), 1e-300)
+            w = mask * (-p * d2 ** (-p / 2 - 1)) / (d2 ** (-p / 2) + sigma)
+            denom = 1 - ca.dot(ca.mtimes(e, w.T), delta)
+            delta = delta / ca.if_else(ca.fabs(denom) > 1e-12, denom, 1.0)
+            scale = ca.fmin(1.0, cap / ca.fmax(ca.norm_2(delta), 1e-300))
+            frac = ca.if_else(delta < 0, 0.9 * (x - low) / ca.fmax(-delta, 1e-300), 1e300)
+            scale = ca.fmin(scale, ca.mmin(frac))
+            moving = gnorm > opts.tol
+            x = ca.if_else(moving, x + scale * delta, x)
+            active = active + moving
+        g, _, _ = kernel(x, pv)
+        one = ca.Function("esba_deflation_round", [x0, roots, mask, pv, low], [x, ca.mmax(ca.fabs(g)), active])
+        return one.map(columns, "serial")
+
+    return model.derived("deflation_round", build, settings=(opts.max_iter, opts.max_step_deg, opts.power, opts.shift, opts.tol, ROUND_ROOTS, columns), persist=False)
+
+
+def _compiled_round(model: Model, pv, starts: np.ndarray, roots: np.ndarray, lb: float, opts: EquilibriaOptions) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`_deflated_newton` as one call of :func:`_round_function` (up to :data:`ROUND_ROOTS` roots)."""
+    m, n = starts.shape
+    fun = _round_function(model, opts, lb, m)
+    padded = np.zeros((n, ROUND_ROOTS))
+    mask = np.zeros((1, ROUND_ROOTS))
+    padded[:, : len(roots)] = np.asarray(roots).T if len(roots) else 0.0
+    mask[0, : len(roots)] = 1.0
+    x, gnorm, active = fun(starts.T, padded, mask, pv, lb)
+    x = np.asarray(x).reshape(n, m).T
+    gnorm = np.asarray(gnorm).ravel()
+    done = np.isfinite(gnorm) & (gnorm <= opts.tol) & np.all(np.isfinite(x), axis=1)
+    return x, done, int(np.sum(np.asarray(active)))
+
+
 def _known(theta: np.ndarray, thetas: list[np.ndarray], distinct: float) -> bool:
     return any(float(np.max(np.abs(theta - t))) <= distinct for t in thetas)
 
 
-def _rounds(kernel, pv, starts, found: _Found, label: str, lb: float, hi_total: float, opts: EquilibriaOptions) -> int:
+def _rounds(model, kernel, pv, starts, found: _Found, label: str, lb: float, hi_total: float, opts: EquilibriaOptions) -> int:
     """Deflation rounds from ``starts`` until one finds nothing new; returns the number found."""
     new_total = 0
     for r in range(opts.max_rounds):
         roots = np.array(found.thetas) if found.thetas else np.zeros((0, starts.shape[1]))
-        x, done, its = _deflated_newton(kernel, pv, starts, roots, lb, hi_total, opts)
+        if len(roots) <= ROUND_ROOTS:
+            x, done, its = _compiled_round(model, pv, starts, roots, lb, opts)
+        else:
+            x, done, its = _deflated_newton(kernel, pv, starts, roots, lb, hi_total, opts)
         found.rounds += 1
         found.runs += len(starts)
         found.iterations += its
@@ -556,10 +618,13 @@ def search(
     theta_starts: Sequence[np.ndarray] = (),
     model: Model | None = None,
     reached: np.ndarray | None = None,
+    known_equilibrium: bool = False,
 ) -> Equilibria:
     """The search of :func:`equilibria` at a given pressure, from the method's starts, ``theta_starts``
     and ``reached``, the state a load history reached (:func:`equilibria` traces the default one,
-    ``solve`` passes the state its history reached); ``history_state`` indexes it."""
+    ``solve`` passes the state its history reached); ``history_state`` indexes it. With
+    ``known_equilibrium`` (``reached`` is a certified equilibrium) it is deflated from the first
+    round instead of being a start."""
     t0 = time.perf_counter()
     model = scene.model() if model is None else model
     n = model.n
@@ -570,11 +635,14 @@ def search(
     extra = ([] if reached is None else [np.asarray(reached, dtype=float).ravel()]) + [np.asarray(t, dtype=float).ravel() for t in theta_starts]
     starts, _ = _first_starts(n, lb, hi_total, options.starts, extra)
     found = _Found([], [])
-    _rounds(kernel, pv, starts, found, "first search", lb, hi_total, options)
+    if reached is not None and known_equilibrium:  # deflate it from the start: the search looks for the others
+        found.thetas.append(np.asarray(reached, dtype=float).ravel().copy())
+        found.labels.append("the load history's state")
+    _rounds(model, kernel, pv, starts, found, "first search", lb, hi_total, options)
     check_found = 0
     complete: bool | None = None
     if options.check:
-        check_found = _rounds(kernel, pv, _fresh_starts(n, lb, hi_total, options.starts), found, "completeness check", lb, hi_total, options)
+        check_found = _rounds(model, kernel, pv, _fresh_starts(n, lb, hi_total, options.starts), found, "completeness check", lb, hi_total, options)
         complete = check_found == 0
     states = []
     outside = 0
@@ -676,12 +744,12 @@ def _with_time(res: Equilibria, seconds: float) -> Equilibria:
 # the check that solve() makes
 
 #: The search ``solve`` makes by default: fewer starts and iterations than :func:`equilibria`, no
-#: completeness check, no barriers, no history of its own (it passes the state it reached); at
-#: n = 3 it costs about as much as the solve (docs/performance.md).
-SOLVE_CHECK = EquilibriaOptions(starts=13, max_iter=30, history=False, check=False, connect=False)
+#: completeness check, no barriers, no history of its own (the state it reached is deflated from
+#: the first round); up to n = 8 it costs about as much as the solve (docs/performance.md).
+SOLVE_CHECK = EquilibriaOptions(starts=9, max_iter=15, history=False, check=False, connect=False)
 #: ``multistability="auto"`` checks up to this many segments: beyond it the search costs
-#: several solves (docs/performance.md, the solve benchmark's "multistability check" line).
-AUTO_MAX_SEGMENTS = 16
+#: several solves (docs/performance.md, the solve benchmark's "multistability check" rows).
+AUTO_MAX_SEGMENTS = 8
 #: The values of ``SolverOptions.multistability``.
 MULTISTABILITY = ("auto", "always", "never")
 
@@ -747,7 +815,7 @@ def check_multistability(scene: Scene, model: Model, pressure: float, reached: n
     ``history`` names the load history, ``why`` says why it reached ``reached`` (it followed one
     branch, it snapped at a fold).
     """
-    res = search(scene, pressure, SOLVE_CHECK, (), model, reached)
+    res = search(scene, pressure, SOLVE_CHECK, (), model, reached, known_equilibrium=True)
     stable = res.stable
     k = None
     for j, s in enumerate(stable):

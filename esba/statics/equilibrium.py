@@ -134,7 +134,7 @@ class SolverOptions:
         at (1, 1). Where the scene is multistable it decides the state reached.
     multistability : str
         Look for other stable states of the scene (:func:`esba.statics.equilibria.check_multistability`):
-        ``auto`` (when n <= 16, where the search costs about a solve), ``always`` or ``never``.
+        ``auto`` (when n <= 8, where the search costs about a solve), ``always`` or ``never``.
 
     Examples
     --------

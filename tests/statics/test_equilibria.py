@@ -222,3 +222,21 @@ def test_bad_options_name_the_value():
     with pytest.raises(EquilibriaOptionsError, match=r"theta_starts\[0\]"):
         equilibria(Scene(pressure=0.1), theta_starts=[[0.1, 0.2]])
     assert history_steps("together") == ((1.0, 1.0),)
+
+
+def test_the_numpy_rounds_find_what_the_compiled_rounds_find(window, monkeypatch):
+    # beyond ROUND_ROOTS equilibria found, the rounds go on in NumPy (one kernel call per iteration)
+    from esba.statics import equilibria as module
+
+    monkeypatch.setattr(module, "ROUND_ROOTS", 0)
+    res = equilibria(window.scene, EquilibriaOptions(connect=False))
+    assert _summary(res) == _summary(window) and res.complete is True
+    for a, b in zip(res.states, window.states):
+        assert float(np.max(np.abs(a.theta - b.theta))) <= SAME_STATE
+
+
+@pytest.mark.parametrize("n", [3, 8])
+def test_solve_finds_the_other_state_up_to_the_auto_limit(n):
+    for pressure in (0.165, 0.17, 0.173):
+        r = solve(Scene(pressure=pressure, payloads=TWO_N, segments=n))
+        assert r.multistable is True and len(r.other_stable_states) == 1, (n, pressure, r.multistability.message)
