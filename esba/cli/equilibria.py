@@ -78,7 +78,8 @@ def _cmd_equilibria(args: argparse.Namespace) -> int:
     if res.complete is False:
         print(f"esba: warning: the completeness check found {res.check_found} equilibria the first search had not: raise --starts", file=sys.stderr)
     if not res.states:
-        print("esba: no equilibrium found in the domain", file=sys.stderr)
+        beyond = f" ({res.outside} beyond it: --max-bend widens it, up to 720 deg)" if res.outside else ""
+        print(f"esba: no equilibrium found in the domain searched, {res.describe_domain()}{beyond}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
 

@@ -66,6 +66,7 @@ import numpy as np
 from esba.infra import checks
 from esba.infra.errors import InputError
 from esba.infra.threads import single_threaded
+from esba.model import resolution
 from esba.model.closed_form import pressure_for_angle
 from esba.model.generated import Model
 from esba.model.scene import Scene, SceneError
@@ -720,6 +721,7 @@ def equilibria(scene: Scene, options: EquilibriaOptions | None = None, theta_sta
     else:
         pressure = pressure_for_angle(scene)
         unloaded = np.full(n, math.radians(scene.target_angle_deg) / n)
+    resolution.check_resolvable(scene, pressure, options.tol)  # scales the search cannot resolve: refused, as solve() does
     full = scene.parameters(pressure)
     pv = model.param_vector(full)
     reached = None
