@@ -232,7 +232,8 @@ class Equilibrium:
     steps : int
         Points traced along the load history plus IPOPT solves (1 without continuation).
     solve_time_s : float
-        Wall time of the whole solve, s.
+        Wall time of the whole solve, s (the multistability check's own time is in
+        ``multistability.search_time_s``).
     message : str
         Why the result is not ok (empty when it is).
     notes : tuple of str
