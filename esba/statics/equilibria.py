@@ -354,7 +354,6 @@ class _Found:
     rounds: int = 0
     runs: int = 0
     iterations: int = 0
-    outside: int = 0
 
 
 def _deflated_newton(kernel, pv: np.ndarray, starts: np.ndarray, roots: np.ndarray, lb: float, hi_total: float, opts: EquilibriaOptions) -> tuple[np.ndarray, np.ndarray, int]:
@@ -499,11 +498,11 @@ def _rounds(model, kernel, pv, starts, found: _Found, label: str, lb: float, hi_
     return new_total
 
 
-def _first_starts(n: int, lb: float, hi_total: float, count: int, extra: Sequence[np.ndarray]) -> tuple[np.ndarray, list[str]]:
+def _first_starts(n: int, lb: float, hi_total: float, count: int, extra: Sequence[np.ndarray]) -> np.ndarray:
     """The method's own starts: the extra states given, theta = 0, and constant curvature over the domain."""
     totals = np.linspace(0.95 * n * lb, hi_total, count)
     rows = [np.asarray(e, dtype=float) for e in extra] + [np.zeros(n)] + [np.full(n, t / n) for t in totals]
-    return np.array(rows), ["given"] * len(extra) + ["straight"] + ["constant curvature"] * count
+    return np.array(rows)
 
 
 def _fresh_starts(n: int, lb: float, hi_total: float, count: int) -> np.ndarray:
@@ -634,7 +633,7 @@ def search(
     lb, lo_total, hi_total = _domain(scene, model, full, options)
     kernel = newton_correction(model)
     extra = ([] if reached is None else [np.asarray(reached, dtype=float).ravel()]) + [np.asarray(t, dtype=float).ravel() for t in theta_starts]
-    starts, _ = _first_starts(n, lb, hi_total, options.starts, extra)
+    starts = _first_starts(n, lb, hi_total, options.starts, extra)
     found = _Found([], [])
     if reached is not None and known_equilibrium:  # deflate it from the start: the search looks for the others
         found.thetas.append(np.asarray(reached, dtype=float).ravel().copy())
@@ -643,7 +642,9 @@ def search(
     check_found = 0
     complete: bool | None = None
     if options.check:
-        check_found = _rounds(model, kernel, pv, _fresh_starts(n, lb, hi_total, options.starts), found, "completeness check", lb, hi_total, options)
+        before = len(found.thetas)
+        _rounds(model, kernel, pv, _fresh_starts(n, lb, hi_total, options.starts), found, "completeness check", lb, hi_total, options)
+        check_found = sum(1 for t in found.thetas[before:] if float(np.sum(t)) <= hi_total + 1e-9)  # new, in the domain
         complete = check_found == 0
     states = []
     outside = 0
