@@ -240,3 +240,30 @@ def test_solve_finds_the_other_state_up_to_the_auto_limit(n):
     for pressure in (0.165, 0.17, 0.173):
         r = solve(Scene(pressure=pressure, payloads=TWO_N, segments=n))
         assert r.multistable is True and len(r.other_stable_states) == 1, (n, pressure, r.multistability.message)
+
+
+def test_solve_check_agrees_with_the_full_search_on_random_scenes():
+    rng = np.random.default_rng(5)
+    for _ in range(15):
+        pressure, force, angle = rng.uniform(0.0, 0.25), rng.uniform(0.0, 4.0), rng.uniform(0.0, 180.0)
+        scene = Scene(pressure=pressure, payloads=(Payload(force, angle),))
+        r = solve(scene)
+        full = equilibria(scene, EquilibriaOptions(connect=False))
+        assert len(r.multistability.stable) == len(full.stable), (pressure, force, angle)
+        assert full.index(r.theta, SAME_STATE) is not None  # the state solve() reached is among them
+
+
+def test_the_detached_curled_branch_at_omega_121():
+    # the 2 N tip payload turned to 121 deg at the 90 degree pressure (docs/paths.md: the direction folds
+    # at 118.9 and 122.8 deg): two stable states; loading from rest reaches the near one, and the branch
+    # through the strongly curled one folds at a payload above 0, never reaching the unloaded actuator
+    res = equilibria(Scene(target_angle_deg=90.0, payloads=(Payload(2.0, 121.0),)))
+    assert [s.morse_index for s in res.states] == [0, 0, 1]
+    curled = max(res.stable, key=lambda s: s.total_angle_deg)
+    assert curled.total_angle_deg > 150.0 and res.states[res.history_state] is not curled
+    problem = PathProblem.from_scene(Scene(pressure=res.pressure, payloads=(Payload(2.0, 121.0),)), "payload")
+    down = trace(problem, curled.theta, 2.0, bounds=(0.0, 8.0), direction=-1.0, options=PathOptions(ds_max=0.1))
+    assert len(down.folds) == 1 and 1.5 < down.folds[0].lam < 2.0
+    assert float(down.lam.min()) > 1.5  # the branch turns back at the fold: F = 0 is never reached
+    r = solve(res.scene)
+    assert r.multistable is True and float(np.max(np.abs(r.other_stable_states[0].theta - curled.theta))) <= 1e-6
