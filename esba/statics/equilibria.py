@@ -24,14 +24,18 @@ The search (:class:`EquilibriaOptions`):
 
 * **the domain**: every segment angle above the model's lower bound (Eq. 10: the chamber closes),
   the total bend from n times that bound up to ``max_bend_deg`` (360 deg: beyond a full turn the
-  actuator passes through itself, :mod:`esba.model.validity`). A Newton run that leaves it is
-  stopped; each step is at most ``max_step_deg`` of total bend and stays inside the lower bound.
-* **the starts**: the load-history state (the one ``solve`` reaches, inflate then load), the
-  straight state theta = 0, the unloaded state at the pressure, ``theta_starts`` given by the
-  caller, and ``starts`` constant-curvature shapes whose total bends span the domain evenly.
-* **rounds**: every start runs deflated Newton against all equilibria found so far, all starts at
-  once; what converges is new (distinct starts that reach the same equilibrium count once). The
-  rounds go on until one finds nothing new.
+  actuator passes through itself, :mod:`esba.model.validity`). Each Newton step changes the total
+  bend by at most ``max_step_deg`` and stays inside the lower bound; an equilibrium that Newton
+  reaches beyond ``max_bend_deg`` is counted (``outside``), not listed.
+* **the starts**: the load-history state (inflate, then load; ``solve`` passes the state its own
+  history reached and deflates it from the first round), the straight state theta = 0, the exact
+  unloaded state when the scene gives a target angle, ``theta_starts`` given by the caller, and
+  ``starts`` constant-curvature shapes whose total bends span the domain evenly.
+* **rounds**: every start runs ``max_iter`` deflated Newton steps against all equilibria found so
+  far, all starts at once (one call of a compiled CasADi graph: the steps unrolled around the
+  kernel, mapped over the starts; a start that has converged stops moving); what converges is new
+  (distinct starts that reach the same equilibrium count once). The rounds go on until one finds
+  nothing new (beyond :data:`ROUND_ROOTS` equilibria found, in NumPy, one kernel call a step).
 * **the completeness check**: a second search from fresh starts (constant curvature half-way
   between the first starts, and shapes curved more towards the base or towards the tip over the
   same total bends), deflated by everything found. ``complete`` says whether it found nothing new
