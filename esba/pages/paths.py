@@ -186,6 +186,10 @@ def render_page(data: PathCases, command: str) -> str:
             if data.history_mpa is not None
             else "."
         ),
+        "That is `solve`'s default history; `--history load-then-inflate` (or `together`, or a list of steps)",
+        "chooses another, and `solve` names the other stable state when there is one. Every equilibrium of",
+        "the window, the saddle between the two stable states and the energy barriers are on",
+        "[equilibria.md](equilibria.md).",
         "",
         f"![pressure path under 2 N]({fig_rel / rel['pressure']})",
         "",
