@@ -74,6 +74,8 @@ WRITERS = {
     "path-pressure-2N": "esba path --write-doc",
     "path-omega-2N": "esba path --write-doc",
     "path-column-n4": "esba path --write-doc",
+    "sensing-blind": "esba docs --write sensing",
+    "sensing-ellipses": "esba docs --write sensing",
 }
 
 
