@@ -897,15 +897,25 @@ def estimate_load(
                        "no start converged: no load found whose equilibrium the iteration could follow")
     chi_k = float(stats.chi2.ppf(options.level, prob.size))
     if options.branches:
+        # every other stable state of each load found that explains the data, and, when none explains
+        # them within the noise, of each start load too: a shape on a branch no load history reaches
         best = min(r[0] for r in runs)
-        for cost, x, thetas, _, _, _ in list(runs):
-            if cost > best + chi_k:
-                continue
+        loads = [(x, thetas) for cost, x, thetas, _, _, _ in runs if cost <= best + chi_k]
+        if best > float(stats.chi2.ppf(options.level, max(m - prob.size, 1))):
+            loads += [(prob.project(x0), None) for _, x0 in starts]
+        for x, thetas in loads:
             for i, pm in enumerate(prob.pm):
-                for other in _other_states(pm, pm.params(prob.z_of(x, i)), thetas[i]):
-                    t0s = list(thetas)
+                p = pm.params(prob.z_of(x, i))
+                own = thetas[i] if thetas is not None else pm.history_state(p)
+                if own is None:
+                    continue
+                for other in _other_states(pm, p, own):
+                    t0s = list(thetas) if thetas is not None else [q.history_state(q.params(prob.z_of(x, j))) for j, q in enumerate(prob.pm)]
+                    if any(t is None for t in t0s):
+                        continue
                     t0s[i] = other
-                    run(x, t0s, f"another stable state of pose {pm.pose.label or i + 1} at a load found")
+                    run(x, t0s, f"another stable state of {pm.pose.label or f'pose {i + 1}'} at the load " + ", ".join(
+                        f"{lab}={v:.4g}" for lab, v in zip(prob.labels, x)))
     runs.sort(key=lambda r: r[0])
     # among the loads that explain the data equally well, one whose states the actuator can hold comes first
     stable_runs = [r for r in runs if r[0] <= runs[0][0] + chi_k and all(np.linalg.eigvalsh(part[0])[0] > 0 for part in r[4])]
