@@ -54,6 +54,8 @@ _FACADE = {
     "solve": "esba.statics.equilibrium",
     "BatchOptions": "esba.statics.batch",
     "solve_scenes": "esba.statics.batch",
+    "equilibria": "esba.statics.equilibria",
+    "EquilibriaOptions": "esba.statics.equilibria",
     # analyses
     "secant_stiffness": "esba.analysis.stiffness",
     "tangent_stiffness": "esba.analysis.stiffness",

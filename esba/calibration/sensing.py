@@ -271,7 +271,7 @@ class SensingOptions:
     level: float = 0.95
     starts: int = 12
     max_force: float = 4.0
-    branches: bool = False
+    branches: bool = True
     max_iterations: int = 100
     tol: float = 1e-10
     identifiability_tol: float = 1e-6

@@ -8,7 +8,7 @@ import re
 import sys
 import time
 
-from esba.infra import outputs
+from esba.infra import checks, outputs
 
 from .arguments import (
     UsageError,
@@ -52,6 +52,10 @@ def _solve_table(d: dict) -> str:
     ]
     if d.get("message"):
         rows.append(("NOT OK", d["message"]))
+    if d.get("history"):
+        rows.append(("history", d["history"]))
+    if d.get("multistability"):
+        rows.append(("other states", d["multistability"]["message"]))
     for note in d.get("notes", []):
         rows.append(("note", note))
     if d.get("sensitivities"):
@@ -108,7 +112,7 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    from esba.statics.equilibrium import EquilibriumError, SolverOptions, solve
+    from esba.statics.equilibrium import EquilibriumError, SolverOptions, SolverOptionsError, solve
 
     if args.no_plot and args.plot is not None:
         raise UsageError("--plot and --no-plot: give one of the two")
@@ -141,7 +145,17 @@ def _cmd_solve(args: argparse.Namespace) -> int:
             check_samples(args.monte_carlo, scene.segments, len(sigmas))  # before the nominal solve
         except UncertaintyError as exc:
             raise UsageError(f"--monte-carlo: {exc}") from None
-    options = SolverOptions(max_iter=args.max_iter, continuation=not args.no_continuation)
+    if args.no_continuation and args.history is not None:
+        raise UsageError("--history and --no-continuation: a history is a continuation; give one of the two")
+    try:
+        options = SolverOptions(
+            max_iter=args.max_iter,
+            continuation=not args.no_continuation,
+            history=args.history or "inflate-then-load",
+            multistability=args.multistability,
+        )
+    except SolverOptionsError as exc:
+        raise UsageError(f"--history: {exc}") from None
     try:
         result = solve(scene, options)
     except EquilibriumError as exc:
@@ -180,12 +194,14 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if figure is not None:
         from esba.figures.scenes import save_figure, solve_figure
 
-        unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False), pressure=result.pressure)
+        unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False), SolverOptions(multistability="never"), pressure=result.pressure)
         cov = propagation.cov_tip if propagation is not None and propagation.has_numbers else None
         tips = mc.tip[mc.ok] if mc is not None else None
         data["figure"] = str(save_figure(solve_figure(result, unloaded, tip_cov=cov, samples=tips), figure).resolve())
     print_result(args, data, _solve_table)
     warn_findings(result.validity)
+    if result.multistable:
+        print(f"esba: warning: {result.multistability.message}", file=sys.stderr)
     if mc is not None and mc.counts["ok"] < 2:
         print(f"esba: warning: {data['agreement']['verdict']}", file=sys.stderr)
     if not result.ok:
@@ -246,6 +262,23 @@ def _seed(text: str) -> int:
     return value
 
 
+def _history_arg(text: str):
+    """``--history``: a name, or steps ``P:L,P:L,...`` of pressure and load fractions."""
+    text = text.strip()
+    if ":" not in text:
+        return text  # a name: SolverOptions says which are allowed
+    steps = []
+    for part in text.split(","):
+        bits = part.split(":")
+        if len(bits) != 2:
+            raise argparse.ArgumentTypeError(f"--history {text!r}: each step is P:L (pressure and load fractions, 0 to 1), e.g. 0:1,1:1")
+        try:
+            steps.append((checks.number("--history", bits[0]), checks.number("--history", bits[1])))
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    return tuple(steps)
+
+
 def add_solve(sub) -> None:
     p = sub.add_parser("solve", help="solve a scene's equilibrium (no arguments: the paper's Table 2 case, n = 3)")
     add_scene_flags(p)
@@ -253,6 +286,19 @@ def add_solve(sub) -> None:
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--max-iter", type=count_arg("max_iter", 1, _MAX_ITER, "an equilibrium takes tens of iterations"), default=200, metavar="N", help="IPOPT iterations per solve (default 200, at most 100000)")
     p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
+    p.add_argument(
+        "--history",
+        type=_history_arg,
+        metavar="HISTORY",
+        help="the load history: inflate-then-load (default), load-then-inflate, together, or steps of (pressure, load) "
+        "fractions P:L,P:L,... ending at 1:1 (e.g. 0.5:0,0.5:1,1:1); where the scene is multistable it decides the state",
+    )
+    p.add_argument(
+        "--multistability",
+        choices=("auto", "always", "never"),
+        default="auto",
+        help="look for other stable states (auto: when n <= 16, where it costs about a solve)",
+    )
     p.add_argument("--sensitivities", action="store_true", help="d(angles, tip)/d(parameter) for every scene parameter (exact, implicit function theorem)")
     p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="uncertain parameter: E=0.05 (in its unit), E=10%%, r2=±0.1 (a tolerance); repeatable; propagated to first order")
     p.add_argument("--monte-carlo", type=_sample_count, metavar="N", help="check the first-order uncertainty with N Monte Carlo samples on the batch path (e.g. 10000)")
