@@ -183,3 +183,47 @@ def test_pose_file_errors_name_the_line(tmp_path):
     f.write_text("pressure_mpa,weight\n0.1,60\n")
     with pytest.raises(Exception, match=r"unknown column\(s\) weight"):
         load_poses(f)
+
+
+def test_two_loads_that_explain_the_same_angle_in_the_bistable_window_are_both_listed():
+    # P = 0.17 MPa under 2 N: at Omega = 90 deg the actuator is bistable (212.84 and 83.90 deg); the
+    # 83.90 deg state is the one inflating and then loading does not reach. Its total angle, with the
+    # direction free, is explained as well by a load at about -10 deg that the history does reach.
+    base = Scene(pressure=0.17, payloads=(Payload(2.0, 0.0),))
+    e = estimate_load(Pose(0.17, (Measured("total_angle", (83.90,), 0.5),)), ("Omega1",), base)
+    assert not e.unique and len(e.alternatives) == 2
+    omegas = sorted(float(c.estimate[0]) for c in e.alternatives)
+    assert omegas[0] == pytest.approx(-10.0, abs=0.1) and omegas[1] == pytest.approx(90.0, abs=0.01)
+    assert all(all(c.stable) for c in e.alternatives)
+    assert any("not unique: 2 loads" in w for w in e.warnings)
+    d = e.to_dict()
+    assert len(d["alternatives"]) == 2 and all(a["states"][0]["total_angle_deg"] == pytest.approx(83.90, abs=1e-6) for a in d["alternatives"])
+
+
+def test_a_shape_no_load_history_reaches_is_explained_through_the_equilibria_search():
+    # the bistable window's second state (83.90 deg under 2 N horizontal at 0.17 MPa): no start's load
+    # history reaches it; the other stable states of the start loads do
+    e = estimate_load(Pose(0.17, (Measured("total_angle", (83.90,), 0.05),)), ("F1",), Scene(pressure=0.17, payloads=(Payload(1.0, 90.0),)))
+    assert e.ok and e.unique and e.value("F1") == pytest.approx(2.0, abs=1e-3)
+    assert not e.states[0]["on_load_history"]
+    assert any("reaches another state (total angle 212.84 deg)" in w for w in e.warnings)
+    without = estimate_load(Pose(0.17, (Measured("total_angle", (83.90,), 0.05),)), ("F1",), Scene(pressure=0.17, payloads=(Payload(1.0, 90.0),)),
+                            SensingOptions(branches=False))
+    assert without.chi2 > 1e3  # from the load histories alone nothing explains it
+
+
+def test_cli_carries_a_fits_covariance(tmp_path, capsys):
+    fit = {"parameters": {"E": {"estimate": 0.55, "std_error": 0.02}}, "covariance": [[0.0004]]}
+    (tmp_path / "fit.json").write_text(json.dumps(fit))
+    argv = ["estimate", "--pressure", "0.15", "--theta", "11.88,21.31,33.05", "--sigma-theta", "0.05", "--json"]
+    assert main(argv) == 0
+    frozen = json.loads(capsys.readouterr().out)["unknowns"]["F1"]["std_error"]
+    assert main([*argv, "--fit", str(tmp_path / "fit.json")]) == 0
+    carried = json.loads(capsys.readouterr().out)["unknowns"]["F1"]["std_error"]
+    pose = Pose(0.15, (Measured("theta", (11.88, 21.31, 33.05), 0.05),))
+    same = estimate_load(pose, ("force", "angle"), Scene(pressure=0.15, payloads=(Payload(2.0, 90.0),)).replace(E=0.55),
+                         carried=("E",), carried_covariance=[[0.0004]])
+    assert carried == pytest.approx(same.std_error[0], rel=1e-6) and carried > frozen
+    (tmp_path / "bad.json").write_text("{}")
+    assert main([*argv, "--fit", str(tmp_path / "bad.json")]) == 2
+    assert "expected the JSON of `esba fit --json`" in capsys.readouterr().err
