@@ -33,8 +33,8 @@ from .arguments import Parser, UsageError
 from .bench import add_bench
 from .design import add_design
 from .docs import add_docs
-from .estimate import add_estimate
 from .equilibria import add_equilibria
+from .estimate import add_estimate
 from .export import add_export
 from .figures import add_figures
 from .fit import add_experiments, add_fit
