@@ -227,3 +227,12 @@ def test_cli_carries_a_fits_covariance(tmp_path, capsys):
     (tmp_path / "bad.json").write_text("{}")
     assert main([*argv, "--fit", str(tmp_path / "bad.json")]) == 2
     assert "expected the JSON of `esba fit --json`" in capsys.readouterr().err
+
+
+def test_two_payloads_are_separated_where_the_segment_angles_can_tell_them_apart():
+    true = Scene(pressure=0.12, payloads=(Payload(1.0, 0.0), Payload(0.8, 90.0, at=0.5)))
+    theta = tuple(solve(true).theta_deg)
+    start = true.replace(payloads=(Payload(0.2, 0.0), Payload(0.2, 90.0, at=0.5)))
+    e = estimate_load(Pose(0.12, (Measured("theta", theta, 0.01),)), ("F1", "F2"), start)
+    assert e.ok and e.identifiable and e.unique
+    assert e.estimate == pytest.approx([1.0, 0.8], abs=1e-6)
