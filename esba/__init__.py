@@ -66,6 +66,7 @@ _FACADE = {
     "fit": "esba.calibration.fit",
     "load_measurements": "esba.calibration.measurements",
     "propagate": "esba.calibration.uncertainty",
+    "estimate_load": "esba.calibration.sensing",
     # studies
     "sweep": "esba.studies.sweep",
     "plan_sweep": "esba.studies.sweep",

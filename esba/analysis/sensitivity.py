@@ -76,6 +76,7 @@ __all__ = [
     "parameter_names",
     "with_parameters",
     "model_values",
+    "implicit_functions",
     "sensitivities",
     "UNITS",
     "ROUND_OFF",
@@ -337,9 +338,11 @@ class SensitivityOptions:
 # ---------------------------------------------------------------------------------------------
 # the CasADi functions (one set per model and pressure mode)
 
-def _functions(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...]) -> ca.Function:
+def implicit_functions(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...]) -> ca.Function:
     """(theta, p, fixed, v) -> G, dG/dtheta, dG/dp, tip, dtip/dtheta, dtip/dp, d(v'Hv)/dtheta, d(v'Hv)/dp
-    (in the model's registry, per set of parameter names)."""
+    (in the model's registry, per set of parameter names): p are scene parameters ``names`` in
+    scene-file units, ``fixed`` the model parameters ``fixed_names`` that are not among them. The
+    load estimate (:mod:`esba.calibration.sensing`) builds on the same function."""
     return model.derived("sensitivity", lambda: _build(model, names, fixed_names), settings=(names, fixed_names), persist=False)
 
 
@@ -505,7 +508,7 @@ def sensitivities(result: Equilibrium, parameters: Sequence[str] | None = None, 
     p = np.array([q.value for q in params])
     fixed_names = tuple(k for k in model.parameters if k == "g" and "g" not in names)
     fixed = np.array([scene.g for _ in fixed_names])
-    fun = _functions(model, names, fixed_names)
+    fun = implicit_functions(model, names, fixed_names)
     theta = np.asarray(result.theta, dtype=float)
     n, m = model.n, len(names)
     eig, vecs = np.linalg.eigh(np.asarray(model.hessian(theta, model.param_vector(result.parameters))))

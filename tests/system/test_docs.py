@@ -76,6 +76,8 @@ WRITERS = {
     "path-column-n4": "esba path --write-doc",
     "equilibria-window": "esba docs --write equilibria",
     "equilibria-omega121": "esba docs --write equilibria",
+    "sensing-blind": "esba docs --write sensing",
+    "sensing-ellipses": "esba docs --write sensing",
 }
 
 
