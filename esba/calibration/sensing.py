@@ -79,7 +79,7 @@ from esba.infra.errors import InputError
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import assess
-from esba.statics.equilibrium import EquilibriumError, solve
+from esba.statics.equilibrium import EquilibriumError, SolverOptions, solve
 
 __all__ = [
     "SensingError",
@@ -108,6 +108,10 @@ _ALIASES = {"force": "F", "angle": "Omega", "at": "s"}
 
 #: Carried actuator parameters that may have a covariance.
 ACTUATOR = ("L", "r1", "r2", "d", "rho", "E", "M")
+
+
+#: The history's state only: the estimate looks for the other stable states itself, where it needs them.
+_HISTORY_ONLY = SolverOptions(multistability="never")
 
 
 class SensingError(InputError):
@@ -565,7 +569,7 @@ class _PoseModel:
         """The state the inflate-then-load history reaches at ``p`` (None where it fails)."""
         try:
             scene = with_parameters(self.scene, dict(zip(self.names, p)))
-            r = solve(scene)
+            r = solve(scene, _HISTORY_ONLY)
         except (SceneError, EquilibriumError):
             return None
         return np.asarray(r.theta, float) if r.success else None
@@ -900,7 +904,12 @@ def estimate_load(
         # every other stable state of each load found that explains the data, and, when none explains
         # them within the noise, of each start load too: a shape on a branch no load history reaches
         best = min(r[0] for r in runs)
-        loads = [(x, thetas) for cost, x, thetas, _, _, _ in runs if cost <= best + chi_k]
+        loads: list[tuple[np.ndarray, list | None]] = []
+        for cost, x, thetas, _, _, _ in sorted(runs, key=lambda r: r[0]):
+            same = any(np.max(np.abs(x - y) / prob.scales(x)) < 1e-6 and all(np.max(np.abs(a - b)) < 1e-6 for a, b in zip(thetas, ts))
+                       for y, ts in loads)
+            if cost <= best + chi_k and not same:  # each distinct load (and state) searched once
+                loads.append((x, thetas))
         if best > float(stats.chi2.ppf(options.level, max(m - prob.size, 1))):
             loads += [(prob.project(x0), None) for _, x0 in starts]
         for x, thetas in loads:
@@ -1043,7 +1052,7 @@ def predict_pose(scene: Scene, kinds: Sequence[Measured], theta: np.ndarray | No
     pose = Pose(scene.pressure, tuple(kinds), target_angle_deg=scene.target_angle_deg if scene.pressure is None else None)
     pm = _PoseModel(pose, scene, (), ())
     if theta is None:
-        r = solve(scene)
+        r = solve(scene, _HISTORY_ONLY)
         theta = np.asarray(r.theta, float)
     return theta, pm.call(theta, pm.p0)[3]
 

@@ -34,8 +34,10 @@ def test_intervals_cover_the_true_load_in_95_percent_of_200_random_cases():
     for _ in range(200):
         p, f, om = rng.uniform(0.08, 0.2), rng.uniform(0.5, 2.5), rng.uniform(-180.0, 180.0)
         noisy = tuple(_shape(p, f, om) + rng.normal(0.0, 0.1, 3))
-        e = estimate_load(Pose(p, (Measured("theta", noisy, 0.1),)), ("F1", "Omega1"), _start(p))
-        assert e.ok and e.unique and e.identifiable
+        # the starts all round, without the equilibria search (it only adds loads on other branches,
+        # tested below): the intervals are what is tested here
+        e = estimate_load(Pose(p, (Measured("theta", noisy, 0.1),)), ("F1", "Omega1"), _start(p), SensingOptions(branches=False))
+        assert e.ok and e.identifiable
         lo, hi = e.interval[0]
         covered_f += lo <= f <= hi
         d_omega = (e.estimate[1] - om + 180.0) % 360.0 - 180.0
