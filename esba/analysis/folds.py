@@ -497,7 +497,8 @@ def _half(fs: _FoldSystem, start: _Node, direction: float, box, opts: FoldOption
     ds = opts.ds
     s_total = 0.0
     (xlo, xhi), (ylo, yhi) = box
-    mx, my = opts.margin * fs.sx, opts.margin * fs.sy
+    _, x, y, _ = fs.split(start.u)
+    outside = max(xlo - x, x - xhi, 0.0) / fs.sx + max(ylo - y, y - yhi, 0.0) / fs.sy
     a = start
     tests_a = fs.tests(a)
     for _ in range(opts.max_steps):
@@ -527,8 +528,10 @@ def _half(fs: _FoldSystem, start: _Node, direction: float, box, opts: FoldOption
         elif b.iterations >= 5:
             ds = max(opts.ds_min, 0.5 * ds)
         theta, x, y, _ = fs.split(b.u)
-        if not (xlo - mx <= x <= xhi + mx and ylo - my <= y <= yhi + my):
+        away = max(xlo - x, x - xhi, 0.0) / fs.sx + max(ylo - y, y - yhi, 0.0) / fs.sy
+        if away > opts.margin and away >= outside:  # beyond the margin and not coming back in
             return nodes, special, "left the map"
+        outside = away
         here = b.u[: fs.n + 2]
         if len(nodes) > 5 and np.linalg.norm(here - start.u[: fs.n + 2]) < 0.6 * ds:
             return nodes, special, "closed (returned to its start)"
@@ -615,20 +618,27 @@ def _equilibrium(plane: Plane, x: float, y: float) -> np.ndarray | None:
 
 
 def seed_folds(plane: Plane, box, lines: int = 5) -> list[tuple[np.ndarray, float, float, np.ndarray]]:
-    """Folds (theta, x, y, v) of ``lines`` paths in x (at evenly spaced y) and in y (at evenly spaced x)."""
+    """Folds (theta, x, y, v) of ``lines`` paths in x (at evenly spaced y) and in y (at evenly spaced x),
+    each traced from the box's low end to one span beyond its high end (a path that reaches a fold
+    beyond the box comes back into it through the fold's partner; a curve seeded outside is
+    followed while it comes nearer the box)."""
     (xlo, xhi), (ylo, yhi) = box
     seeds = []
     for y in np.linspace(ylo, yhi, lines):
         theta = _equilibrium(plane, xlo, y)
         if theta is None:
             continue
-        b = trace(plane.along_x(float(y)), theta, xlo, to=xhi, options=SEED_OPTIONS)
+        problem = plane.along_x(float(y))
+        to = min(xhi + (xhi - xlo), problem.domain[1])
+        b = trace(problem, theta, xlo, to=to, options=SEED_OPTIONS)
         seeds += [(f.theta, f.lam, float(y), f.eigenvector) for f in b.folds if f.status == "converged"]
     for x in np.linspace(xlo, xhi, lines):
         theta = _equilibrium(plane, x, ylo)
         if theta is None:
             continue
-        b = trace(plane.along_y(float(x)), theta, ylo, to=yhi, options=SEED_OPTIONS)
+        problem = plane.along_y(float(x))
+        to = min(yhi + (yhi - ylo), problem.domain[1])
+        b = trace(problem, theta, ylo, to=to, options=SEED_OPTIONS)
         seeds += [(f.theta, float(x), f.lam, f.eigenvector) for f in b.folds if f.status == "converged"]
     return seeds
 

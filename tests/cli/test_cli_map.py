@@ -69,3 +69,18 @@ def test_map_table(capsys, tmp_path):
 def test_bad_input(capsys, args, words):
     code, out, err = run(capsys, "map", *args, "--no-out", "--no-plot")
     assert code == EXIT_USAGE and words in err and err.count("\n") == 1, err
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["--envelope-pressure", "0.3"], "needs both"),
+        (["--envelope-pressure", "0.3", "--envelope-payload", "-2"], "max_payload=-2"),
+        (["--envelope-pressure", "0.3", "--envelope-payload", "2", "--objective", "angle"], "stiffness objective"),
+        (["--envelope-pressure", "0.3", "--envelope-payload", "2", "--fold-margin", "-1"], "margin=-1"),
+        (["--envelope-pressure", "0.3", "--envelope-payload", "2", "--envelope-at", "0"], "at=0"),
+    ],
+)
+def test_design_envelope_bad_input(capsys, args, words):
+    code, out, err = run(capsys, "design", *args)
+    assert code == EXIT_USAGE and words in err and err.count("\n") == 1, err
