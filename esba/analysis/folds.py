@@ -536,8 +536,10 @@ def _half(fs: _FoldSystem, start: _Node, direction: float, box, opts: FoldOption
         if len(nodes) > 5 and np.linalg.norm(here - start.u[: fs.n + 2]) < 0.6 * ds:
             return nodes, special, "closed (returned to its start)"
         for other in known:
-            if len(nodes) > 5 and np.min(np.linalg.norm(other - here, axis=1)) < 1e-3:
-                return nodes, special, "joined a fold curve already traced"
+            # within a step of a traced curve's points: the same curve (its last node overlaps it and goes)
+            if np.min(np.linalg.norm(other - here, axis=1)) < 0.75 * opts.ds_max:
+                nodes.pop()
+                return nodes, [p for p in special if p.arclength <= s_total - ds], "joined a fold curve already traced"
         a, tests_a = b, tests_b
     return nodes, special, f"reached {opts.max_steps} steps"
 
@@ -669,7 +671,9 @@ def fold_curves(
             continue
         c = trace_fold_curve(plane, theta, x, y, v, box, options, known=curves, index=len(curves))
         if c is not None and len(c) > 1:
-            curves.append(c)
+            inside = (c.xs >= box[0][0]) & (c.xs <= box[0][1]) & (c.ys >= box[1][0]) & (c.ys <= box[1][1])
+            if inside.any():  # a piece wholly outside the box (seeded beyond it) is not the map's
+                curves.append(c)
     return curves
 
 
