@@ -78,7 +78,29 @@ def _map_table(d: dict) -> str:
     return "\n".join(lines)
 
 
+def _map_write_doc(args: argparse.Namespace) -> int:
+    """``esba map --write-doc FILE``: the maps of docs/maps.md (no other map flags)."""
+    given = [flag for flag, v in (("--x", args.x), ("--y", args.y), ("--out", args.out), ("--plot", args.plot), ("--check-grid", args.check_grid), ("SCENE.toml", args.scene)) if v is not None]
+    if given:
+        raise UsageError(f"--write-doc runs its own maps of the Table 1 actuator: give no {', '.join(given)} with it")
+    outputs.check_file(args.write_doc, "--write-doc", (".md",))
+    from esba.pages.maps import PAGE, MapsSettings
+
+    def say(msg):
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    page = PAGE.write(args.write_doc, MapsSettings(f"esba map --write-doc {args.write_doc}"), progress=say).path
+    print_result(args, {"page": str(page.resolve())}, lambda d: f"wrote {d['page']}")
+    return EXIT_OK
+
+
 def _cmd_map(args: argparse.Namespace) -> int:
+    if args.write_doc:
+        return _map_write_doc(args)
+    for flag, v in (("--x", args.x), ("--y", args.y)):
+        if v is None:
+            raise UsageError(f"the following arguments are required: {flag} PARAM:FROM:TO")
     out = None if args.no_out else outputs.check_file(args.out or DEFAULT_MAP_OUT, "--out", (".csv", ".json"))
     plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_MAP_FIGURE, "--plot", DEFAULT_MAP_FIGURE)
     (xname, x0, x1), (yname, y0, y1) = args.x, args.y
@@ -125,8 +147,8 @@ def add_map(sub) -> None:
         help="stability map of two parameters: fold curves, cusps, regions by number of stable states, jump lines (CSV/JSON, figure)",
     )
     add_scene_flags(p)
-    p.add_argument("--x", type=axis_arg("--x"), required=True, metavar="PARAM:FROM:TO", help="the horizontal parameter and its range (e.g. omega:110:135; units as esba path)")
-    p.add_argument("--y", type=axis_arg("--y"), required=True, metavar="PARAM:FROM:TO", help="the vertical parameter and its range (e.g. payload:0:4)")
+    p.add_argument("--x", type=axis_arg("--x"), metavar="PARAM:FROM:TO", help="the horizontal parameter and its range (e.g. omega:110:135; units as esba path)")
+    p.add_argument("--y", type=axis_arg("--y"), metavar="PARAM:FROM:TO", help="the vertical parameter and its range (e.g. payload:0:4)")
     p.add_argument("--check-grid", type=count_arg("--check-grid", 1, 40, "K x K brute-force counts"), metavar="K", help="also count the stable states by brute force at the centres of a K x K grid and compare (exit 1 on a disagreement away from a fold curve)")
     p.add_argument("--resolution", type=count_arg("--resolution", 11, 1001, "raster of the regions"), default=201, metavar="N", help="the regions' raster, N x N (default 201)")
     p.add_argument("--history-lines", type=count_arg("--history-lines", 0, 201, "quasi-static histories"), default=21, metavar="N", help="values of y at which the history in x is followed up and down for the jump lines (default 21; 0: none)")
@@ -135,4 +157,5 @@ def add_map(sub) -> None:
     p.add_argument("--plot", metavar="FILE", help=f"the figure (default {DEFAULT_MAP_FIGURE})")
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--points", action="store_true", help="with --json: print every point of the fold curves")
+    p.add_argument("--write-doc", metavar="FILE", help="compute the maps of docs/maps.md (Table 1: three stability maps, the design plane; about two minutes) and write the page and its figures")
     p.set_defaults(func=_cmd_map)

@@ -397,3 +397,77 @@ def optimise_envelope(
         return _pso_method(problem, envelope, options, pso_options)
     m = _map_method(problem, envelope, options)
     return m, _pso_method(problem, envelope, options, pso_options, m.unconstrained)
+
+
+# ---------------------------------------------------------------------------------------------
+# the design plane
+
+
+@dataclass(frozen=True, eq=False)
+class DesignPlane:
+    """Designs on a grid over (r2, d) against an envelope.
+
+    Per design (flat arrays): ``stiffness`` (N/m, nan where it fails), ``pressure`` (the 90 degree
+    pressure, MPa), ``value`` (the fold constraint c; nan over the pressure budget, where it is not
+    computed), ``state``: ``"clear"``, ``"margin"`` (a fold beyond the envelope but within the
+    margin), ``"snaps"`` (a stable fold inside the envelope) or ``"over budget"`` (the 90 degree
+    pressure is above max_pressure). ``optimum``: (map, pso) designs, or None.
+    """
+
+    problem: DesignProblem
+    envelope: Envelope
+    r2: np.ndarray
+    d: np.ndarray
+    stiffness: np.ndarray
+    pressure: np.ndarray
+    value: np.ndarray
+    state: tuple[str, ...]
+    optimum: tuple[EnvelopeDesign, ...] | None
+    seconds: float
+
+    def count(self, state: str) -> int:
+        return sum(1 for s in self.state if s == state)
+
+
+def design_plane(
+    problem: DesignProblem | None,
+    envelope: Envelope,
+    r2_values,
+    d_values,
+    *,
+    optimum: str | None = "both",
+    options: DesignOptions | None = None,
+    pso_options: PSOOptions | None = None,
+    progress=None,
+) -> DesignPlane:
+    """The fold constraint and the stiffness of every design (r2, d) of the grid with r2 + d inside the
+    geometry, and (``optimum``: a method of :data:`ENVELOPE_METHODS`) the stiffest clear design."""
+    say = progress or (lambda msg: None)
+    problem = _problem(problem, envelope)
+    options = DEFAULT_DESIGN_OPTIONS if options is None else options
+    t0 = time.perf_counter()
+    room = problem.actuator.r1 - problem.wall
+    R2, D = np.meshgrid(np.asarray(r2_values, dtype=float), np.asarray(d_values, dtype=float))
+    keep = R2 + D <= room
+    r2, d = R2[keep], D[keep]
+    say(f"{len(r2)} designs: stiffness")
+    e = evaluate(problem, r2, d, options)
+    value = np.full(len(r2), np.nan)
+    state = []
+    say(f"{len(r2)} designs: fold curves")
+    for i in range(len(r2)):
+        if not e.ok[i] or e.pressure[i] > problem.max_pressure:
+            state.append("over budget" if e.ok[i] else "fails")
+            continue
+        c = fold_clearance(problem, envelope, r2[i], d[i])
+        value[i] = c.value
+        state.append("clear" if c.clear else ("snaps" if c.inside else "margin"))
+    best = None
+    if optimum:
+        say(f"the stiffest clear design ({optimum})")
+        run = optimise_envelope(problem, envelope, optimum, options, pso_options)
+        best = run if isinstance(run, tuple) else (run,)
+    return DesignPlane(problem, envelope, r2, d, np.where(e.ok, e.stiffness, np.nan), e.pressure, value, tuple(state), best, time.perf_counter() - t0)
+
+
+__all__ += ["DesignPlane", "design_plane"]

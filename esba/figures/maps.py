@@ -82,3 +82,38 @@ def map_figure(smap: StabilityMap, title: str | None = None) -> Figure:
     if title:
         ax.set_title(title, fontsize=9)
     return fig
+
+
+#: Colours of the design plane's states.
+DESIGN_STATES = {"clear": "#ffffff", "margin": "#fdd49e", "snaps": "#ef6548", "over budget": "#d9d9d9", "fails": "#969696"}
+
+
+def design_plane_figure(plane) -> Figure:
+    """The design plane (:class:`esba.design.envelope.DesignPlane`): each design coloured by whether a
+    fold lies in its envelope, contours of the stiffness, the optimum without and with the constraint."""
+    fig = new_figure(6.0, 4.8)
+    ax = fig.add_subplot(1, 1, 1)
+    labels = {"clear": "clear of folds", "margin": "fold within the margin", "snaps": "snaps inside the envelope",
+              "over budget": "90 deg pressure over the budget", "fails": "no stable loaded state"}
+    states = np.array(plane.state)
+    for s, colour in DESIGN_STATES.items():
+        pick = states == s
+        if pick.any():
+            ax.scatter(plane.r2[pick], plane.d[pick], s=60, marker="s", c=colour, edgecolors="0.5", linewidths=0.5, label=labels[s])
+    ok = np.isfinite(plane.stiffness)
+    if ok.sum() >= 3:
+        cs = ax.tricontour(plane.r2[ok], plane.d[ok], plane.stiffness[ok], levels=8, colors="C0", linewidths=0.8)
+        ax.clabel(cs, fontsize=7, fmt="%.0f")
+    if plane.optimum:
+        u = plane.optimum[0].unconstrained
+        if u.get("r2_mm") is not None:
+            ax.plot([u["r2_mm"]], [u["d_mm"]], "X", color="k", ms=10, label="stiffest design (no fold constraint)")
+        for r, marker, colour in zip(plane.optimum, ("*", "P"), ("C3", "C2")):
+            ax.plot([r.r2_mm], [r.d_mm], marker, color=colour, ms=12 if marker == "*" else 9, label=f"stiffest clear design ({r.method})")
+    ax.set_xlabel("r2 (mm)")
+    ax.set_ylabel("d (mm)")
+    ax.legend(fontsize=7, loc="upper right")
+    return fig
+
+
+__all__ += ["design_plane_figure", "DESIGN_STATES"]

@@ -6,7 +6,7 @@ page's module when it is asked for.
 Examples
 --------
 >>> list(ENTRIES)
-['derivations', 'validation', 'design', 'paths', 'experiments', 'accuracy-vs-time', 'performance', 'scaling']
+['derivations', 'validation', 'design', 'paths', 'experiments', 'accuracy-vs-time', 'performance', 'scaling', 'maps']
 >>> [e.name for e in ENTRIES.values() if e.slow]
 ['accuracy-vs-time', 'performance', 'scaling']
 >>> check_names(["paths", "paths", "validation"])
@@ -65,6 +65,8 @@ ENTRIES: dict[str, Entry] = {
               "generation, single calls, path tracing"),
         Entry("scaling", "scaling.md", "esba.pages.scaling", "esba bench scaling --markdown docs/scaling.md", True,
               "sweeps in this process and on Dask workers"),
+        Entry("maps", "maps.md", "esba.pages.maps", "esba map --write-doc docs/maps.md", False,
+              "stability maps: fold curves, cusps, regions by stable states, designs clear of folds"),
     )
 }
 
