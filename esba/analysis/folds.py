@@ -55,7 +55,7 @@ import numpy as np
 from esba.infra import jsonsafe
 from esba.model.scene import Scene
 from esba.model.stability import CRITICAL_TOL
-from esba.paths.continuation import PathOptions, trace
+from esba.paths.continuation import MAX_SPAN, PathOptions, trace
 from esba.paths.problem import PathError, PathProblem
 from esba.statics.equilibrium import EquilibriumError, solve
 
@@ -645,6 +645,16 @@ def seed_folds(plane: Plane, box, lines: int = 5) -> list[tuple[np.ndarray, floa
     return seeds
 
 
+def check_box(plane: Plane, box) -> None:
+    """Refuse a box wider than the path engine follows (the seeding traces run one span beyond it)."""
+    for (lo, hi), prob, axis in ((box[0], plane.px, "x"), (box[1], plane.py, "y")):
+        if hi - lo > 0.5 * MAX_SPAN * prob.scale:
+            raise PathError(
+                f"{axis} range {lo:g}..{hi:g}{prob.unit_short}: at most {0.5 * MAX_SPAN * prob.scale:g}{prob.unit_short} wide "
+                f"({0.5 * MAX_SPAN:g} typical sizes of {prob.name})"
+            )
+
+
 def fold_curves(
     plane: Plane,
     xrange: tuple[float, float],
@@ -661,6 +671,7 @@ def fold_curves(
     box = (tuple(map(float, xrange)), tuple(map(float, yrange)))
     if not (box[0][0] < box[0][1] and box[1][0] < box[1][1]):
         raise PathError(f"ranges {xrange!r}, {yrange!r}: expected FROM < TO for both parameters")
+    check_box(plane, box)
     seeds = seed_folds(plane, box, lines) if seeds is None else list(seeds)
     spans = (box[0][1] - box[0][0], box[1][1] - box[1][0])
     curves: list[FoldCurve] = []
@@ -718,4 +729,4 @@ def folds_at(plane: Plane, curves: Sequence[FoldCurve], box, *, x: float | None 
     return sorted(found)
 
 
-__all__ += ["fold_summary", "seed_folds", "SEED_OPTIONS", "folds_at"]
+__all__ += ["fold_summary", "seed_folds", "SEED_OPTIONS", "folds_at", "check_box"]

@@ -105,7 +105,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_MAP_FIGURE, "--plot", DEFAULT_MAP_FIGURE)
     (xname, x0, x1), (yname, y0, y1) = args.x, args.y
     scene = scene_from_args(args)
-    from esba.analysis.folds import Plane, write_fold_curves
+    from esba.analysis.folds import Plane, check_box, write_fold_curves
     from esba.analysis.maps import check_grid, stability_map
     from esba.paths.problem import PathError
     from esba.statics.equilibrium import EquilibriumError
@@ -115,6 +115,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
         for name, lo, hi, prob in ((xname, x0, x1, plane.px), (yname, y0, y1, plane.py)):
             if not (prob.in_range(lo) and prob.in_range(hi)):
                 raise UsageError(f"--{'x' if prob is plane.px else 'y'} {name}:{lo:g}:{hi:g}: outside the parameter's range {prob.domain[0]:g}..{prob.domain[1]:g}")
+        check_box(plane, ((x0, x1), (y0, y1)))
         say = (lambda msg: None) if args.json else (lambda msg: print(f"  {msg}", file=sys.stderr))
         smap = stability_map(plane, (x0, x1), (y0, y1), resolution=args.resolution, history_lines=args.history_lines, progress=say)
         checked = check_grid(smap, args.check_grid) if args.check_grid else None

@@ -63,6 +63,8 @@ def test_map_table(capsys, tmp_path):
         (["--x", "payload:0:4", "--y", "payload1:0:4"], "same model parameter"),
         (["--x", "pressure:-1:0.2", "--y", "payload:0:4"], "outside the parameter's range"),
         (["--x", "omega2:0:90", "--y", "payload:0:4"], "1 payload"),
+        (["--x", "pressure:0:1e300", "--y", "payload:0:4"], "at most 50000 MPa wide"),
+        (["--x", "omega:nan:3", "--y", "payload:0:4"], "finite FROM < TO"),
         (["--x", "omega:110:135", "--y", "payload:0:4", "--check-grid", "0"], "--check-grid"),
     ],
 )

@@ -74,6 +74,10 @@ WRITERS = {
     "path-pressure-2N": "esba path --write-doc",
     "path-omega-2N": "esba path --write-doc",
     "path-column-n4": "esba path --write-doc",
+    "map-pressure-payload": "esba map --write-doc",
+    "map-omega-payload": "esba map --write-doc",
+    "map-pressure-omega": "esba map --write-doc",
+    "map-design-plane": "esba map --write-doc",
 }
 
 
