@@ -48,6 +48,8 @@ MAX_STARTS = 400
 START_HIGH = 2.2
 #: Largest max |dU/dtheta| of a stationary point, N mm/rad.
 STATES_TOL = 1e-9
+#: Point-segment pairs per block when counting crossings (memory: a few arrays of this many doubles).
+CROSSING_BLOCK = 1_000_000
 #: Two minima closer than this (max over the segments, rad) are one state.
 SAME_STATE = 1e-5
 
@@ -192,10 +194,15 @@ def count_at(curves: Sequence[FoldCurve], spans, reference: tuple[float, float, 
     x = np.asarray(x, dtype=float).ravel()
     y = np.asarray(y, dtype=float).ravel()
     xr, yr, nr = reference
-    p0 = np.column_stack([np.full_like(x, xr / spans[0]), np.full_like(y, yr / spans[1])])
-    corner = np.column_stack([np.full_like(x, xr / spans[0]), y / spans[1]])
-    end = np.column_stack([x / spans[0], y / spans[1]])
-    return nr + _crossings(p0, corner, segs, sides) + _crossings(corner, end, segs, sides)
+    out = np.empty(len(x), dtype=int)
+    chunk = max(1, CROSSING_BLOCK // max(1, len(segs)))  # points per block: bounded memory
+    for start in range(0, len(x), chunk):
+        xs, ys = x[start : start + chunk], y[start : start + chunk]
+        p0 = np.column_stack([np.full_like(xs, xr / spans[0]), np.full_like(ys, yr / spans[1])])
+        corner = np.column_stack([np.full_like(xs, xr / spans[0]), ys / spans[1]])
+        end = np.column_stack([xs / spans[0], ys / spans[1]])
+        out[start : start + chunk] = nr + _crossings(p0, corner, segs, sides) + _crossings(corner, end, segs, sides)
+    return out
 
 
 def _distance_to_curves(curves: Sequence[FoldCurve], spans, x: float, y: float) -> float:

@@ -165,3 +165,30 @@ def test_a_plane_of_one_parameter_twice_is_refused():
 
     with pytest.raises(PathError, match="same model parameter"):
         Plane.from_scene(MAIN_JOB, "payload", "payload1")
+
+
+def test_design_plane_figure_shows_each_design():
+    from esba.design.envelope import Envelope, design_plane
+    from esba.figures.maps import design_plane_figure
+    from tests.figures import drawn
+
+    dp = design_plane(None, Envelope(0.3, 2.5, margin=0.05), [0.8, 1.5, 3.0], [0.0, 2.0], optimum=None)
+    assert len(dp.state) == 6 and dp.count("clear") == 1 and dp.count("snaps") >= 3  # r2 = 0.8, d = 0 is clear
+    (ax,) = drawn.axes(design_plane_figure(dp))
+    shown = sum(len(c.get_offsets()) for c in ax.collections if c.get_label() and not c.get_label().startswith("_"))
+    assert shown == 6 and ax.get_xlabel() == "r2 (mm)" and ax.get_ylabel() == "d (mm)"
+
+
+def test_counting_in_blocks_gives_the_same_regions(pf):
+    from esba.analysis import maps
+
+    plane, curves = pf
+    smap = stability_map(plane, *PF_BOX, resolution=31, history_lines=0)
+    xs, ys = np.meshgrid(smap.grid_x, smap.grid_y)
+    whole = smap.count(xs, ys)
+    saved = maps.CROSSING_BLOCK
+    try:
+        maps.CROSSING_BLOCK = 500  # a few points per block
+        assert np.array_equal(smap.count(xs, ys), whole)
+    finally:
+        maps.CROSSING_BLOCK = saved
