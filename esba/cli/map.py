@@ -114,7 +114,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
         plane = Plane.from_scene(scene, xname, yname)
         for name, lo, hi, prob in ((xname, x0, x1, plane.px), (yname, y0, y1, plane.py)):
             if not (prob.in_range(lo) and prob.in_range(hi)):
-                raise UsageError(f"--{'x' if prob is plane.px else 'y'} {name}:{lo:g}:{hi:g}: outside the parameter's range {prob.domain[0]:g}..{prob.domain[1]:g}")
+                raise UsageError(f"--{'x' if prob is plane.px else 'y'} {name}:{lo:g}:{hi:g}: outside the parameter's range {prob.domain[0]:.7g}..{prob.domain[1]:.7g}{prob.unit_short}")
         check_box(plane, ((x0, x1), (y0, y1)))
         say = (lambda msg: None) if args.json else (lambda msg: print(f"  {msg}", file=sys.stderr))
         smap = stability_map(plane, (x0, x1), (y0, y1), resolution=args.resolution, history_lines=args.history_lines, progress=say)
