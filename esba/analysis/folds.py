@@ -6,8 +6,9 @@ plane: the solutions of the extended system
 
     g(theta; x, y) = 0,   H(theta; x, y) v = 0,   v0 . v = 1
 
-(2n + 1 equations in the 2n + 2 unknowns theta, x, y, v), which this module continues by
-pseudo-arclength continuation (codimension-two continuation, AUTO-07p's LP continuation). The
+(2n + 1 equations in the 2n + 2 unknowns theta, x, y, v), which the path engine continues by
+pseudo-arclength continuation (:func:`esba.paths.extended.follow`; codimension-two continuation,
+AUTO-07p's LP continuation). The
 terms of the system and its Jacobian (with the third derivatives d(H v)/d(theta, x, y) by AD) come
 from the path engine's problem (:meth:`esba.paths.problem.PathProblem.extended_terms`, the
 ``path_fold`` Function in the model's registry), one :class:`~esba.paths.problem.PathProblem`
@@ -48,14 +49,16 @@ import json
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from esba.infra import jsonsafe
 from esba.model.scene import Scene
 from esba.model.stability import CRITICAL_TOL
+from esba.paths import extended
 from esba.paths.continuation import MAX_SPAN, PathOptions, trace
+from esba.paths.extended import Crossing, Node
 from esba.paths.problem import PathError, PathProblem
 from esba.statics.equilibrium import EquilibriumError, solve
 
@@ -318,20 +321,9 @@ class FoldOptions:
                 raise PathError(f"{name}={v!r}: expected a whole number >= 1")
 
 
-class _Node:
-    """A converged point of the extended system, in the scaled unknowns u = (theta, x / sx, y / sy, v)."""
-
-    __slots__ = ("u", "t", "terms", "iterations")
-
-    def __init__(self, u, terms, iterations=0):
-        self.u = u
-        self.t: np.ndarray | None = None
-        self.terms = terms
-        self.iterations = iterations
-
-
 class _FoldSystem:
-    """The extended system of one plane, scaled, with its Newton corrector and tangent."""
+    """The fold system of one plane in the scaled unknowns u = (theta, x / sx, y / sy, v): g = 0,
+    H v = 0, v0 . v = 1 (v0 the anchor's v), an :class:`esba.paths.extended.ExtendedSystem`."""
 
     def __init__(self, plane: Plane, spans: tuple[float, float], opts: FoldOptions):
         self.plane, self.opts = plane, opts
@@ -346,9 +338,15 @@ class _FoldSystem:
     def join(self, theta, x, y, v) -> np.ndarray:
         return np.concatenate([theta, [x / self.sx, y / self.sy], v])
 
-    def evaluate(self, u, v0):
+    def anchor(self, u: np.ndarray) -> np.ndarray:
+        u = u.copy()
+        u[self.n + 2 :] /= np.linalg.norm(u[self.n + 2 :])
+        return u
+
+    def evaluate(self, u, anchor):
         """(residual, Jacobian (2n+1) x (2n+2), terms) at u, or None outside the model's domain."""
         theta, x, y, v = self.split(u)
+        v0 = anchor[self.n + 2 :]
         if not self.plane.along_x(y).defined(theta, x):
             return None
         self.evaluations += 1
@@ -373,175 +371,63 @@ class _FoldSystem:
         hscale = max(1.0, float(np.max(np.abs(terms[1]))))
         return float(np.max(np.abs(res[:n]))) <= self.opts.tol and float(np.max(np.abs(res[n : 2 * n]))) <= 1e-12 * hscale and abs(res[-1]) <= 1e-13
 
-    def correct(self, u, row: np.ndarray | None, c0: float) -> _Node | None:
-        """Newton on the extended system and row . u = c0 (None: the last Newton row is left out, for
-        a square system it is given); v0 is the start's v."""
-        n = self.n
-        v0 = u[n + 2 :] / np.linalg.norm(u[n + 2 :])
-        u = u.copy()
-        u[n + 2 :] = v0
-        previous = math.inf
-        for it in range(self.opts.max_iterations + 1):
-            out = self.evaluate(u, v0)
-            if out is None:
-                return None
-            res, jac, terms = out
-            r_row = float(row @ u - c0)
-            if self.converged(res, terms) and abs(r_row) <= 1e-13 * (1.0 + abs(c0)):
-                return _Node(u, terms, it)
-            if it == self.opts.max_iterations:
-                return None
-            size = float(np.max(np.abs(res[:n])))
-            if it >= 2 and size > 2.0 * previous:
-                return None
-            previous = size
-            try:
-                step = np.linalg.solve(np.vstack([jac, row]), -np.concatenate([res, [r_row]]))
-            except np.linalg.LinAlgError:
-                return None
-            if not np.all(np.isfinite(step)):
-                return None
-            u = u + step
-            if float(np.max(np.abs(step))) <= 1e-15 * (1.0 + float(np.max(np.abs(u)))):
-                out = self.evaluate(u, v0)
-                if out is None or float(np.max(np.abs(out[0][:n]))) > 1e3 * self.opts.tol:
-                    return None
-                return _Node(u, out[2], it + 1)
-        return None  # pragma: no cover
+    def acceptable(self, res, terms) -> bool:
+        return float(np.max(np.abs(res[: self.n]))) <= 1e3 * self.opts.tol
 
-    def jacobian(self, node: _Node) -> np.ndarray:
-        v = node.u[self.n + 2 :]
-        return self.evaluate(node.u, v / np.linalg.norm(v))[1]  # type: ignore[index]
-
-    def tangent(self, node: _Node, previous: np.ndarray | None) -> np.ndarray | None:
-        jac = self.jacobian(node)
-        if previous is None:
-            t = np.linalg.svd(jac)[2][-1]
-        else:
-            rhs = np.zeros(jac.shape[0] + 1)
-            rhs[-1] = 1.0
-            try:
-                t = np.linalg.solve(np.vstack([jac, previous]), rhs)
-            except np.linalg.LinAlgError:
-                return None
-        if not np.all(np.isfinite(t)):
-            return None
-        t = t / np.linalg.norm(t)
-        if previous is not None and t @ previous < 0:
-            t = -t
-        return t
-
-    def on_segment(self, a: _Node, s: float) -> _Node | None:
-        """The point at arclength s along a's tangent (pseudo-arclength corrector)."""
-        return self.correct(a.u + s * a.t, a.t, float(a.t @ a.u) + s)
+    def correct(self, u, row: np.ndarray, c0: float) -> Node | None:
+        """Newton on the fold system and row . u = c0 (the engine's corrector)."""
+        return extended.correct(self, u, row, c0, self.opts.max_iterations)
 
     # -- what a point says ----------------------------------------------------------------------
 
-    def tests(self, node: _Node) -> np.ndarray:
+    def tests(self, node: Node) -> np.ndarray:
         """(c, v . dg/dx, v . dg/dy): the cusp test and the two branch-point tests (v unit)."""
-        _, _, gx, gy, _, hvt, _, _ = node.terms
+        _, _, gx, gy, _, hvt, _, _ = node.data
         v = node.u[self.n + 2 :]
         v = v / np.linalg.norm(v)
         return np.array([float(v @ hvt @ v), float(v @ gx), float(v @ gy)])
 
-    def stable(self, node: _Node) -> bool:
-        eig = np.linalg.eigvalsh(node.terms[1])
+    def stable(self, node: Node) -> bool:
+        eig = np.linalg.eigvalsh(node.data[1])
         scale = max(float(np.max(np.abs(eig))), 1e-300)
         k = int(np.argmin(np.abs(eig)))
         others = np.delete(eig, k)
         return bool(np.all(others > self.opts.critical_tol * scale))
 
 
-def _brent_on_segment(fs: _FoldSystem, a: _Node, s_b: float, f: Callable[[_Node], float], f_a: float, f_b: float) -> _Node | None:
-    from scipy.optimize import brentq
-
-    cache: dict[float, _Node | None] = {}
-
-    class _Fail(Exception):
-        pass
-
-    def value(s: float) -> float:
-        if s == 0.0:
-            return f_a
-        if s == s_b:
-            return f_b
-        if s not in cache:
-            cache[s] = fs.on_segment(a, s)
-        node = cache[s]
-        if node is None:
-            raise _Fail
-        return f(node)
-
-    try:
-        s_star = brentq(value, 0.0, s_b, xtol=1e-15, rtol=1e-15, maxiter=200)
-    except (_Fail, ValueError, RuntimeError):
-        return None
-    return cache.get(s_star) or fs.on_segment(a, s_star)
-
-
-def _special(fs: _FoldSystem, node: _Node, kind: str, status: str, arclength: float) -> CodimTwo:
-    theta, x, y, v = fs.split(node.u)
+def _special(fs: _FoldSystem, c: Crossing) -> CodimTwo:
+    theta, x, y, v = fs.split(c.node.u)
     v = v / np.linalg.norm(v)
     v = v * np.sign(v[int(np.argmax(np.abs(v)))])
-    return CodimTwo(kind, x, y, theta.copy(), v, status, arclength)
+    return CodimTwo(KINDS[c.index], x, y, theta.copy(), v, c.status, c.arclength)
 
 
-def _half(fs: _FoldSystem, start: _Node, direction: float, box, opts: FoldOptions, known: list[np.ndarray]):
-    """One direction of a fold curve from ``start``: nodes, special points, why it ended."""
-    nodes = [start]
-    special: list[CodimTwo] = []
-    t0 = fs.tangent(start, None)
-    if t0 is None:
-        return nodes, special, "no tangent at the start"
-    start.t = t0 * direction
-    ds = opts.ds
-    s_total = 0.0
+def _stop(fs: _FoldSystem, start: Node, box, opts: FoldOptions, known: list[np.ndarray]):
+    """When a fold curve ends: beyond the box's margin and going away, back at its start, or on a curve already traced."""
     (xlo, xhi), (ylo, yhi) = box
-    _, x, y, _ = fs.split(start.u)
-    outside = max(xlo - x, x - xhi, 0.0) / fs.sx + max(ylo - y, y - yhi, 0.0) / fs.sy
-    a = start
-    tests_a = fs.tests(a)
-    for _ in range(opts.max_steps):
-        b = fs.on_segment(a, ds)
-        ok = b is not None
-        if ok:
-            b.t = fs.tangent(b, a.t)
-            ok = b.t is not None and float(b.t @ a.t) > 0.95
-        if not ok:
-            ds *= 0.5
-            if ds < opts.ds_min:
-                return nodes, special, "the corrector failed (the model's domain or a singular extended system)"
-            continue
-        tests_b = fs.tests(b)
-        for k, kind in enumerate(KINDS):
-            if tests_a[k] * tests_b[k] < 0:
-                found = _brent_on_segment(fs, a, ds, lambda nd, k=k: float(fs.tests(nd)[k]), float(tests_a[k]), float(tests_b[k]))
-                if found is not None:
-                    special.append(_special(fs, found, kind, "converged", s_total + float(a.t @ (found.u - a.u))))
-                else:
-                    nearer = a if abs(tests_a[k]) <= abs(tests_b[k]) else b
-                    special.append(_special(fs, nearer, kind, "guess", s_total + (0.0 if nearer is a else ds)))
-        nodes.append(b)
-        s_total += ds
-        if b.iterations <= 2:
-            ds = min(opts.ds_max, 1.5 * ds)
-        elif b.iterations >= 5:
-            ds = max(opts.ds_min, 0.5 * ds)
-        theta, x, y, _ = fs.split(b.u)
-        away = max(xlo - x, x - xhi, 0.0) / fs.sx + max(ylo - y, y - yhi, 0.0) / fs.sy
-        if away > opts.margin and away >= outside:  # beyond the margin and not coming back in
-            return nodes, special, "left the map"
-        outside = away
-        here = b.u[: fs.n + 2]
+
+    def away(u) -> float:
+        _, x, y, _ = fs.split(u)
+        return max(xlo - x, x - xhi, 0.0) / fs.sx + max(ylo - y, y - yhi, 0.0) / fs.sy
+
+    state = {"outside": away(start.u)}
+
+    def stop(nodes, ds: float) -> tuple[str, bool]:
+        u = nodes[-1].u
+        out = away(u)
+        if out > opts.margin and out >= state["outside"]:  # beyond the margin and not coming back in
+            return "left the map", False
+        state["outside"] = out
+        here = u[: fs.n + 2]
         if len(nodes) > 5 and np.linalg.norm(here - start.u[: fs.n + 2]) < 0.6 * ds:
-            return nodes, special, "closed (returned to its start)"
+            return "closed (returned to its start)", False
         for other in known:
-            # within a step of a traced curve's points: the same curve (its last node overlaps it and goes)
+            # within a step of a traced curve's points: the same curve (its last point overlaps it and goes)
             if np.min(np.linalg.norm(other - here, axis=1)) < 0.75 * opts.ds_max:
-                nodes.pop()
-                return nodes, [p for p in special if p.arclength <= s_total - ds], "joined a fold curve already traced"
-        a, tests_a = b, tests_b
-    return nodes, special, f"reached {opts.max_steps} steps"
+                return "joined a fold curve already traced", True
+        return "", False
+
+    return stop
 
 
 def trace_fold_curve(
@@ -556,7 +442,8 @@ def trace_fold_curve(
     index: int = 0,
 ) -> FoldCurve | None:
     """The fold curve through the fold (theta; x, y) with critical vector v, both ways, within ``box``
-    ((xlo, xhi), (ylo, yhi)) and a margin; None when the start does not converge."""
+    ((xlo, xhi), (ylo, yhi)) and a margin, by :func:`esba.paths.extended.follow`; None when the start
+    does not converge."""
     import time
 
     opts = options or FoldOptions()
@@ -570,17 +457,17 @@ def trace_fold_curve(
     if start is None:
         return None
     known_u = [np.column_stack([c.theta, c.xs / fs.sx, c.ys / fs.sy]) for c in known if len(c)]
-    fwd, sp_f, why_f = _half(fs, start, 1.0, box, opts, known_u)
-    back_start = _Node(start.u.copy(), start.terms)
+    fwd, sp_f, why_f = extended.follow(fs, start, 1.0, opts, _stop(fs, start, box, opts, known_u))
+    back_start = Node(start.u.copy(), start.data)
     if why_f.startswith("closed"):
         bwd, sp_b, why_b = [back_start], [], why_f
     else:
-        bwd, sp_b, why_b = _half(fs, back_start, -1.0, box, opts, known_u)
+        bwd, sp_b, why_b = extended.follow(fs, back_start, -1.0, opts, _stop(fs, back_start, box, opts, known_u))
     s_f = np.concatenate([[0.0], np.cumsum([np.linalg.norm(b.u - a.u) for a, b in zip(fwd, fwd[1:])])])
     s_b = np.concatenate([[0.0], np.cumsum([np.linalg.norm(b.u - a.u) for a, b in zip(bwd, bwd[1:])])])
     nodes = bwd[::-1] + fwd[1:]
     arclength = np.concatenate([-s_b[::-1], s_f[1:]])
-    special = [replace(p, arclength=-p.arclength, curve=index) for p in sp_b] + [replace(p, curve=index) for p in sp_f]
+    special = [replace(_special(fs, c), arclength=-c.arclength, curve=index) for c in sp_b] + [replace(_special(fs, c), curve=index) for c in sp_f]
     special.sort(key=lambda p: p.arclength)
     parts = [fs.split(nd.u) for nd in nodes]
     tests = np.array([fs.tests(nd) for nd in nodes])
