@@ -6,7 +6,7 @@ page's module when it is asked for.
 Examples
 --------
 >>> list(ENTRIES)
-['derivations', 'validation', 'design', 'paths', 'experiments', 'sensing', 'accuracy-vs-time', 'performance', 'scaling', 'equilibria']
+['derivations', 'validation', 'design', 'paths', 'experiments', 'sensing', 'accuracy-vs-time', 'performance', 'scaling', 'equilibria', 'maps']
 >>> [e.name for e in ENTRIES.values() if e.slow]
 ['accuracy-vs-time', 'performance', 'scaling']
 >>> check_names(["paths", "paths", "validation"])
@@ -69,6 +69,8 @@ ENTRIES: dict[str, Entry] = {
               "sweeps in this process and on Dask workers"),
         Entry("equilibria", "equilibria.md", "esba.pages.equilibria", "esba docs --write equilibria", False,
               "every equilibrium of the bistable window and the detached branch, barriers"),
+        Entry("maps", "maps.md", "esba.pages.maps", "esba map --write-doc docs/maps.md", False,
+              "stability maps: fold curves, cusps, regions by stable states, designs clear of folds"),
     )
 }
 

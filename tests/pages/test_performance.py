@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from esba.bench.maps import MapBenchRow
 from esba.bench.path import PathBenchRow
 from esba.bench.timing import GenerationRow
 from esba.pages.page import MASK, TIMES, matches
@@ -86,11 +87,13 @@ def test_the_whole_page_renders_its_sections_in_order():
     gen = GenerationRow(n=16, derive_s=0.5, emit_s=0.2, total_s=0.7, assignments=100, instructions={"energy": 2318, "gradient": 3987, "hessian": 6510},
                         ad_hessian_instructions=6585, naive_s=3.5, call_us={"energy": 43.0, "gradient": 46.2, "hessian": 49.4})
     row = PathBenchRow(n=3, points=34, folds=(0.17354, 0.16360), evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=None, newton_step_us=None)
-    data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row]}
+    maps = MapBenchRow("omega-payload", curves=1, points=55, special=2, trace_s=0.12, brute_k=20, brute_s=9.9, agree=400, near=3)
+    data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row], "maps": [maps]}
     text = PAGE.render(data, PAGE.settings(), ROOT / "docs" / "performance.md").text
     _, sections = read_sections(text)
     assert tuple(k for k, _ in sections) == SECTIONS
     assert "2318       3987       6510     6585" in text
+    assert "omega-payload" in text and "400/400" in text and "Every cell of each grid agrees" in text
 
 
 def test_the_committed_page_has_every_section_written_by_its_command():

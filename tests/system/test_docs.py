@@ -78,6 +78,10 @@ WRITERS = {
     "equilibria-omega121": "esba docs --write equilibria",
     "sensing-blind": "esba docs --write sensing",
     "sensing-ellipses": "esba docs --write sensing",
+    "map-pressure-payload": "esba map --write-doc",
+    "map-omega-payload": "esba map --write-doc",
+    "map-pressure-omega": "esba map --write-doc",
+    "map-design-plane": "esba map --write-doc",
 }
 
 
