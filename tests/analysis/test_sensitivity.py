@@ -85,13 +85,13 @@ def test_sensitivities_match_central_differences_of_solves(which, n):
 @pytest.mark.parametrize("n, at", [(3, 0.5), (3, 1.0 / 3.0), (3, 2.0 / 3.0), (3, 1.0), (8, 0.25), (1, 1.0), (2, 0.7)])
 def test_payload_point_column_against_differences_of_the_generated_gradient(n, at):
     """The closed form of d(dU/dtheta)/ds, at fixed angles, inside segments, at segment ends and the tip."""
-    from esba.analysis.sensitivity import _functions
+    from esba.analysis.sensitivity import implicit_functions
 
     scene = Scene(pressure=0.15, payloads=(Payload(1.5, 60.0, at),), segments=n)
     r = solve(scene)
     model, names = r.model, parameter_names(scene)
     p = np.array([q.value for q in scene_parameters(scene)])
-    out = _functions(model, names, ())(r.theta, p, [], np.ones(n))
+    out = implicit_functions(model, names, ())(r.theta, p, [], np.ones(n))
     column = np.asarray(out[2])[:, names.index("s1")].ravel()
     h = 1e-6
 
