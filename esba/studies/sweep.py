@@ -359,9 +359,10 @@ def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions |
         pres[feasible] = batch.pressure
         stability[feasible] = batch.stability
         method[feasible] = batch.method
+        ok = batch.ok  # a property computed over the whole batch: read once, not once per point
         for j, i in enumerate(feasible):
             notes[i] = batch.notes[j]
-            if not batch.ok[j]:
+            if not ok[j]:
                 status[i], messages[i] = "not ok", batch.messages[j]
         backend, timings = batch.backend, dict(batch.timings)
         a = base.actuator
