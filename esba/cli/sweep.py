@@ -63,9 +63,13 @@ def _sweep_table(d: dict) -> str:
     else:
         total = sum(d["counts"].values())
         lines.append(f"{total} rows" + (f" in {d['out']}" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
+    nothing = bool(st) and st["chunks_solved"] == 0 and st["resumed_from_row"] == st["rows"]
     for k in ("out", "figure"):
         if d.get(k):
-            lines.append(f"wrote {d[k]}")
+            if k == "out" and nothing:
+                lines.append(f"{d[k]} already holds every row of this study ({st['rows']}): nothing solved, nothing written")
+            else:
+                lines.append(f"wrote {d[k]}")
     return "\n".join(lines)
 
 
@@ -100,6 +104,13 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         data = {"figure": str(path), "curves": len(curves), "points": sum(len(s.status) for s in curves), "not_ok": bad}
         print_result(args, data, lambda d: f"wrote {d['figure']}: {d['curves']} curves, {d['points']} points, {d['not_ok']} not ok")
         return EXIT_OK if bad == 0 else EXIT_FAILED
+    if out is not None and str(out).lower().endswith(".csv"):  # a study file: refused now when another run writes it
+        from esba.studies.chunks import StudyError, StudyFile
+
+        try:
+            StudyFile(out, "sweep", {}, [], 0).check_free()
+        except StudyError as exc:
+            raise UsageError(str(exc)) from None
     result = sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d, options=options)
     if figure is not None:
         drawn = sweep_figure(result)  # refuses a figure with too many curves before anything is written

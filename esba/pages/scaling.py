@@ -203,7 +203,7 @@ def scaling_page(data: dict[str, Any], command: str, t: Times = TIMES) -> str:
         "## Files and resuming",
         "",
         "With `--out FILE.csv`, rows stream to the file in grid order as soon as a chunk and every chunk before it",
-        "are solved; the first line, `# esba-study {...}`, holds the study's settings and hash. `--resume` checks",
+        "are solved; the study's settings and hash are in `FILE.study.json` beside it (the CSV is plain: `pandas.read_csv(FILE)`). `--resume` checks",
         "that the file is the same study (grid, scene, batch settings, esba code), keeps its complete rows, drops a",
         "row cut short, and solves the rest: the finished file is the uninterrupted one. A worker that dies has its",
         "chunks run again by Dask; each chunk's rows are written once.",
