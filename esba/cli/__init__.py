@@ -33,6 +33,7 @@ from .arguments import Parser, UsageError
 from .bench import add_bench
 from .design import add_design
 from .docs import add_docs
+from .examples import add_example
 from .export import add_export
 from .figures import add_figures
 from .fit import add_experiments, add_fit
@@ -45,7 +46,7 @@ from .sweep import add_sweep
 __all__ = ["main", "build_parser", "COMMANDS", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [add_generate, add_audit, add_solve, add_path, add_stiffness, add_pressure, add_validate, add_sweep, add_bench, add_figures, add_design, add_fit, add_experiments, add_export, add_docs]
+COMMANDS: list[Callable] = [add_generate, add_audit, add_solve, add_path, add_stiffness, add_pressure, add_validate, add_sweep, add_bench, add_figures, add_design, add_fit, add_experiments, add_export, add_docs, add_example]
 
 
 def build_parser() -> argparse.ArgumentParser:

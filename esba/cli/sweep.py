@@ -36,7 +36,7 @@ def _sweep_table(d: dict) -> str:
         return f"{k} {values} {v['unit']}" if len(values) <= 8 else f"{k} {len(values)} values from {min(values):g} to {max(values):g} {v['unit']}"
 
     lines = [f"base: {d['base']}", "axes: " + "; ".join(axis(k, v) for k, v in d["axes"].items())]
-    lines.append(f"points: {d['counts']}; {d['backend']}")
+    lines.append("points: " + ", ".join(f"{count} {status}" for status, count in d["counts"].items()) + f"; {d['backend']}")
     st = d.get("study")
     if st:
         resumed = f", resumed at row {st['resumed_from_row']}" if st["resumed_from_row"] else ""

@@ -2,7 +2,7 @@
 
 Presentation only: every number comes from the comparison; nothing here computes a model.
 ``esba experiments --write-doc docs/experiments.md`` writes the page and
-``docs/figures/experiments.png``; the page holds no times, so ``esba experiments --check FILE`` and
+``docs/figures/experiments.png``; the page holds no times, so ``esba experiments --check [FILE]`` and
 ``esba docs --check experiments`` can say whether the committed one is stale.
 """
 

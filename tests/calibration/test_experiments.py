@@ -110,6 +110,10 @@ def test_cli_writes_and_checks_the_page(tmp_path, capsys, comparison, monkeypatc
                 shown = [[p.measured, p.predicted] for p in preds if p.quantity in quantities and p.ok and math.isfinite(p.predicted)]
                 np.testing.assert_allclose(series[label], shown)
     assert main(["experiments", "--check", str(page)]) == EXIT_OK
+    capsys.readouterr()
+    monkeypatch.chdir(page.parent)  # outside a checkout the page is ./experiments.md, as for esba validate --check
+    assert main(["experiments", "--check"]) == EXIT_OK
+    assert capsys.readouterr().out.strip() == f"{Path.cwd() / 'experiments.md'} is up to date"
     page.write_text("stale\n", encoding="utf-8")
     assert main(["experiments", "--check", str(page)]) == EXIT_FAILED
     assert "is stale" in capsys.readouterr().err

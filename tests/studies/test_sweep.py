@@ -128,7 +128,7 @@ def test_cli_sweep_csv(tmp_path, capsys):
     rc = main(["sweep", "--pressure", "0:0.2:3", "--payload", "0,2", "--no-compile", "--no-progress", "--out", str(out)])
     assert rc == 0
     text = capsys.readouterr().out
-    assert "points: {'ok': 6" in text and f"wrote {out}" in text
+    assert "points: 6 ok, 0 not ok, 0 infeasible;" in text and "{'" not in text and f"wrote {out}" in text
     rows = list(csv.DictReader(out.open()))
     assert [float(r["pressure_mpa"]) for r in rows] == [0.0, 0.0, 0.1, 0.1, 0.2, 0.2]
 
