@@ -145,6 +145,7 @@ def _cmd_bench_path(args: argparse.Namespace) -> int:
 
 def _cmd_bench_batch(args: argparse.Namespace) -> int:
     from esba.bench import accuracy as acc
+    from esba.pages.accuracy import answered
     from esba.statics.batch import check_size
 
     check_size(args.size, args.segments, "--size", UsageError)
@@ -163,7 +164,7 @@ def _cmd_bench_batch(args: argparse.Namespace) -> int:
             ("IPOPT solve", f"{d['ipopt_us']:.0f} us per equilibrium (esba.statics.equilibrium.solve, one by one, on {d['ipopt_samples']} of them)"),
             ("naive BFGS", f"{d['naive_us']:.0f} us per equilibrium (SciPy, numeric gradients)"),
             ("speed-up", f"{d['speedup_vs_naive']:.0f}x naive, {d['speedup_vs_ipopt']:.0f}x IPOPT"),
-            ("answered by", ", ".join(f"{method} {count}" for method, count in d["counts"].items())),
+            ("answered by", answered(d["counts"])),
             ("vs IPOPT", "no sample solved ok by both" if diff is None else f"largest angle difference {diff:.2g} rad on a sample"),
             ("backend", d["backend"]),
         ]

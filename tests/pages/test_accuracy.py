@@ -28,6 +28,9 @@ def test_bench_accuracy_quick_writes_the_page(tmp_path, capsys, monkeypatch):
     for heading in ("## The reference", "## IPOPT tolerance", "## The cost of each effect", "## The first script", "## Many solves"):
         assert heading in text
     assert "esba bench accuracy --quick" in text and "](acc.png)" in text
+    # written outside a checkout, the page links no sweep figure that is not beside it, and names the command that draws it
+    assert "](figures/sweep-" not in text
+    assert f"(figures/sweep-fig12.png is not beside this page: `esba sweep --fig12 {tmp_path.as_posix()}/figures/sweep-fig12.png` draws it.)" in text
     assert data["batch"]["counts"]["not_ok"] == 0
     assert data["batch"]["max_theta_difference_vs_ipopt"] < BATCH_THETA_ATOL
     assert all(ref["order"] == pytest.approx(2.0, abs=0.1) for ref in data["reference"].values())
