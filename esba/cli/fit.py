@@ -115,8 +115,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         fitted = predict(data, result.params(), cov)
         fig = measured_vs_predicted([
             Series("start: " + ", ".join(f"{n} = {v:g}" for n, v in zip(result.free, result.start)), start, sds, "s", "0.5"),
-            Series("fitted: " + ", ".join(f"{n} = {v:.4g}" for n, v in result.params().items()) + " (95 %)", fitted, sds, "o", "C0"),
-        ], title=f"{data.source}: measured against predicted")
+            Series("fitted: " + ", ".join(f"{n} = {v:.4g}" if math.isfinite(se) else f"{n} not identifiable"
+                                          for n, v, se in zip(result.free, result.estimate, result.std_error)) + " (95 %)",
+                   fitted, sds, "o", "C0", face="C0"),
+        ], title=f"{data.source}: the model's error against each measured value")
         try:
             out["figure"] = str(save_figure(fig, args.plot).resolve())
         except OSError as exc:

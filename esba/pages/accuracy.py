@@ -57,6 +57,8 @@ def figure(accuracy: AccuracyBenchmark) -> "Figure":
             ax.annotate(label, (1.0, mm), xycoords=("axes fraction", "data"), xytext=(-40, 3), textcoords="offset points", fontsize=8, color="0.4")
         ax.grid(True, which="both", color="0.92", lw=0.5)
         ax.set_ylabel("tip position error (mm)")
+    plain_log_ticks(ax_n.xaxis)
+    plain_log_ticks(ax_t.xaxis)
     ax_n.set_xlabel("segments n")
     ax_n.set_title("(a) error against n")
     ax_n.legend(fontsize=7)
@@ -66,6 +68,18 @@ def figure(accuracy: AccuracyBenchmark) -> "Figure":
     ref = accuracy.reference[next(iter(accuracy.reference))]
     fig.suptitle(f"Accuracy against time (reference: {ref['method']}; esba bench accuracy)", fontsize=10)
     return fig
+
+
+def plain_log_ticks(axis) -> None:
+    """Label a logarithmic axis with plain numbers (``2``, ``3``, ``10``, not ``2×10⁰``); its
+    minor ticks too when it spans less than two decades (else only the powers of ten)."""
+    from matplotlib.ticker import FuncFormatter
+
+    lo, hi = sorted(axis.get_view_interval())
+    plain = FuncFormatter(lambda v, _pos: f"{v:g}")
+    axis.set_major_formatter(plain)
+    short = lo > 0 and hi / lo < 100.0
+    axis.set_minor_formatter(plain if short else FuncFormatter(lambda v, _pos: ""))
 
 
 def _fmt_s(s: float, t: Times = TIMES) -> str:
