@@ -39,7 +39,7 @@ def readme_commands() -> tuple[list[str], list[str]]:
         for line in _section(title).splitlines():
             if not line.startswith("    "):
                 continue
-            command, _, comment = line.strip().partition("  #")
+            command, _, comment = line.strip().partition(" # ")
             command = command.split("&& ")[-1].strip()
             if comment.strip().startswith("in a checkout"):
                 continue
@@ -60,6 +60,7 @@ def _param(command: str):
 
 def test_the_readme_has_its_commands():
     assert PREPARE == ["esba example --all", "mkdir -p docs"]
+    assert not any("#" in c for c in COMMANDS)
     assert "esba solve" in COMMANDS and "esba fit examples/measurements/paper_exp.csv" in COMMANDS and len(COMMANDS) > 25
 
 
