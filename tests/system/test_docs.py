@@ -87,7 +87,7 @@ def test_every_figure_is_shown_on_a_page_beside_its_command(figure):
 
 def test_gitignore_lists_what_the_readme_commands_write():
     ignored = (ROOT / ".gitignore").read_text().split()
-    assert "esba-solve.png" in ignored and "sweep.csv" in ignored
+    assert "esba-solve.png" in ignored and "sweep.csv" in ignored and "sweep.study.json" in ignored
 
 
 def test_license_is_an_spdx_string():
