@@ -96,7 +96,8 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
         lines = [f"{'case':>10} {'n':>4} {'error mm':>9} {'n vs n+1':>9} {'solve ms':>9}"]
         for r in accuracy.rows:
             lines.append(f"{r.case:>10} {r.n:>4} {r.error_mm:9.3g} {r.next_mm:9.3g} {1e3 * r.solve_s:9.2f}")
-        lines += [f"{case}: reaches {reach}" for case, reach in d["reach"].items()]
+        lines += [f"{case}: tip error below " + ", ".join(f"{mm} from n = {n}" if n is not None else f"{mm} at no n tried" for mm, n in reach.items())
+                  for case, reach in d["reach"].items()]
         lines.append(f"batch: {batch.get('compiled_us', batch['interpreted_us']):.1f} us per equilibrium; naive {batch['naive_us']:.0f} us; IPOPT {batch['ipopt_us']:.0f} us")
         if "page" in d:
             lines.append(f"wrote {d['page']} and {d['figure']}")
