@@ -206,7 +206,7 @@ def add_sweep(sub) -> None:
     p.add_argument("--gravity", action="store_true", help="include the actuator's weight (Eq. 15)")
     p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant")
-    p.add_argument("--out", metavar="FILE", help="write every point to FILE.csv or FILE.json (no file is written by default)")
+    p.add_argument("--out", metavar="FILE", help="write every point to FILE.csv (the study's metadata in FILE.study.json beside it) or FILE.json (no file is written by default)")
     p.add_argument("--plot", metavar="FILE|DIR", help="total angle against the first swept axis, one curve per other value (a folder gets esba-sweep.png)")
     p.add_argument("--fig12", metavar="FILE|DIR", help="write the paper's Fig. 12 (angle vs r2 for d = 0, 2, 4, 6; vs d for r2 = 2, 4, 6; P = 0.2 MPa)")
     p.add_argument("--no-compile", action="store_true", help="use CasADi's interpreter, not compiled C")
