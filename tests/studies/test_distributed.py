@@ -782,7 +782,10 @@ def test_bench_scaling_writes_its_page(capsys, tmp_path):
     assert data["overhead"]["round_trip_s"] > 0 and len(data["clusters"]) == 2
     text = page.read_text()
     assert f"`esba bench scaling --points 400 --segments 2 --repeat 1 --markdown {page}`" in text
-    for heading in ("## Throughput against the worker count", "## What the chunk size does", "## The overhead of one chunk", "dask-jobqueue"):
+    # the sweep in this process at two sizes: how its time grows with the grid (linear: the same time per equilibrium)
+    assert [g["points"] for g in data["growth"]] == [100, 400] and all(g["per_point_us"] > 0 for g in data["growth"])
+    for heading in ("## Throughput against the worker count", "## In this process against the grid's size", "## What the chunk size does",
+                    "## The overhead of one chunk", "dask-jobqueue"):
         assert heading in text
     assert "nan" not in text.lower() and "**no**" not in text
     # a second run of the benchmark finds the page up to date, times aside (rates, load averages, versions)
