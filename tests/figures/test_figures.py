@@ -253,3 +253,30 @@ def test_the_top_contour_of_a_steep_field_lies_where_the_field_has_its_value():
     finite = np.where(np.isfinite(field), field, 1e9)
     on_line = LinearTriInterpolator(tri, finite)(top[:, 0], top[:, 1])
     np.testing.assert_allclose(on_line.compressed(), 720.0, rtol=1e-9)
+
+
+def test_the_loading_band_goes_on_through_a_branch_point_it_passes():
+    """n = 4 column, 1 -> 6.4 N and back (docs/paths.md's figure): unloading comes back along the buckled
+    branch to the branch point and goes on straight; its band is drawn through the branch point, from
+    its last point on the buckled branch to the first on the straight one."""
+    from esba.analysis.path_analysis import analyse
+    from esba.figures.paths import LOADING_BANDS, path_figure
+    from esba.model.scene import Payload, Scene
+    from esba.paths.continuation import PathOptions
+
+    run = analyse(Scene(pressure=0.0, payloads=(Payload(1.0, 180.0),), segments=4), "payload", 6.4, options=PathOptions(ds_max=0.1))
+    down = run.loading[1]
+    (bp,) = down.branch_points
+    assert down.jumps == ()
+    ax = drawn.axes(path_figure(run))[0]
+    _, down_colour, down_width = LOADING_BANDS[1]
+    bands = [ln for ln in drawn.lines(ax) if ln.get_linewidth() == down_width and ln.get_color() == down_colour]
+    x = np.concatenate([drawn.xy(ln)[0] for ln in bands])
+    assert x.min() == 1.0 and x.max() == 6.4
+    # no stretch of the ramp left undrawn: every gap between drawn x values lies inside one band
+    spans = sorted((float(min(drawn.xy(ln)[0])), float(max(drawn.xy(ln)[0]))) for ln in bands)
+    reach = spans[0][1]
+    for lo, hi in spans[1:]:
+        assert lo <= reach + 1e-12, (lo, reach)
+        reach = max(reach, hi)
+    assert any(bp.lam in drawn.xy(ln)[0] for ln in bands)

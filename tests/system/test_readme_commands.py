@@ -22,7 +22,7 @@ README = (ROOT / "README.md").read_text(encoding="utf-8")
 
 #: Substrings of the commands that take more than a few seconds: slow, not in CI.
 EXPENSIVE = ("bench ", "--monte-carlo", "--workers", "generate --segments 12", "path --write-doc", "docs --write", "design --method both",
-             "esba figures", "esba audit", "experiments --write-doc")
+             "esba figures", "esba audit", "experiments --write-doc", "esba map", "--envelope", "esba estimate")
 
 
 def _section(title: str) -> str:
