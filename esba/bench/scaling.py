@@ -139,6 +139,7 @@ def scaling_benchmark(
     sweep_times, reference = _timed(lambda: sweep(plan.base, options=options, **plan.axes), repeat)
     ref_rows = reference.rows()
     rows = [_row("in this process, one batch (esba sweep)", 0, None, 1, sweep_times, size, True)]
+    growth = _growth(plan, segments, options, repeat, sweep_times)
     serial: dict[int, dict[str, Any]] = {}
     for c in sorted(set(chunk_sizes) | {chunk}):
         times, study = _timed(lambda c=c: sweep_study(plan, options, runner=SerialRunner(), chunk=c), repeat)
@@ -221,7 +222,20 @@ def scaling_benchmark(
          "identical": serial[c]["identical"] and (by_chunk[c]["identical"] if c in by_chunk else True)}
         for c in sorted(serial)
     ]
-    return {"setup": setup, "rows": rows, "clusters": clusters, "chunks": chunks, "overhead": overhead}
+    return {"setup": setup, "rows": rows, "clusters": clusters, "chunks": chunks, "overhead": overhead, "growth": growth}
+
+
+def _growth(plan: SweepPlan, segments: int, options: BatchOptions, repeat: int, full_times: list[float]) -> list[dict[str, Any]]:
+    """The in-process sweep (one batch) at a quarter of the grid and at the whole grid: the median
+    wall time and the time per equilibrium at each size. Linear growth keeps the time per
+    equilibrium the same; a cost that grows with N per point (a property recomputed over the whole
+    batch at every point made it O(N^2) once) shows as a larger time per equilibrium at the larger size."""
+    quarter = study_plan(max(PAYLOADS, plan.size // 4), segments)
+    times, _ = _timed(lambda: sweep(quarter.base, options=options, **quarter.axes), repeat)
+    return [
+        {"points": quarter.size, "median_s": statistics.median(times), "per_point_us": 1e6 * statistics.median(times) / quarter.size},
+        {"points": plan.size, "median_s": statistics.median(full_times), "per_point_us": 1e6 * statistics.median(full_times) / plan.size},
+    ]
 
 
 def _has_compiler() -> bool:

@@ -96,7 +96,8 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
         lines = [f"{'case':>10} {'n':>4} {'error mm':>9} {'n vs n+1':>9} {'solve ms':>9}"]
         for r in accuracy.rows:
             lines.append(f"{r.case:>10} {r.n:>4} {r.error_mm:9.3g} {r.next_mm:9.3g} {1e3 * r.solve_s:9.2f}")
-        lines += [f"{case}: reaches {reach}" for case, reach in d["reach"].items()]
+        lines += [f"{case}: tip error below " + ", ".join(f"{mm} from n = {n}" if n is not None else f"{mm} at no n tried" for mm, n in reach.items())
+                  for case, reach in d["reach"].items()]
         lines.append(f"batch: {batch.get('compiled_us', batch['interpreted_us']):.1f} us per equilibrium; naive {batch['naive_us']:.0f} us; IPOPT {batch['ipopt_us']:.0f} us")
         if "page" in d:
             lines.append(f"wrote {d['page']} and {d['figure']}")
@@ -159,6 +160,7 @@ def _cmd_bench_path(args: argparse.Namespace) -> int:
 
 def _cmd_bench_batch(args: argparse.Namespace) -> int:
     from esba.bench import accuracy as acc
+    from esba.pages.accuracy import answered
     from esba.statics.batch import check_size
 
     check_size(args.size, args.segments, "--size", UsageError)
@@ -177,7 +179,7 @@ def _cmd_bench_batch(args: argparse.Namespace) -> int:
             ("IPOPT solve", f"{d['ipopt_us']:.0f} us per equilibrium (esba.statics.equilibrium.solve, one by one, on {d['ipopt_samples']} of them)"),
             ("naive BFGS", f"{d['naive_us']:.0f} us per equilibrium (SciPy, numeric gradients)"),
             ("speed-up", f"{d['speedup_vs_naive']:.0f}x naive, {d['speedup_vs_ipopt']:.0f}x IPOPT"),
-            ("answered by", str(d["counts"])),
+            ("answered by", answered(d["counts"])),
             ("vs IPOPT", "no sample solved ok by both" if diff is None else f"largest angle difference {diff:.2g} rad on a sample"),
             ("backend", d["backend"]),
         ]
@@ -278,7 +280,7 @@ def add_bench(sub) -> None:
     g.add_argument("--repeat", type=count_arg("repeat", 1, _MAX_REPEAT), default=3, help="runs per n, median reported (default 3, at most 100)")
     g.add_argument("--no-naive", action="store_true", help="skip the naive SymPy route")
     g.add_argument("--markdown", metavar="FILE", help="also write the table as a docs page (docs/performance.md)")
-    g.add_argument("--json", action="store_true")
+    g.add_argument("--json", action="store_true", help="print JSON")
     g.set_defaults(func=_cmd_bench_generation)
 
     a = bsub.add_parser("accuracy", help="tip error against n, tolerance, effects, naive vs esba, batch (about 4 minutes); writes the accuracy page")
@@ -290,23 +292,23 @@ def add_bench(sub) -> None:
     a.add_argument("--out", default=None, metavar="FILE", help="page to write (default docs/accuracy-vs-time.md in a checkout, else ./accuracy-vs-time.md)")
     a.add_argument("--figure", default=None, metavar="FILE", help="figure to write (default figures/accuracy-vs-time.png beside the page)")
     a.add_argument("--no-write", action="store_true", help="print only; write no page or figure")
-    a.add_argument("--json", action="store_true")
+    a.add_argument("--json", action="store_true", help="print JSON")
     a.set_defaults(func=_cmd_bench_accuracy)
     so = bsub.add_parser("solve", help="single-scene calls (solve for n = 3..128, stiffness, design, model load, CLI) against naive SciPy and the compiled limit")
     so.add_argument("--repeat", type=segments_arg, default=11, help="runs per timing, median reported (default 11)")
     so.add_argument("--markdown", metavar="FILE", help="also write the solve section of a docs page (docs/performance.md)")
-    so.add_argument("--json", action="store_true")
+    so.add_argument("--json", action="store_true", help="print JSON")
     so.set_defaults(func=_cmd_bench_solve)
-    pa = bsub.add_parser("path", help="time to trace the 2 N pressure path 0 -> 0.3 MPa (n = 3, 32) against the IPOPT ramp and naive BFGS")
+    pa = bsub.add_parser("path", help="time to trace the 2 N pressure path 0 -> 0.3 MPa (n = 3, 32) against the IPOPT ramp and naive BFGS (about 15 s)")
     pa.add_argument("--repeat", type=segments_arg, default=5, help="runs per timing, median reported (default 5)")
     pa.add_argument("--markdown", metavar="FILE", help="also write the path section of a docs page (docs/performance.md)")
-    pa.add_argument("--json", action="store_true")
+    pa.add_argument("--json", action="store_true", help="print JSON")
     pa.set_defaults(func=_cmd_bench_path)
     mp = bsub.add_parser("maps", help="time to trace the fold curves of each map of docs/maps.md against the brute-force grid of stable-state counts")
     mp.add_argument("--repeat", type=segments_arg, default=3, help="runs per timing of the fold curves, median reported (default 3)")
     mp.add_argument("--k", type=count_arg("--k", 2, 100, "k x k brute-force cells"), default=20, help="cells per side of the brute-force grid (default 20)")
     mp.add_argument("--markdown", metavar="FILE", help="also write the maps section of a docs page (docs/performance.md)")
-    mp.add_argument("--json", action="store_true")
+    mp.add_argument("--json", action="store_true", help="print JSON")
     mp.set_defaults(func=_cmd_bench_maps)
     sc = bsub.add_parser("scaling", help="equilibria per second of a sweep in this process and on Dask (1, 2 workers), chunk sizes, overhead per chunk (docs/scaling.md)")
     sc.add_argument("--points", type=count_arg("points", 20, 200_000, "the rows are compared in memory"), default=12_000, help="grid size, 20 to 200000 (default 12000)")
@@ -317,17 +319,17 @@ def add_bench(sub) -> None:
     sc.add_argument("--scheduler", type=scheduler_arg, metavar="ADDRESS", help="measure the existing Dask cluster at ADDRESS instead (e.g. one started by dask-jobqueue)")
     sc.add_argument("--connect-timeout", type=timeout_arg, default=None, metavar="S", help="seconds to wait for --scheduler (default 10)")
     sc.add_argument("--markdown", type=output_file_arg(".md"), metavar="FILE", help="also write the page (docs/scaling.md)")
-    sc.add_argument("--json", action="store_true")
+    sc.add_argument("--json", action="store_true", help="print JSON")
     sc.set_defaults(func=_cmd_bench_scaling)
     em = bsub.add_parser("embedded", help="the exported C (esba export c) at n = 3, 8, 16: us per equilibrium and inverse against Python, code size, stack, Cortex-M4, float vs double (docs/embedded.md; a few minutes)")
     em.add_argument("--segments", "-n", type=count_arg("segments", 1, 64, "each n is exported and compiled"), action="append", metavar="N", help="segment counts (repeatable; default 3, 8 and 16)")
     em.add_argument("--repeat", type=count_arg("repeat", 1, _MAX_REPEAT), default=11, help="calls per timing, median reported (default 11, at most 100)")
     em.add_argument("--out", default=None, metavar="FILE.md", help="page to write (default docs/embedded.md in a checkout, else ./embedded.md)")
     em.add_argument("--no-write", action="store_true", help="print only; write no page")
-    em.add_argument("--json", action="store_true")
+    em.add_argument("--json", action="store_true", help="print JSON")
     em.set_defaults(func=_cmd_bench_embedded)
     b = bsub.add_parser("batch", help="us per equilibrium of the batch path against IPOPT and naive BFGS")
     b.add_argument("--size", type=count_arg("size", 1, _MAX_SIZE), default=10_000, help="batch size (default 10000; bounded by the memory it takes)")
     b.add_argument("--segments", "-n", type=segments_arg, default=3, help="segment count (default 3)")
-    b.add_argument("--json", action="store_true")
+    b.add_argument("--json", action="store_true", help="print JSON")
     b.set_defaults(func=_cmd_bench_batch)

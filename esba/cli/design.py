@@ -151,7 +151,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
 
     if args.write_doc:
         refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot"], "with --write-doc (the page runs its own design cases)")
-        page = outputs.check_file(args.write_doc, "--write-doc")
+        page = outputs.check_file(args.write_doc, "--write-doc", (".md",))
     method = args.method or "ipopt"
     if method == "ipopt":
         refuse(args, ["particles", "iterations", "seed"], "with --method ipopt (they set the swarm: use --method pso or both)")
@@ -248,11 +248,11 @@ def add_design(sub) -> None:
     p.add_argument("--iterations", type=count_arg("iterations", 1, 500_000, "particles x (iterations + 1) is at most 1000000"), default=None, help="PSO iterations (default 50, the paper's)")
     p.add_argument("--starts", type=count_arg("starts", 1, 8), default=None, help="IPOPT starts (1 to 8, default 4)")
     p.add_argument("--plot", metavar="FILE|DIR", help="write the stiffness map with the design(s) (and the swarm); a folder gets esba-design.png")
-    p.add_argument("--write-doc", metavar="FILE", help="run every design case of the page (both methods, every problem; minutes) and write it, e.g. docs/design.md")
+    p.add_argument("--write-doc", metavar="FILE", help="run every design case of the page (both methods, every problem; about 5 s) and write it, e.g. docs/design.md")
     p.add_argument("--envelope-pressure", type=float_arg, metavar="P", help="operating envelope: pressures up to P MPa; with --envelope-payload, the stiffest design with no fold in the envelope (docs/maps.md)")
     p.add_argument("--envelope-payload", type=float_arg, metavar="F", help="operating envelope: tip payloads up to F N")
     p.add_argument("--envelope-angle", type=float_arg, action="append", metavar="DEG", help="a payload direction of the envelope, degrees from the vertical (repeatable; default 90)")
     p.add_argument("--envelope-at", type=float_arg, metavar="FRACTION", help="the envelope's payload point, a fraction of L (default 1, the tip)")
     p.add_argument("--fold-margin", type=float_arg, metavar="M", help="no fold up to (1 + M) times the envelope (default 0.1)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_design)

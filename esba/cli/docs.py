@@ -113,5 +113,5 @@ def add_docs(sub) -> None:
     )
     what.add_argument("--write", nargs="*", metavar="NAME", help="compute and write each page (default: every page) with its figures")
     p.add_argument("--dir", metavar="DIR", help="the folder of the pages (default: docs/ in a checkout, else the current folder)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_docs)

@@ -57,5 +57,5 @@ def add_export(sub) -> None:
     c.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default {DEFAULT_VARIANT})")
     c.add_argument("--out", required=True, metavar="DIR", help="folder to write (created when missing; its parent must exist)")
     c.add_argument("--float", action="store_true", help="single precision (float) instead of double")
-    c.add_argument("--json", action="store_true")
+    c.add_argument("--json", action="store_true", help="print JSON")
     c.set_defaults(func=_cmd_export_c)

@@ -27,8 +27,8 @@ def _cmd_figures(args: argparse.Namespace) -> int:
 
 
 def add_figures(sub) -> None:
-    p = sub.add_parser("figures", help="regenerate the paper-style figures (Figs. 7b, 8c, 10, 11, 13a, 13b, 14) as PNG files (a few minutes)")
+    p = sub.add_parser("figures", help="regenerate the paper-style figures (Figs. 7b, 8c, 10, 11, 13a, 13b, 14) as PNG files (about 5 s)")
     p.add_argument("--out", metavar="DIR", default=None, help="folder to write (default docs/figures/ in a checkout, else ./figures/)")
     p.add_argument("--only", metavar="NAME", nargs="+", action="extend", default=None, help="write only these figures (e.g. fig7b fig11)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_figures)

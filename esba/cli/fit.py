@@ -8,6 +8,7 @@ import math
 import sys
 
 from derive.effects import VARIANTS
+from esba.infra import outputs
 
 from .arguments import UsageError, output_file_arg, segments_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result
@@ -114,8 +115,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         fitted = predict(data, result.params(), cov)
         fig = measured_vs_predicted([
             Series("start: " + ", ".join(f"{n} = {v:g}" for n, v in zip(result.free, result.start)), start, sds, "s", "0.5"),
-            Series("fitted: " + ", ".join(f"{n} = {v:.4g}" for n, v in result.params().items()) + " (95 %)", fitted, sds, "o", "C0"),
-        ], title=f"{data.source}: measured against predicted")
+            Series("fitted: " + ", ".join(f"{n} = {v:.4g}" if math.isfinite(se) else f"{n} not identifiable"
+                                          for n, v, se in zip(result.free, result.estimate, result.std_error)) + " (95 %)",
+                   fitted, sds, "o", "C0", face="C0"),
+        ], title=f"{data.source}: the model's error against each measured value")
         try:
             out["figure"] = str(save_figure(fig, args.plot).resolve())
         except OSError as exc:
@@ -142,7 +145,7 @@ def add_fit(sub) -> None:
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant (overrides the scene's)")
     p.add_argument("--level", type=_level_arg, default=0.95, help="confidence level of the intervals (default 0.95)")
     p.add_argument("--plot", type=output_file_arg(".png", ".pdf", ".svg"), metavar="FILE", help="write measured against predicted, with error bars (.png, .pdf, .svg)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_fit)
 
 
@@ -154,7 +157,8 @@ def _experiments_table(d: dict) -> str:
     for col in d["columns"]:
         for key in ("fit_e", "fit_both"):
             f = col[key]
-            est = ", ".join(f"{n} = {v['estimate']:.5g} +- {'-' if v['std_error'] is None else format(v['std_error'], '.2g')} {v['unit']}"
+            est = ", ".join(f"{n} = {v['estimate']:.5g} {v['unit']} (no standard error)" if v["std_error"] is None else
+                            f"{n} = {v['estimate']:.5g} +- {v['std_error']:.2g} {v['unit']}"
                             for n, v in f["parameters"].items())
             lines.append(f"{col['name']} fit: {est}" + (f" ({'; '.join(f['warnings'])})" if f["warnings"] else ""))
     lines.append(f"E +-20 % on the main job: {d['modulus']['verdict']}")
@@ -167,12 +171,17 @@ def _cmd_experiments(args: argparse.Namespace) -> int:
     from esba.pages.experiments import DOC_COMMAND, PAGE
 
     if args.check:
-        check = PAGE.check(args.check)
+        if args.write_doc:
+            raise UsageError("--check writes nothing: give the page to check as --check FILE, not --write-doc")
+        page = outputs.default_page("experiments.md") if args.check is True else args.check
+        check = PAGE.check(page)
         if not check.ok:
-            print(f"esba: {args.check} is {check.status}: run `{DOC_COMMAND}` and commit it", file=sys.stderr)
+            print(f"esba: {page} is {check.status}: run `{DOC_COMMAND}` and commit it", file=sys.stderr)
             return EXIT_FAILED
-        print("experiments page is up to date")
+        print(f"{page} is up to date")
         return EXIT_OK
+    if args.write_doc:
+        outputs.check_file(args.write_doc, "--write-doc", (".md",))  # before the comparison runs
     comparison = PAGE.compute()
     data = {
         "columns": [
@@ -193,7 +202,8 @@ def _cmd_experiments(args: argparse.Namespace) -> int:
 
 def add_experiments(sub) -> None:
     p = sub.add_parser("experiments", help="the paper's EXP and FEM values against the model, fits and cross-validation (docs/experiments.md)")
-    p.add_argument("--write-doc", type=output_file_arg(".md"), metavar="FILE", help="write the page (e.g. docs/experiments.md) and figures/experiments.png beside it")
-    p.add_argument("--check", metavar="FILE", help="exit 1 when the page FILE differs from what --write-doc would write")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--write-doc", metavar="FILE", help="write the page (e.g. docs/experiments.md) and figures/experiments.png beside it")
+    p.add_argument("--check", nargs="?", const=True, default=None, metavar="FILE",
+                   help="write nothing; exit 1 when the page is stale (FILE, default docs/experiments.md in a checkout, else ./experiments.md)")
+    p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_experiments)

@@ -74,8 +74,16 @@ def _cmd_generate(args: argparse.Namespace) -> int:
         "instructions": entry["instructions"],
         "generate_time_s": time.perf_counter() - t0,
     }
-    print_result(args, data, lambda d: "\n".join(f"{k:>16}: {v}" for k, v in d.items()))
+    print_result(args, data, _generate_table)
     return EXIT_OK
+
+
+def _generate_table(d: dict) -> str:
+    """What ``esba generate`` wrote, in words: the instruction counts as a list, the time rounded."""
+    rows = [(k, d[k]) for k in ("file", "written_to", "segments", "effects", "variant")]
+    rows.append(("instructions", ", ".join(f"{name} {count}" for name, count in d["instructions"].items())))
+    rows.append(("generated in", f"{d['generate_time_s']:.1f} s"))
+    return "\n".join(f"{k:>16}: {v}" for k, v in rows)
 
 
 def add_generate(sub) -> None:
@@ -85,7 +93,7 @@ def add_generate(sub) -> None:
     p.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default {DEFAULT_VARIANT}; with --refresh: that variant only)")
     p.add_argument("--out", default=None, metavar="DIR", help="folder to write (default: generated/ in a checkout, else the model cache)")
     p.add_argument("--refresh", action="store_true", help="regenerate the committed models (n = 1..8, both variants) and the manifest")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_generate)
 
 
@@ -112,5 +120,5 @@ def add_audit(sub) -> None:
     p = sub.add_parser("audit", help="check the paper's printed equations against the derivation; write the derivations page")
     p.add_argument("--check", action="store_true", help="write nothing; exit 1 when the page is stale")
     p.add_argument("--out", default=None, metavar="FILE.md", help="page to write (default docs/derivations.md in a checkout, else ./derivations.md)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_audit)

@@ -94,7 +94,7 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
     else:
         e = u["tip_ellipse_95"]
         rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
-                                    f"95 % tip ellipse {e['semi_axes_mm'][0]:.3g} x {e['semi_axes_mm'][1]:.3g} mm at {e['angle_deg']:.1f} deg from x"))
+                                    f"95 % tip ellipse: semi-axes {e['semi_axes_mm'][0]:.3g} and {e['semi_axes_mm'][1]:.3g} mm, the major at {e['angle_deg']:.1f} deg from x"))
         if u["status"] != "ok":
             rows.append(("NOT LINEAR", u["message"]))
     mc = d.get("monte_carlo")
@@ -460,7 +460,9 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     from esba.calibration import validation
     from esba.pages.validation import PAGE
 
-    page = outputs.default_page("validation.md") if args.out is None else args.out
+    if args.check not in (None, True) and args.out is not None:
+        raise UsageError("give the page to check once: --check FILE or --out FILE")
+    page = args.check if args.check not in (None, True) else outputs.default_page("validation.md") if args.out is None else args.out
     if not args.check:
         page = outputs.check_file(page, "--out")
     cases = PAGE.compute()
@@ -481,7 +483,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 def add_validate(sub) -> None:
     p = sub.add_parser("validate", help="compare with the paper's Table 2 (n = 1..4); write the validation page")
-    p.add_argument("--check", action="store_true", help="write nothing; exit 1 when the page is stale")
+    p.add_argument("--check", nargs="?", const=True, default=None, metavar="FILE",
+                   help="write nothing; exit 1 when the page is stale (FILE, default docs/validation.md in a checkout, else ./validation.md)")
     p.add_argument("--out", default=None, metavar="FILE.md", help="page to write (default docs/validation.md in a checkout, else ./validation.md)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_validate)

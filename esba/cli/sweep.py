@@ -36,7 +36,7 @@ def _sweep_table(d: dict) -> str:
         return f"{k} {values} {v['unit']}" if len(values) <= 8 else f"{k} {len(values)} values from {min(values):g} to {max(values):g} {v['unit']}"
 
     lines = [f"base: {d['base']}", "axes: " + "; ".join(axis(k, v) for k, v in d["axes"].items())]
-    lines.append(f"points: {d['counts']}; {d['backend']}")
+    lines.append("points: " + ", ".join(f"{count} {status}" for status, count in d["counts"].items()) + f"; {d['backend']}")
     st = d.get("study")
     if st:
         resumed = f", resumed at row {st['resumed_from_row']}" if st["resumed_from_row"] else ""
@@ -63,9 +63,13 @@ def _sweep_table(d: dict) -> str:
     else:
         total = sum(d["counts"].values())
         lines.append(f"{total} rows" + (f" in {d['out']}" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
+    nothing = bool(st) and st["chunks_solved"] == 0 and st["resumed_from_row"] == st["rows"]
     for k in ("out", "figure"):
         if d.get(k):
-            lines.append(f"wrote {d[k]}")
+            if k == "out" and nothing:
+                lines.append(f"{d[k]} already holds every row of this study ({st['rows']}): nothing solved, nothing written")
+            else:
+                lines.append(f"wrote {d[k]}")
     return "\n".join(lines)
 
 
@@ -100,6 +104,13 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         data = {"figure": str(path), "curves": len(curves), "points": sum(len(s.status) for s in curves), "not_ok": bad}
         print_result(args, data, lambda d: f"wrote {d['figure']}: {d['curves']} curves, {d['points']} points, {d['not_ok']} not ok")
         return EXIT_OK if bad == 0 else EXIT_FAILED
+    if out is not None and str(out).lower().endswith(".csv"):  # a study file: refused now when another run writes it
+        from esba.studies.chunks import StudyError, StudyFile
+
+        try:
+            StudyFile(out, "sweep", {}, [], 0).check_free()
+        except StudyError as exc:
+            raise UsageError(str(exc)) from None
     result = sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d, options=options)
     if figure is not None:
         drawn = sweep_figure(result)  # refuses a figure with too many curves before anything is written
@@ -195,7 +206,7 @@ def add_sweep(sub) -> None:
     p.add_argument("--gravity", action="store_true", help="include the actuator's weight (Eq. 15)")
     p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant")
-    p.add_argument("--out", metavar="FILE", help="write every point to FILE.csv or FILE.json (no file is written by default)")
+    p.add_argument("--out", metavar="FILE", help="write every point to FILE.csv (the study's metadata in FILE.study.json beside it) or FILE.json (no file is written by default)")
     p.add_argument("--plot", metavar="FILE|DIR", help="total angle against the first swept axis, one curve per other value (a folder gets esba-sweep.png)")
     p.add_argument("--fig12", metavar="FILE|DIR", help="write the paper's Fig. 12 (angle vs r2 for d = 0, 2, 4, 6; vs d for r2 = 2, 4, 6; P = 0.2 MPa)")
     p.add_argument("--no-compile", action="store_true", help="use CasADi's interpreter, not compiled C")

@@ -115,7 +115,16 @@ def _triangle_axes(ax: Axes, r1: float) -> None:
 def _contour(fig, ax: Axes, grid: np.ndarray, values: np.ndarray, levels, label: str, cmap: str, extend: str = "neither"):
     ok = ~np.isnan(values)
     tri = Triangulation(grid[ok, 0], grid[ok, 1])
-    shown = np.clip(values[ok], levels[0], levels[-1] + (levels[-1] - levels[-2]) if extend == "max" else levels[-1])
+    if extend == "max":
+        # values above the top level keep their size (the fill's extension colours them): clipped to
+        # just above it, a steep field's top contour was drawn between a value and its clipped
+        # neighbour, as far out as the clip happened to put it (a jagged 720 deg line on Fig. 13a);
+        # only a value off every scale (inf) is drawn as twice the largest one there is
+        finite = values[ok][np.isfinite(values[ok])]
+        cap = 2.0 * max(float(finite.max()) if finite.size else levels[-1], levels[-1])
+        shown = np.clip(values[ok], levels[0], cap)
+    else:
+        shown = np.clip(values[ok], levels[0], levels[-1])
     cs = ax.tricontourf(tri, shown, levels=levels, cmap=cmap, extend=extend)
     lines = ax.tricontour(tri, shown, levels=levels[::2], colors="k", linewidths=0.4, alpha=0.6)
     ax.clabel(lines, fmt="%g", fontsize=7)

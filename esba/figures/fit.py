@@ -1,9 +1,11 @@
-"""Measured against predicted, with error bars (``esba fit --plot`` and ``docs/experiments.md``).
+"""The model's error against the measured value, with error bars (``esba fit --plot`` and ``docs/experiments.md``).
 
 One panel per kind of measured value (angles in degrees, tip coordinates in mm, stiffnesses in
-N/m): each series puts every measured value (x) against the model's prediction (y), with the
-measurement's standard deviation as a horizontal bar and the prediction's propagated uncertainty
-(95 %, from the fitted parameters' covariance) as a vertical one; the diagonal is a perfect model.
+N/m): each series puts every measured value (x) against the prediction's error, predicted minus
+measured (y), with the measurement's standard deviation as a horizontal bar and the prediction's
+propagated uncertainty (95 %, from the fitted parameters' covariance) as a vertical one; the line
+at 0 is a perfect model. (Predicted against measured put every series on the diagonal, where
+their markers hid each other: the errors are a few percent of the values.)
 
 Examples
 --------
@@ -46,6 +48,8 @@ class Series:
     measured_sd : mapping
         (row, quantity) -> the measurement's standard deviation (horizontal bar; none when missing).
     marker, color : str
+    face : str
+        The markers' fill: ``"none"`` (hollow) or a colour.
     level_z : float
         Half-width of the vertical bar in prediction standard deviations (1.96: 95 %).
     """
@@ -56,10 +60,12 @@ class Series:
     marker: str = "o"
     color: str = "C0"
     level_z: float = 1.96
+    face: str = "none"
 
 
 def measured_vs_predicted(series: Sequence[Series], title: str = "") -> Figure:
-    """The figure: a panel per kind of measured value, a marker per measured value."""
+    """The figure: a panel per kind of measured value, a marker per measured value at (measured,
+    predicted - measured)."""
     used = [p for p in PANELS if any(pr.quantity in p[1] for s in series for pr in s.predictions)]
     fig = new_figure(4.0 * max(1, len(used)), 4.2)
     axes = fig.subplots(1, max(1, len(used)), squeeze=False)[0]
@@ -70,22 +76,22 @@ def measured_vs_predicted(series: Sequence[Series], title: str = "") -> Figure:
             if not pts:
                 continue
             x = np.array([p.measured for p in pts])
-            y = np.array([p.predicted for p in pts])
+            y = np.array([p.predicted - p.measured for p in pts])
             xerr = np.array([s.measured_sd.get((p.row, p.quantity), 0.0) for p in pts])
             yerr = np.array([s.level_z * p.sd if math.isfinite(p.sd) else 0.0 for p in pts])
-            ax.errorbar(x, y, xerr=xerr, yerr=yerr, fmt=s.marker, color=s.color, ms=5, capsize=2.5, lw=1, label=s.label, mfc="none")
-            lo, hi = min(lo, x.min() - xerr.max(), y.min() - yerr.max()), max(hi, x.max() + xerr.max(), y.max() + yerr.max())
+            ax.errorbar(x, y, xerr=xerr, yerr=yerr, fmt=s.marker, color=s.color, ms=5, capsize=2.5, lw=1, label=s.label, mfc=s.face)
+            lo, hi = min(lo, x.min() - xerr.max()), max(hi, x.max() + xerr.max())
         if math.isfinite(lo):
             pad = 0.06 * (hi - lo if hi > lo else 1.0)
-            ax.plot([lo - pad, hi + pad], [lo - pad, hi + pad], color="0.6", lw=0.8, zorder=0)
             ax.set_xlim(lo - pad, hi + pad)
-            ax.set_ylim(lo - pad, hi + pad)
-        ax.set_aspect("equal", adjustable="box")
+        ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
         label = name + (" (x and y)" if len(quantities) > 1 else "")
         ax.set_xlabel(f"measured {label} ({unit})")
-        ax.set_ylabel(f"predicted ({unit})")
+        ax.set_ylabel(f"predicted - measured ({unit})")
         ax.grid(True, color="0.9", lw=0.6)
-    axes[0].legend(fontsize=7, loc="upper left")
+    handles, labels = axes[0].get_legend_handles_labels()
+    if handles:  # below the panels, where it hides no marker
+        fig.legend(handles, labels, fontsize=7.5, loc="outside lower center", ncol=min(len(handles), 2))
     if title:
         fig.suptitle(title, fontsize=10)
     return fig

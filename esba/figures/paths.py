@@ -18,6 +18,7 @@ True
 
 from __future__ import annotations
 
+import textwrap
 from typing import Sequence
 
 import numpy as np
@@ -26,10 +27,11 @@ from matplotlib.figure import Figure
 
 from esba.paths.branch import Branch
 from esba.paths.loading import Ramp
+from esba.paths.problem import PathError
 
 from .scenes import new_figure, save_figure
 
-__all__ = ["Y_AXES", "branch_values", "draw_branch", "draw_loading", "path_figure", "save_figure"]
+__all__ = ["Y_AXES", "LOADING_BANDS", "branch_values", "draw_branch", "draw_loading", "path_figure", "parameter_label", "path_title", "save_figure"]
 
 #: What a path figure can show against the parameter: name -> (label, unit).
 Y_AXES = {"total-angle": ("total bending angle", "deg"), "tip-x": ("tip x, vertical, downwards", "mm"), "tip-y": ("tip y, horizontal", "mm")}
@@ -84,17 +86,24 @@ def draw_branch(ax: Axes, branch: Branch, y: str = "total-angle", color: str = "
             ax.plot(x, yv, "s", mfc="white", mec=color, mew=1.5, ms=7, zorder=5)
 
 
-def draw_loading(ax: Axes, ramps: Sequence[Ramp], y: str = "total-angle", swap: bool = False, colors: Sequence[str] = ("C3", "C2")) -> None:
-    """Draw quasi-static ramps: the stable pieces followed (thick, translucent) and each jump (an arrow)."""
-    names = ("loading up", "loading down")
+#: The bands of quasi-static loading up and down: opaque light colours (a translucent pair blends,
+#: where both follow the same piece, into a colour that neither legend entry shows) and two widths,
+#: the narrower drawn over the wider, so that both stay visible where they coincide.
+LOADING_BANDS = (("loading up", "#f4a3a3", 11.0), ("loading down", "#7fcf8f", 5.5))
+#: Drawing order: the bands under the branches and their markers.
+BAND_ZORDER = 1.0
+
+
+def draw_loading(ax: Axes, ramps: Sequence[Ramp], y: str = "total-angle", swap: bool = False) -> None:
+    """Draw quasi-static ramps: the stable pieces followed (bands, :data:`LOADING_BANDS`) and each jump (an arrow)."""
     for k, ramp in enumerate(ramps):
-        color = colors[k % len(colors)]
+        name, color, width = LOADING_BANDS[k % 2]
         first = True
         for piece in ramp.pieces:
             xs, ys = piece.lam, branch_values(piece, y)
             if swap:
                 xs, ys = ys, xs
-            ax.plot(xs, ys, color=color, lw=6, alpha=0.25, solid_capstyle="round", label=names[k % 2] if first else None)
+            ax.plot(xs, ys, color=color, lw=width, solid_capstyle="round", zorder=BAND_ZORDER + 0.1 * k, label=name if first else None)
             first = False
         # a branch point passed without a jump: the state goes on from it to the crossing branch's first point
         for a, b in zip(ramp.pieces, ramp.pieces[1:]):
@@ -103,12 +112,12 @@ def draw_loading(ax: Axes, ramps: Sequence[Ramp], y: str = "total-angle", swap: 
                 ys = np.array([branch_values(a, y)[-1], branch_values(b, y)[0]])
                 if swap:
                     xs, ys = ys, xs
-                ax.plot(xs, ys, color=color, lw=6, alpha=0.25, solid_capstyle="round")
+                ax.plot(xs, ys, color=color, lw=width, solid_capstyle="round", zorder=BAND_ZORDER + 0.1 * k)
         for j in ramp.jumps:
             a = _point_value(j.theta_before, j.tip_before, y)
             b = _point_value(j.theta_after, j.tip_after, y)
             start, end = ((a, j.lam), (b, j.lam_after)) if swap else ((j.lam, a), (j.lam_after, b))
-            ax.annotate("", xy=end, xytext=start, arrowprops={"arrowstyle": "-|>", "color": color, "lw": 1.6})
+            ax.annotate("", xy=end, xytext=start, arrowprops={"arrowstyle": "-|>", "color": ("C3", "C2")[k % 2], "lw": 1.6})
 
 
 def path_figure(analysis, y: str = "total-angle", title: str | None = None) -> Figure:
@@ -127,11 +136,39 @@ def path_figure(analysis, y: str = "total-angle", title: str | None = None) -> F
         ax.plot([], [], "o", mfc="white", mec="0.3", label="fold (LP)")
     if any(b.branch_points for b in analysis.branches):
         ax.plot([], [], "s", mfc="white", mec="0.3", label="branch point (BP)")
-    unit = analysis.problem.unit.split(" ")[0]
-    ax.set_xlabel(f"{analysis.problem.name}" + ("" if unit == "1" else f" ({unit})"))
+    ax.set_xlabel(parameter_label(analysis.problem))
     name, yunit = Y_AXES[y]
     ax.set_ylabel(f"{name} ({yunit})")
     ax.grid(True, color="0.9", lw=0.6)
     ax.legend(fontsize=7.5, loc="best")
-    ax.set_title(title or f"{analysis.scene.describe()}\n(esba path --param {analysis.problem.name})", fontsize=8)
+    ax.set_title(title or path_title(analysis), fontsize=8)
     return fig
+
+
+def parameter_label(problem) -> str:
+    """The axis label of a path's parameter in words, with its unit: ``payload magnitude (N)``,
+    ``payload direction from the vertical (deg)``; a payload's number when the scene has several."""
+    what = problem.what or problem.name
+    k = problem.name[len(problem.name.rstrip("0123456789")):]
+    scene = getattr(problem, "scene", None)
+    if k and scene is not None and len(scene.payloads) > 1:
+        what += f" of payload {k}"
+    unit = problem.unit
+    if unit.startswith("1"):
+        unit = unit[1:].strip(" ()")
+    return what + (f" ({unit})" if unit else "")
+
+
+def path_title(analysis) -> str:
+    """What a path figure shows: the parameter and its range, then the scene at the start of the
+    path (its value of the parameter, not the scene's drive: a pressure path starts at its
+    ``--from``, whatever pressure or target angle the scene had)."""
+    problem = analysis.problem
+    unit = problem.unit.split(" ")[0]
+    unit = "" if unit == "1" else f" {unit}"
+    try:
+        scene = problem.scene_at(float(analysis.lam_from)).describe()
+    except PathError:  # a path not built from a scene, or a start the scene cannot take: the scene as given
+        scene = analysis.scene.describe()
+    head = f"{problem.what or problem.name} from {analysis.lam_from:g} to {analysis.lam_to:g}{unit} (esba path --param {problem.name})"
+    return "\n".join([head, *textwrap.wrap(f"at the start: {scene}", 90)])

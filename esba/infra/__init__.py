@@ -2,6 +2,6 @@
 
 The per-user cache (:mod:`.cache`, :mod:`.fncache`), where commands write (:mod:`.outputs`), the
 terminal (:mod:`.console`), JSON without NaN (:mod:`.jsonsafe`), one BLAS thread (:mod:`.threads`),
-Ctrl-C (:mod:`.interrupts`), value checks (:mod:`.checks`) and the error hierarchy
-(:mod:`.errors`). Imports nothing of esba's (only ``esba.__version__``).
+Ctrl-C (:mod:`.interrupts`), value checks (:mod:`.checks`), the example files shipped in the package
+(:mod:`.examples`) and the error hierarchy (:mod:`.errors`). Imports nothing of esba's (only ``esba.__version__``).
 """

@@ -15,7 +15,7 @@ import numpy as np
 
 from esba.bench.accuracy import ACCURACY_NS, REFERENCE_N, AccuracyBenchmark
 
-from .page import TIMES, Page, Progress, Rendered, Times
+from .page import TIMES, Page, Progress, Rendered, Times, figure_link
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -57,6 +57,8 @@ def figure(accuracy: AccuracyBenchmark) -> "Figure":
             ax.annotate(label, (1.0, mm), xycoords=("axes fraction", "data"), xytext=(-40, 3), textcoords="offset points", fontsize=8, color="0.4")
         ax.grid(True, which="both", color="0.92", lw=0.5)
         ax.set_ylabel("tip position error (mm)")
+    plain_log_ticks(ax_n.xaxis)
+    plain_log_ticks(ax_t.xaxis)
     ax_n.set_xlabel("segments n")
     ax_n.set_title("(a) error against n")
     ax_n.legend(fontsize=7)
@@ -66,6 +68,18 @@ def figure(accuracy: AccuracyBenchmark) -> "Figure":
     ref = accuracy.reference[next(iter(accuracy.reference))]
     fig.suptitle(f"Accuracy against time (reference: {ref['method']}; esba bench accuracy)", fontsize=10)
     return fig
+
+
+def plain_log_ticks(axis) -> None:
+    """Label a logarithmic axis with plain numbers (``2``, ``3``, ``10``, not ``2×10⁰``); its
+    minor ticks too when it spans less than two decades (else only the powers of ten)."""
+    from matplotlib.ticker import FuncFormatter
+
+    lo, hi = sorted(axis.get_view_interval())
+    plain = FuncFormatter(lambda v, _pos: f"{v:g}")
+    axis.set_major_formatter(plain)
+    short = lo > 0 and hi / lo < 100.0
+    axis.set_minor_formatter(plain if short else FuncFormatter(lambda v, _pos: ""))
 
 
 def _fmt_s(s: float, t: Times = TIMES) -> str:
@@ -102,8 +116,19 @@ def _batch_cost(b: dict, t: Times) -> list[str]:
     return [line + "."]
 
 
-def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = TIMES) -> str:
-    """The Markdown of ``docs/accuracy-vs-time.md``."""
+def answered(counts: dict[str, int]) -> str:
+    """A batch's :meth:`esba.statics.batch.BatchResult.counts` in words.
+
+    >>> answered({"newton": 9, "ipopt": 1, "ok": 10, "not_ok": 0})
+    'newton 9, ipopt 1 (10 ok, 0 not ok)'
+    """
+    methods = ", ".join(f"{m} {c}" for m, c in counts.items() if m not in ("ok", "not_ok"))
+    return f"{methods} ({counts.get('ok', 0)} ok, {counts.get('not_ok', 0)} not ok)"
+
+
+def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = TIMES, page_dir: Path | None = None) -> str:
+    """The Markdown of ``docs/accuracy-vs-time.md``; with ``page_dir`` (the page's folder) a sweep
+    figure that is not in ``figures/`` there is named with the command that draws it, not linked."""
     accuracy, tolerance, effects, naive, batch = runs.accuracy, runs.tolerance, runs.effects, runs.naive, runs.batch
     lines = [
         "# What accuracy costs in time",
@@ -290,7 +315,7 @@ def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = 
         + (f"{t.word('met' if b.get('compiled_us', 1e9) <= 20 else 'NOT met')} ({t(b.get('compiled_us', float('nan')), '.1f')} µs compiled, warm)." if "compiled_us" in b else "no C compiler here: interpreted only."),
         *_batch_cost(b, t),
         f"- Speed-up: {t(b['speedup_vs_naive'], '.0f')}x the naive script, {t(b['speedup_vs_ipopt'], '.0f')}x IPOPT one by one.",
-        f"- How the elements were answered: {b['counts']}; backend: {b['backend'].split(', cached')[0]}.",
+        f"- How the elements were answered: {answered(b['counts'])}; backend: {b['backend'].split(', cached')[0]}.",
         f"- Largest difference from IPOPT on {50} sampled elements: {b['max_theta_difference_vs_ipopt']:.2g} rad.",
         "",
         "## Sweeps on the batch path",
@@ -303,7 +328,7 @@ def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = 
         "  The angle grows with both and faster with r2 (the paper's conclusion), and without bound as",
         "  the chamber wall r1 - r2 - d thins: the model has no wall-thickness limit.",
         "",
-        f"  ![Fig. 12]({Path(SWEEP_FIGURES['fig12']).relative_to('docs').as_posix()})",
+        "  " + figure_link(page_dir, Path(SWEEP_FIGURES["fig12"]).relative_to("docs").as_posix(), "Fig. 12", "esba sweep --fig12 {file}"),
         "",
         f"- `esba sweep --pressure 0:0.2:41 --payload 0,0.5,1,2 --plot {SWEEP_FIGURES['pressure']}`: total angle",
         "  against pressure for horizontal tip payloads (Table 1). Each curve is the branch traced through",
@@ -312,7 +337,8 @@ def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = 
         "  between its two folds the actuator is bistable, and the grid points switch branch where that",
         "  history starts to reach the upper state (`docs/paths.md` has the folds and the hysteresis).",
         "",
-        f"  ![pressure sweep]({Path(SWEEP_FIGURES['pressure']).relative_to('docs').as_posix()})",
+        "  " + figure_link(page_dir, Path(SWEEP_FIGURES["pressure"]).relative_to("docs").as_posix(), "pressure sweep",
+                           "esba sweep --pressure 0:0.2:41 --payload 0,0.5,1,2 --plot {file}"),
         "",
     ]
     return "\n".join(lines)
@@ -390,7 +416,7 @@ class AccuracyPage(Page):
             rel = fig_path.resolve().relative_to(path.resolve().parent).as_posix()
         except ValueError:
             rel = fig_path.resolve().as_posix()
-        return Rendered(render_page(data, settings.command, rel, times), {fig_path: lambda: figure(data.accuracy)})
+        return Rendered(render_page(data, settings.command, rel, times, path.parent), {fig_path: lambda: figure(data.accuracy)})
 
 
 PAGE = AccuracyPage()

@@ -18,7 +18,7 @@ from esba.design.cases import MAX_PRESSURE, MIN_STIFFNESS, WALLS, DesignCases, d
 from esba.design.optimise import DEFAULT_DESIGN_OPTIONS, Comparison, DesignOptions, DesignResult
 from esba.solvers.pso import PSOOptions
 
-from .page import TIMES, Page, Progress, Rendered, Times
+from .page import TIMES, Page, Progress, Rendered, Times, figure_link
 from .registry import ENTRIES
 
 __all__ = ["PAGE", "DesignPage", "DesignSettings", "render_page", "DOC_COMMAND"]
@@ -83,8 +83,13 @@ def _comparison_block(title: str, c: Comparison, t: Times) -> list[str]:
     return lines + [""]
 
 
-def render_page(cases: DesignCases, t: Times = TIMES) -> str:
-    """The Markdown of ``docs/design.md`` from :func:`esba.design.cases.design_cases`."""
+def render_page(cases: DesignCases, t: Times = TIMES, page_dir: Path | None = None) -> str:
+    """The Markdown of ``docs/design.md`` from :func:`esba.design.cases.design_cases`; with
+    ``page_dir`` (the page's folder) a figure that is not in ``figures/`` there is named, not linked."""
+
+    def figure(name: str, alt: str) -> str:
+        return figure_link(page_dir, f"figures/{name}.png", alt, f"esba figures --only {name} --out {{dir}}")
+
     segments, options, pso_options, base = cases.segments, cases.options, cases.pso_options, cases.base
     runs, best, trade, hard, infeasible, by_n = cases.runs, cases.best, cases.trade_off, cases.hard, cases.infeasible, cases.by_segments
     r2_line, line, line_angle, line_terms, t1 = cases.line_r2, cases.line, cases.line_angle, cases.line_terms, cases.table1
@@ -167,7 +172,7 @@ def render_page(cases: DesignCases, t: Times = TIMES) -> str:
         f"both equilibria stable. Loaded angles {', '.join(f'{v:.2f}' for v in best.theta_deg['loaded'])} deg."
     )
     L.append("")
-    L.append("![stiffness over the triangle](figures/fig13b.png)")
+    L.append(figure("fig13b", "stiffness over the triangle"))
     L.append("")
     L.append("## Why the optimum lies where it does")
     L.append("")
@@ -212,7 +217,7 @@ def render_page(cases: DesignCases, t: Times = TIMES) -> str:
         "buys bending angle per MPa (Fig. 13a), and the designer's trade-off is between the two."
     )
     L.append("")
-    L.append("![free bending angle at 0.2 MPa](figures/fig13a.png)")
+    L.append(figure("fig13a", "free bending angle at 0.2 MPa"))
     L.append("")
     L.append("### The pressure/stiffness trade-off")
     L.append("")
@@ -275,7 +280,7 @@ def render_page(cases: DesignCases, t: Times = TIMES) -> str:
     L.append("")
     L.append("## The swarm")
     L.append("")
-    L.append("![swarm positions per iteration](figures/fig14.png)")
+    L.append(figure("fig14", "swarm positions per iteration"))
     L.append("")
     hist = p.pso.pso.history.best_value
     first = int(np.argmax(np.abs(hist - hist[-1]) <= 1e-3 * abs(hist[-1])))
@@ -328,7 +333,7 @@ class DesignPage(Page):
         return design_cases(settings.segments, settings.options, settings.pso_options, progress)
 
     def render(self, data: DesignCases, settings: DesignSettings, path: Path, times: Times = TIMES) -> Rendered:
-        return Rendered(render_page(data, times))
+        return Rendered(render_page(data, times, path.parent))
 
 
 PAGE = DesignPage()

@@ -2,7 +2,7 @@
 
 Presentation only: every number comes from the comparison; nothing here computes a model.
 ``esba experiments --write-doc docs/experiments.md`` writes the page and
-``docs/figures/experiments.png``; the page holds no times, so ``esba experiments --check FILE`` and
+``docs/figures/experiments.png``; the page holds no times, so ``esba experiments --check [FILE]`` and
 ``esba docs --check experiments`` can say whether the committed one is stale.
 """
 
@@ -208,11 +208,11 @@ def render(comparison: PaperComparison, figure_path: str = f"figures/{FIGURE_NAM
            "the E its payload rows need." if any(w.startswith("rho ended on its bound") for w in fem.fit_both.warnings)
            else f"puts rho at {fem.fit_both.value('rho'):.2f}°."),
         "",
-        f"![measured against predicted, with error bars]({figure_path})",
+        f"![the model's error against each measured value, with error bars]({figure_path})",
         "",
-        "The figure sets every measured value against the prediction: grey at E = 0.54 MPa, coloured with E and rho fitted to the "
-        "column (vertical bars: 95 % of the uncertainty propagated from the fit's covariance; horizontal bars: the assumed measurement "
-        "sd).",
+        "The figure sets every measured value against the model's error there, predicted minus measured: hollow grey at E = 0.54 MPa, "
+        "filled and coloured with E and rho fitted to the column (vertical bars: 95 % of the uncertainty propagated from the fit's "
+        "covariance; horizontal bars: the assumed measurement sd; a parameter the column cannot determine is named so in the legend).",
         "",
         "## Cross-validation",
         "",
@@ -292,6 +292,23 @@ def render(comparison: PaperComparison, figure_path: str = f"figures/{FIGURE_NAM
     return "\n".join(L)
 
 
+def fitted_label(fit) -> str:
+    """The fitted parameters for a legend: each value, or "not identifiable" for a parameter the data
+    do not determine (no finite standard error: a value on its bound means nothing).
+
+    >>> from types import SimpleNamespace
+    >>> fitted_label(SimpleNamespace(free=("E", "rho"), estimate=[0.561, 3e-5], std_error=[0.006, float("nan")]))
+    'E = 0.561 MPa, rho not identifiable'
+    """
+    out = []
+    for n, v, se in zip(fit.free, fit.estimate, fit.std_error):
+        if not math.isfinite(float(se)):
+            out.append(f"{n} not identifiable")
+        else:
+            out.append(f"{n} = {v:.3f} MPa" if n == "E" else f"{n} = {v:.1f}°")
+    return ", ".join(out)
+
+
 def figure(comparison: PaperComparison):
     """Measured against predicted for both columns, at E = 0.54 MPa and fitted."""
     series = []
@@ -300,8 +317,7 @@ def figure(comparison: PaperComparison):
         sds = {(r.label, q): sd for r in col.data.rows for q, sd in r.sds.items()}
         marker, color = styles[col.name]
         series.append(Series(f"{col.name}, E = 0.54 MPa", col.nominal, sds, marker, "0.55"))
-        params = ", ".join(f"{n} = {v:.3f} MPa" if n == "E" else f"{n} = {v:.1f}°" for n, v in col.fit_both.params().items())
-        series.append(Series(f"{col.name}, fitted ({params})", col.fitted, sds, marker, color))
+        series.append(Series(f"{col.name}, fitted ({fitted_label(col.fit_both)})", col.fitted, sds, marker, color, face=color))
     return measured_vs_predicted(series, title="The paper's EXP and FEM values against esba (n = 3)")
 
 

@@ -59,6 +59,7 @@ __all__ = [
     "MISSING",
     "matches",
     "first_difference",
+    "figure_link",
 ]
 
 #: A time (or a phrase chosen by times) on one line, in a template.
@@ -178,6 +179,19 @@ def first_difference(template: str, text: str) -> tuple[int, str]:
             high = mid
     shown = tlines[high - 1] if follows(high - 1) else tlines[low]
     return high, shown.replace(_INLINE, "…").replace(_BLOCK, "…")
+
+
+def figure_link(page_dir: Path | None, rel: str, alt: str, command: str) -> str:
+    """The Markdown image of the figure ``rel`` (relative to the page), when it is there beside the
+    page (or ``page_dir`` is None: not known); else a line that says which command draws it there,
+    so that a page written outside a checkout never links a figure that is not there.
+
+    >>> figure_link(Path("/nowhere"), "figures/f.png", "F", "esba figures --only f --out {dir}")
+    '(figures/f.png is not beside this page: `esba figures --only f --out /nowhere/figures` draws it.)'
+    """
+    if page_dir is None or (page_dir / rel).is_file():
+        return f"![{alt}]({rel})"
+    return f"({rel} is not beside this page: `{command.format(dir=(page_dir / rel).parent.as_posix(), file=(page_dir / rel).as_posix())}` draws it.)"
 
 
 @dataclass(frozen=True, eq=False)

@@ -67,6 +67,11 @@ def _rate(v: float | None, t: Times = TIMES) -> str:
     return "-" if v is None else t(v, ",.0f")
 
 
+def _methods(counts: dict[str, int]) -> str:
+    """How many points each method answered, in words: ``newton 10, ipopt 2``."""
+    return ", ".join(f"{m} {c:,}" for m, c in counts.items())
+
+
 def scaling_page(data: dict[str, Any], command: str, t: Times = TIMES) -> str:
     """The Markdown of ``docs/scaling.md`` from :func:`esba.bench.scaling.scaling_benchmark`."""
     st = data["setup"]
@@ -78,7 +83,7 @@ def scaling_page(data: dict[str, Any], command: str, t: Times = TIMES) -> str:
         f"Written by `{command}`; rerun it to refresh. Every number on this page comes from that command.",
         "",
         f"The study: a sweep grid of {st['points']:,} equilibria at n = {st['segments']} ({st['grid']}), each along its load",
-        f"path on the batch path ({st['backend']}; answered by {st['methods']}). Each time is the median of {t(st['repeat'])}",
+        f"path on the batch path ({st['backend']}; answered by {_methods(st['methods'])}). Each time is the median of {t(st['repeat'])}",
         f"runs. The machine: {t(st['cores'])} cores shared with other work (load average {t(st['load_before'][0], '.2f')} before the",
         f"benchmark, {t(st['load_after'][0], '.2f')} after), Python {t(st['python'])}, CasADi {t(st['casadi'])}, Dask {t(st['dask'])}.",
         t.word(f"Before any timing the batch path's graph was built ({st['build_s']:.1f} s) and compiled to C ({st['compile_s']:.1f} s), once: "
@@ -103,6 +108,23 @@ def scaling_page(data: dict[str, Any], command: str, t: Times = TIMES) -> str:
         "in this process, the wall time) over the points. Where it grows with the worker count, the workers slowed",
         "each other down: they share the cores.",
     ]
+    growth = data.get("growth") or []
+    if len(growth) == 2:
+        small, large = growth
+        lines += [
+            "",
+            "## In this process against the grid's size",
+            "",
+            "One batch (`esba sweep`) of a quarter of the grid and of the whole grid: a sweep in this process grows",
+            "linearly with its points when the time per equilibrium stays the same.",
+            "",
+            "| points | wall time (s) | time per equilibrium (µs) |",
+            "|---|---|---|",
+            *[f"| {g['points']:,} | {t(g['median_s'], '.2f')} | {t(g['per_point_us'], '.0f')} |" for g in growth],
+            "",
+            f"{large['points'] / small['points']:.0f}x the points took {t(large['median_s'] / small['median_s'], '.2f')}x the time"
+            f" ({t(large['per_point_us'] / small['per_point_us'], '.2f')}x the time per equilibrium).",
+        ]
     dask_rows = [r for r in rows if r["workers"]]
     if dask_rows:
         most = max(dask_rows, key=lambda r: r["workers"])
@@ -181,7 +203,7 @@ def scaling_page(data: dict[str, Any], command: str, t: Times = TIMES) -> str:
         "## Files and resuming",
         "",
         "With `--out FILE.csv`, rows stream to the file in grid order as soon as a chunk and every chunk before it",
-        "are solved; the first line, `# esba-study {...}`, holds the study's settings and hash. `--resume` checks",
+        "are solved; the study's settings and hash are in `FILE.study.json` beside it (the CSV is plain: `pandas.read_csv(FILE)`). `--resume` checks",
         "that the file is the same study (grid, scene, batch settings, esba code), keeps its complete rows, drops a",
         "row cut short, and solves the rest: the finished file is the uninterrupted one. A worker that dies has its",
         "chunks run again by Dask; each chunk's rows are written once.",
@@ -198,6 +220,8 @@ def summary(data: dict[str, Any]) -> str:
         lines.append(f"{r['where']:<62} {r['chunk'] or '-':>6} {r['median_s']:9.2f} {r['per_second']:9.0f}  {r['identical']}")
     for c in data["chunks"]:
         lines.append(f"chunk {c['chunk']:>6}: in process {_rate(c['in_process_per_second']):>9} eq/s; cluster {_rate(c['cluster_per_second']):>9} eq/s")
+    for g in data.get("growth") or []:
+        lines.append(f"in this process, {g['points']:>7} points: {g['median_s']:.2f} s, {g['per_point_us']:.0f} us per equilibrium")
     if data["overhead"]:
         lines.append(f"overhead per chunk: {1e3 * data['overhead']['overhead_s']:.1f} ms")
     if data.get("page"):

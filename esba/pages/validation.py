@@ -11,7 +11,7 @@ from typing import Sequence
 from esba.calibration.validation import TOLERANCE_DEG, TOLERANCE_MM, Table2Case, table2
 from esba.model.scene import MAIN_JOB
 
-from .page import TIMES, Page, Progress, Rendered, Times
+from .page import TIMES, Page, Progress, Rendered, Times, figure_link
 
 __all__ = ["PAGE", "ValidationPage", "Table2Cases", "render_page"]
 
@@ -32,8 +32,9 @@ def _table(cases: Sequence[Table2Case]) -> list[str]:
     return out
 
 
-def render_page(cases: Sequence[Table2Case], printed: Sequence[Table2Case] = ()) -> str:
-    """The Markdown of ``docs/validation.md`` (deterministic: no times, numbers to 3 decimals)."""
+def render_page(cases: Sequence[Table2Case], printed: Sequence[Table2Case] = (), page_dir: Path | None = None) -> str:
+    """The Markdown of ``docs/validation.md`` (deterministic: no times, numbers to 3 decimals); with
+    ``page_dir`` (the page's folder) a figure that is not in ``figures/`` there is named, not linked."""
     a = MAIN_JOB.actuator
     p90 = cases[0].result.pressure if cases else float("nan")
     all_pass = all(c.passed for c in cases)
@@ -87,7 +88,7 @@ def render_page(cases: Sequence[Table2Case], printed: Sequence[Table2Case] = ())
             "",
             *_table(printed),
         ]
-    lines += ["", *_figures_section()]
+    lines += ["", *_figures_section(page_dir)]
     lines.append("")
     return "\n".join(lines)
 
@@ -101,7 +102,7 @@ PAGE_FIGURES = (
 )
 
 
-def _figures_section() -> list[str]:
+def _figures_section(page_dir: Path | None = None) -> list[str]:
     out = [
         "## Figures",
         "",
@@ -111,7 +112,8 @@ def _figures_section() -> list[str]:
         "",
     ]
     for name, caption in PAGE_FIGURES:
-        out += [f"- `esba figures --only {name}`: {caption}", "", f"  ![{name}](figures/{name}.png)", ""]
+        out += [f"- `esba figures --only {name}`: {caption}", "",
+                "  " + figure_link(page_dir, f"figures/{name}.png", name, f"esba figures --only {name} --out {{dir}}"), ""]
     return out[:-1]
 
 
@@ -133,7 +135,7 @@ class ValidationPage(Page):
         return Table2Cases(tuple(cases), tuple(table2("printed", segments=[c.n for c in cases])))
 
     def render(self, data: Table2Cases, settings: None, path: Path, times: Times = TIMES) -> Rendered:
-        return Rendered(render_page(data.paper, data.printed))
+        return Rendered(render_page(data.paper, data.printed, path.parent))
 
 
 PAGE = ValidationPage()

@@ -22,6 +22,8 @@ from typing import Callable
 
 import numpy as np
 
+from esba.solvers.roots import brentq
+
 from .branch import SpecialPoint
 from .corrector import Corrector, Point
 
@@ -131,10 +133,6 @@ def _brent(corr: Corrector, a: Point, s_b: float, f: Callable[[Point], float], f
         if pt is None:
             raise _SegmentError
         return f(pt)
-
-    from scipy.optimize import (
-        brentq,  # SciPy's optimize takes ~0.2 s to import: only when a point is located
-    )
 
     try:
         s_star = brentq(fs, 0.0, s_b, xtol=1e-15 * max(1.0, s_b), rtol=1e-15, maxiter=200)

@@ -7,17 +7,19 @@ rows are appended to a :class:`StudyFile` as soon as it and every chunk before i
 the file always holds the first k rows of the study, in order, and an interrupted study resumes
 from row k.
 
-The file is CSV with one line before the column names::
+The file is plain CSV, column names first (``pandas.read_csv(path)`` reads it as it is), and the
+study's metadata is a JSON file beside it, the same name with ``.study.json`` for ``.csv``
+(:func:`sidecar`, read by :func:`read_header`)::
 
-    # esba-study {"kind": "sweep", "hash": "9f0c...", "rows": 2000, "settings": {...}, "identity": {...}}
-    pressure_mpa,payload_n,...
-    0.0,0.0,...
+    grid.csv          pressure_mpa,payload_n,...
+                      0.0,0.0,...
+    grid.study.json   {"kind": "sweep", "hash": "9f0c...", "rows": 2000, "settings": {...}, "identity": {...}}
 
 ``identity`` is everything that fixes the study's answers (the grid or the samples, the model,
 the batch settings, the esba code); ``hash`` is its SHA-256, and a resumed study must have the
 same. ``settings`` records decisions taken when the study started (whether the batch path runs
-compiled), which a resumed study keeps. Read the file with ``csv`` after skipping the first line,
-or ``pandas.read_csv(path, skiprows=1)``.
+compiled), which a resumed study keeps. Every writer of a study's CSV (a sweep in this process
+included) writes both, under the same lock.
 
 While a run writes the file it holds an exclusive lock on it (``flock``, on POSIX systems): a
 second run that starts or resumes the same file is refused (:class:`StudyError`) instead of
@@ -53,6 +55,7 @@ import io
 import json
 import logging
 import os
+import stat
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
@@ -65,12 +68,36 @@ try:
 except ImportError:  # pragma: no cover - not POSIX: studies are not locked
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["StudyError", "StudyStopped", "StudyFile", "study_hash", "chunk_bounds", "run_chunks", "HEADER", "MAX_CHUNK"]
+__all__ = ["StudyError", "StudyStopped", "StudyFile", "study_hash", "sidecar", "read_header", "write_study", "chunk_bounds", "run_chunks", "HEADER", "MAX_CHUNK"]
 
 _log = logging.getLogger("esba.studies.chunks")
 
-#: The start of a study file's first line; the JSON header follows.
+#: The start of the first line of a study file written by esba before 0.1.0's sidecar files (the
+#: JSON header followed it in the CSV): recognised only to refuse resuming such a file.
 HEADER = "# esba-study "
+
+#: The suffix of a study's metadata file, beside its CSV (``grid.csv``: ``grid.study.json``).
+SIDECAR_SUFFIX = ".study.json"
+
+
+def sidecar(path: str | Path) -> Path:
+    """The metadata file of the study CSV at ``path``.
+
+    >>> sidecar("runs/grid.csv").as_posix()
+    'runs/grid.study.json'
+    """
+    path = Path(path)
+    return path.with_name(path.stem + SIDECAR_SUFFIX)
+
+
+def read_header(path: str | Path) -> dict[str, Any] | None:
+    """The metadata (kind, hash, rows, settings, identity) of the study CSV at ``path``, or None
+    when there is no readable metadata file beside it."""
+    try:
+        header = json.loads(sidecar(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return header if isinstance(header, dict) else None
 
 #: The most points one chunk may hold (its arrays travel whole between processes).
 MAX_CHUNK = 1_000_000
@@ -155,6 +182,12 @@ class StudyFile:
             ) from None
         return fd
 
+    def check_free(self) -> None:
+        """Refuse (:class:`StudyError`) now, before a long computation, a file that another run is
+        writing; the lock itself is taken when the file is started or resumed."""
+        if self.path.exists():
+            os.close(self._acquire(os.O_RDONLY, f"{self.path}: cannot read the study file"))
+
     # -- writing -------------------------------------------------------------------------------
 
     def start(self, settings: Mapping[str, Any]) -> None:
@@ -172,16 +205,25 @@ class StudyFile:
         fd = self._acquire(os.O_WRONLY | os.O_CREAT | os.O_APPEND, f"{self.path}: cannot write the study file")
         try:
             self.replaced = self._rows_of_this_study()
-            os.ftruncate(fd, 0)  # only now, under the lock
+            if stat.S_ISREG(os.fstat(fd).st_mode):  # not a device (a pipe, /dev/null)
+                os.ftruncate(fd, 0)  # only now, under the lock
         except OSError as exc:
             os.close(fd)
             raise StudyError(f"{self.path}: cannot write the study file ({exc.strerror or exc})") from None
         if self.replaced:
             _log.warning("%s held %d rows of this study; starting over (give --resume to continue it)", self.path, self.replaced)
         self._fd, self._size = fd, 0
+        meta, tmp = sidecar(self.path), sidecar(self.path).with_name(sidecar(self.path).name + f".{os.getpid()}.tmp")
+        try:  # whole or not at all: written beside it, then renamed over the old one
+            tmp.write_text(json.dumps(header, sort_keys=True, allow_nan=False, indent=1) + "\n", encoding="utf-8")
+            os.replace(tmp, meta)
+        except OSError as exc:
+            tmp.unlink(missing_ok=True)
+            self.close()
+            raise StudyError(f"{meta}: cannot write the study's metadata ({exc.strerror or exc})") from None
         names = io.StringIO()
         csv.writer(names, lineterminator="\n").writerow(self.columns)
-        self._write(HEADER + json.dumps(header, sort_keys=True, allow_nan=False) + "\n" + names.getvalue())
+        self._write(names.getvalue())
 
     def append(self, rows: Sequence[Mapping[str, Any]]) -> None:
         """Append rows (None as an empty cell) and push them to the disk.
@@ -253,13 +295,12 @@ class StudyFile:
         fd = self._acquire(os.O_RDWR | os.O_APPEND, f"--resume {self.path}: cannot read the study file")
         try:
             with open(self.path, "rb") as fb:
-                first = fb.readline()
-                header = self._header(first)
-                self.settings = dict(header.get("settings") or {})
                 names = fb.readline()
+                header = self._header(names)
+                self.settings = dict(header.get("settings") or {})
                 if names.decode("utf-8", "replace").rstrip("\r\n") != ",".join(self.columns):
                     raise self._bad(f"its column names are not this study's ({names[:80].decode('utf-8', 'replace').strip()!r}...)")
-                end, count = self._rows(fb, len(first) + len(names), on_row)
+                end, count = self._rows(fb, len(names), on_row)
             if end < os.fstat(fd).st_size:
                 os.ftruncate(fd, end)  # a chunk cut short: its complete rows stay, the broken tail goes
         except OSError as exc:
@@ -272,13 +313,18 @@ class StudyFile:
         return count
 
     def _header(self, first: bytes) -> dict:
-        text = first.decode("utf-8", "replace")
-        if not text.startswith(HEADER):
-            raise self._bad(f"not a study file written chunk by chunk (its first line does not start with {HEADER.strip()!r})")
+        """The study's metadata from the file beside the CSV (``first`` is the CSV's first line)."""
+        if first.startswith(HEADER.encode()):
+            raise self._bad(f"it was written by an older esba, with its metadata on its first line ({HEADER.strip()!r}), not in {sidecar(self.path).name}")
+        meta = sidecar(self.path)
         try:
-            header = json.loads(text[len(HEADER):])
+            header = json.loads(meta.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise self._bad(f"not a study file (no {meta.name} beside it: the study's metadata)") from None
+        except OSError as exc:
+            raise self._bad(f"cannot read its metadata {meta} ({exc.strerror or exc})") from None
         except ValueError:
-            raise self._bad("its header line is not valid JSON") from None
+            raise self._bad(f"its metadata {meta.name} is not valid JSON") from None
         if not isinstance(header, dict) or header.get("kind") != self.kind:
             kind = header.get("kind") if isinstance(header, dict) else None
             raise self._bad(f"it holds a {kind!r} study, not a {self.kind!r} one")
@@ -336,19 +382,23 @@ class StudyFile:
     def _rows_of_this_study(self) -> int:
         """Complete rows of this same study (same hash) in the file now; 0 for anything else."""
         try:
+            header = read_header(self.path)
+            if header is None or header.get("hash") != self.hash:
+                return 0
             with open(self.path, "rb") as fb:
-                first = fb.readline()
-                if not first.startswith(HEADER.encode()):
-                    return 0
-                try:
-                    if json.loads(first[len(HEADER):].decode("utf-8")).get("hash") != self.hash:
-                        return 0
-                except (ValueError, AttributeError):
-                    return 0
                 names = fb.readline()
-                return self._rows(fb, len(first) + len(names), None)[1]
+                return self._rows(fb, len(names), None)[1]
         except (OSError, StudyError):
             return 0
+
+
+def write_study(path: str | Path, kind: str, identity: Mapping[str, Any], columns: Sequence[str], rows: Sequence[Mapping[str, Any]], settings: Mapping[str, Any]) -> StudyFile:
+    """Write a whole study (every row at once) as :class:`StudyFile` does chunk by chunk: the same
+    CSV and metadata file, under the same lock. Returns the closed file (its :attr:`StudyFile.replaced`)."""
+    with StudyFile(path, kind, identity, columns, len(rows)) as file:
+        file.start(settings)
+        file.append(rows)
+    return file
 
 
 def _lock_holder(fd: int) -> int | None:

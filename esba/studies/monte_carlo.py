@@ -10,7 +10,7 @@ Python's shortest round-trip form, so a resumed study reads back exactly the val
 ends with the same statistics as an uninterrupted one.
 
 A study is resumed only by the same scene, sigmas, samples, seed, batch settings and esba code
-(the file's header hash), and only when the samples in the file are the ones drawn again from
+(the hash in the file's metadata), and only when the samples in the file are the ones drawn again from
 the seed (a NumPy whose generator draws other numbers is refused).
 
 Examples
@@ -22,8 +22,8 @@ Examples
 >>> out = pathlib.Path(tempfile.mkdtemp()) / "mc.csv"
 >>> opts = MonteCarloOptions(samples=20, chunk=8)
 >>> mc, info = monte_carlo_study(MAIN_JOB, sig, opts, out=out)
->>> mc.counts["ok"], info["resumed_from_sample"], len(out.read_text().splitlines())
-(20, 0, 22)
+>>> mc.counts["ok"], info["resumed_from_sample"], len(out.read_text().splitlines())  # column names and 20 rows
+(20, 0, 21)
 >>> again, info = monte_carlo_study(MAIN_JOB, sig, opts, out=out, resume=True)
 >>> info["resumed_from_sample"], bool((again.tip == mc.tip).all())
 (20, True)
@@ -163,7 +163,7 @@ def monte_carlo_study(
         decided = file.settings.get("compile")
         if decided not in ("always", "never"):
             file.close()
-            raise StudyError(f"--resume {file.path}: its header has no backend decision (compile={decided!r})")
+            raise StudyError(f"--resume {file.path}: its metadata has no backend decision (compile={decided!r})")
         batch = options.batch if options.batch is not None else BatchOptions()
         options = dataclasses.replace(options, batch=dataclasses.replace(batch, compile=decided))
     else:

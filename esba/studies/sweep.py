@@ -46,6 +46,7 @@ from esba.model import resolution
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import Finding, assess_arrays
 from esba.statics.batch import BatchOptions, check_size, decide_backend, solve_arrays
+from esba.statics.batch_options import DEFAULT_BATCH_OPTIONS
 from esba.statics.equilibrium import (
     DEFAULT_OPTIONS,
     EquilibriumError,
@@ -359,9 +360,10 @@ def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions |
         pres[feasible] = batch.pressure
         stability[feasible] = batch.stability
         method[feasible] = batch.method
+        ok = batch.ok  # a property computed over the whole batch: read once, not once per point
         for j, i in enumerate(feasible):
             notes[i] = batch.notes[j]
-            if not batch.ok[j]:
+            if not ok[j]:
                 status[i], messages[i] = "not ok", batch.messages[j]
         backend, timings = batch.backend, dict(batch.timings)
         a = base.actuator
@@ -482,6 +484,10 @@ class SweepResult:
         How the batch path ran (compiled or interpreted, and why), decided once for the grid.
     timings : dict
         Wall times of the batch path in s (summed over chunks).
+    identity : dict or None
+        What fixes the study's answers (:func:`study_identity`), for the metadata of its CSV file.
+    settings : dict
+        Decisions taken when it ran (``compile``: ``always`` or ``never``; ``backend``).
     """
 
     base: Scene
@@ -498,9 +504,12 @@ class SweepResult:
     timings: dict = dataclasses.field(default_factory=dict)
     notes: tuple[tuple[str, ...], ...] = ()
     validity: tuple[tuple[Finding, ...], ...] = ()
+    identity: dict | None = None
+    settings: dict = dataclasses.field(default_factory=dict)
 
     @classmethod
-    def from_parts(cls, plan: SweepPlan, parts: Sequence[Mapping[str, Any]], backend: str) -> SweepResult:
+    def from_parts(cls, plan: SweepPlan, parts: Sequence[Mapping[str, Any]], backend: str,
+                   identity: dict | None = None, settings: Mapping[str, Any] | None = None) -> SweepResult:
         """The result of a whole grid from the :func:`solve_points` arrays of its chunks, in order."""
         timings: dict[str, float] = {}
         for p in parts:
@@ -521,6 +530,8 @@ class SweepResult:
             timings=timings,
             notes=tuple(tuple(t) for p in parts for t in p["notes"]),
             validity=tuple(tuple(v) for p in parts for v in p.get("validity", [()] * len(p["status"]))),
+            identity=identity,
+            settings=dict(settings or {}),
         )
 
     @property
@@ -588,11 +599,21 @@ class SweepResult:
         }
 
     def write(self, path: str | Path) -> Path:
-        """Write CSV (``.csv``) or JSON (``.json``, no NaN) by the file's suffix; the folder must exist."""
+        """Write CSV (``.csv``) or JSON (``.json``, no NaN) by the file's suffix; the folder must exist.
+
+        A CSV file is a study file, as a sweep on Dask writes it: the rows (``pandas.read_csv(path)``
+        reads them), the study's metadata beside them (:func:`esba.studies.chunks.sidecar`), and
+        the study lock while it is written (:class:`esba.studies.chunks.StudyFile`).
+        """
         path = Path(path)
         if path.suffix.lower() == ".csv":
-            text = self.to_csv()
-        elif path.suffix.lower() == ".json":
+            from .chunks import write_study
+
+            identity = self.identity if self.identity is not None else study_identity(plan_sweep(self.base, **self.axes), DEFAULT_BATCH_OPTIONS)
+            rows = [csv_cells(r) for r in self.rows()]
+            write_study(path, "sweep", identity, row_fields(self.base.segments), rows, self.settings)
+            return path
+        if path.suffix.lower() == ".json":
             text = jsonsafe.dumps(self.to_dict(), indent=1)
         else:
             raise SweepError(f"output {str(path)!r}: expected a .csv or .json file")
@@ -630,6 +651,17 @@ def sweep(
     check_points(plan)
     check_size(plan.size, plan.base.segments, "the sweep", SweepError)
     check_resolvable(plan)
+    identity = study_identity(plan, DEFAULT_BATCH_OPTIONS if options is None else options)
     options, backend = decide_backend(plan.base.model(), options, plan.angle_mode, plan.size)
     part = solve_points(plan, 0, plan.size, options)
-    return SweepResult.from_parts(plan, [part], backend)
+    return SweepResult.from_parts(plan, [part], backend, identity, {"compile": options.compile, "backend": backend})
+
+
+def study_identity(plan: SweepPlan, options: BatchOptions) -> dict[str, Any]:
+    """Everything that fixes a sweep's rows (the grid, the scene, the batch settings as given, the
+    esba code): the identity in its study file's metadata (:class:`esba.studies.chunks.StudyFile`),
+    the same whether it ran in this process or chunk by chunk."""
+    from .distributed import code_digest
+
+    batch = {k: v for k, v in dataclasses.asdict(options).items() if k not in ("progress", "cache")}
+    return {"plan": plan.describe(), "batch": batch, "esba": code_digest()}

@@ -12,7 +12,7 @@ for element, in the same order.
 - With ``out`` (a ``.csv`` file) each chunk's rows are appended as soon as it and the chunks
   before it are solved (:class:`esba.studies.chunks.StudyFile`); nothing of the grid is held in memory but
   a few chunks. With ``resume`` a study continues from the rows its file holds, once the file's
-  header shows the same study (grid, scene, batch settings, esba code) and keeps its backend.
+  metadata shows the same study (grid, scene, batch settings, esba code) and keeps its backend.
 
 Examples
 --------
@@ -43,7 +43,7 @@ from esba.statics.batch import (
 from esba.statics.batch_options import DEFAULT_BATCH_OPTIONS
 
 from .chunks import MAX_CHUNK, StudyError, StudyFile, chunk_bounds, run_chunks
-from .distributed import ModelKey, SerialRunner, code_digest
+from .distributed import ModelKey, SerialRunner
 from .sweep import (
     AXES,
     SweepError,
@@ -55,6 +55,7 @@ from .sweep import (
     point_rows,
     row_fields,
     solve_points,
+    study_identity,
 )
 
 __all__ = ["SweepStudy", "sweep_study", "check_study", "read_rows", "DEFAULT_CHUNK", "MAX_CHUNK"]
@@ -89,7 +90,7 @@ class SweepStudy:
     out : Path or None
         The CSV file the rows were streamed to.
     hash : str or None
-        The study's hash (in the file's header).
+        The study's hash (in the file's metadata, beside it).
     result : SweepResult or None
         Every point, when the rows were gathered in memory (no ``out``).
     outside : int
@@ -158,13 +159,11 @@ class SweepStudy:
 def read_rows(path: str | Path) -> list[dict[str, Any]]:
     """The rows of a sweep's study file (:func:`esba.studies.sweep.parse_row`: numbers exact, empty cells None)."""
     with open(path, encoding="utf-8", newline="") as fh:
-        fh.readline()  # the study header
         return [parse_row(r) for r in csv.DictReader(fh)]
 
 
 def _identity(plan: SweepPlan, options: BatchOptions) -> dict[str, Any]:
-    batch = {k: v for k, v in dataclasses.asdict(options).items() if k not in ("progress", "cache")}
-    return {"plan": plan.describe(), "batch": batch, "esba": code_digest()}
+    return study_identity(plan, options)
 
 
 def check_study(plan: SweepPlan, chunk: int, streamed: bool) -> None:
@@ -241,7 +240,7 @@ def sweep_study(
             decided = file.settings.get("compile")
             if decided not in ("always", "never"):
                 file.close()
-                raise StudyError(f"--resume {file.path}: its header has no backend decision (compile={decided!r})")
+                raise StudyError(f"--resume {file.path}: its metadata has no backend decision (compile={decided!r})")
             fixed, backend = dataclasses.replace(options, compile=decided), str(file.settings.get("backend", ""))
     try:
         if start is None:
@@ -272,7 +271,7 @@ def sweep_study(
             file.close()
     result = None
     if file is None:
-        result = SweepResult.from_parts(plan, parts, backend)
+        result = SweepResult.from_parts(plan, parts, backend, _identity(plan, options), {"compile": fixed.compile, "backend": backend})
         counts = result.counts()
         outside = sum(1 for v in result.validity if v)
     return SweepStudy(

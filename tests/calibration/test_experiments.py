@@ -107,9 +107,20 @@ def test_cli_writes_and_checks_the_page(tmp_path, capsys, comparison, monkeypatc
         assert len(series) == 4
         for col in comparison.columns:
             for label, preds in ((f"{col.name}, E = 0.54 MPa", col.nominal), (next(k for k in series if k.startswith(f"{col.name}, fitted")), col.fitted)):
-                shown = [[p.measured, p.predicted] for p in preds if p.quantity in quantities and p.ok and math.isfinite(p.predicted)]
+                shown = [[p.measured, p.predicted - p.measured] for p in preds if p.quantity in quantities and p.ok and math.isfinite(p.predicted)]
                 np.testing.assert_allclose(series[label], shown)
+    # the FEM column cannot determine rho: the legend says so instead of a value on its bound
+    (box,) = saved[figure.resolve()].legends  # below the panels
+    legend = [t.get_text() for t in box.get_texts()]
+    fem = next(c for c in comparison.columns if c.name == "FEM")
+    if not np.all(np.isfinite(fem.fit_both.std_error)):
+        assert any(t.startswith("FEM, fitted (") and "rho not identifiable" in t for t in legend), legend
+    assert not any("rho = 0.0°" in t for t in legend)
     assert main(["experiments", "--check", str(page)]) == EXIT_OK
+    capsys.readouterr()
+    monkeypatch.chdir(page.parent)  # outside a checkout the page is ./experiments.md, as for esba validate --check
+    assert main(["experiments", "--check"]) == EXIT_OK
+    assert capsys.readouterr().out.strip() == f"{Path.cwd() / 'experiments.md'} is up to date"
     page.write_text("stale\n", encoding="utf-8")
     assert main(["experiments", "--check", str(page)]) == EXIT_FAILED
     assert "is stale" in capsys.readouterr().err

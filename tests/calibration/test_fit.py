@@ -284,7 +284,8 @@ def test_cli_fit_table_json_and_plot(tmp_path, capsys, clean, monkeypatch):
         measured = sorted(v for (_, q), v in clean.items() if q in quantities)
         fitted = next(v for k, v in series.items() if k.startswith("fitted"))
         assert sorted(fitted[:, 0]) == pytest.approx(measured)
-        assert fitted[:, 1] == pytest.approx(fitted[:, 0], rel=FIT_EXACT_REL)  # clean data: the fit predicts them
+        assert fitted[:, 1] == pytest.approx(0.0, abs=FIT_EXACT_REL * np.abs(fitted[:, 0]).max())  # clean data: the fit predicts them
+    assert [ax.get_ylabel() for ax in axes] == ["predicted - measured (deg)", "predicted - measured (mm)", "predicted - measured (N/m)"]
     assert main(["fit", str(path), "--free", "E", "--level", "0.9", "--json"]) == EXIT_OK
     d = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert list(d["parameters"]) == ["E"] and "interval_90" in d["parameters"]["E"] and d["status"] == "ok"

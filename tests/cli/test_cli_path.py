@@ -130,7 +130,7 @@ def test_write_doc_writes_the_page_and_its_figures(capsys, tmp_path, monkeypatch
     for heading in ("## Pressure under the 2 N horizontal tip payload", "## Payload direction", "## The straight actuator", "## What a designer"):
         assert heading in text
     assert f"esba path --write-doc {page}" in text
-    for name, xlabel in (("path-pressure-2N.png", "pressure (MPa)"), ("path-omega-2N.png", "omega1 (deg)"), ("path-column-n4.png", "payload1 (N)")):
+    for name, xlabel in (("path-pressure-2N.png", "pressure (MPa)"), ("path-omega-2N.png", "payload direction from the vertical (deg)"), ("path-column-n4.png", "payload magnitude (N)")):
         file = tmp_path / "docs" / "figures" / name
         assert file.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"figures/{name}" in text
         (ax,) = saved[file.resolve()].axes

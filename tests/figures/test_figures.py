@@ -230,12 +230,37 @@ def test_design_figures_registered_only_when_their_module_exists(tmp_path, monke
     assert (tmp_path / "out" / "fig13a.png").read_bytes()[:8] == PNG_SIGNATURE
 
 
+def test_the_top_contour_of_a_steep_field_lies_where_the_field_has_its_value():
+    """Fig. 13a's field grows steeply past its top level (720 deg): the contour lines are drawn on
+    the field's own values there, not on values clipped just above the top level (which put the
+    720 deg line between a value and its clipped neighbour: jagged)."""
+    from matplotlib.contour import ContourSet
+    from matplotlib.tri import LinearTriInterpolator
+
+    from esba.figures.design import _contour, triangle_grid
+    from esba.figures.scenes import new_figure
+
+    grid = triangle_grid(8.0, 30)
+    field = 20.0 * np.exp(0.8 * grid[:, 0]) + 5.0 * grid[:, 1]  # steep in r2, like the bending angle at 0.2 MPa
+    field[np.argmax(field)] = np.inf  # a design off every scale
+    levels = np.arange(0.0, 721.0, 45.0)
+    fig = new_figure()
+    ax = fig.add_subplot()
+    tri = _contour(fig, ax, grid, field, levels, "deg", "viridis", extend="max")
+    (lines,) = [c for c in ax.collections if isinstance(c, ContourSet) and not c.filled]
+    top = lines.get_paths()[list(lines.levels).index(720.0)].vertices
+    assert len(top) > 5
+    finite = np.where(np.isfinite(field), field, 1e9)
+    on_line = LinearTriInterpolator(tri, finite)(top[:, 0], top[:, 1])
+    np.testing.assert_allclose(on_line.compressed(), 720.0, rtol=1e-9)
+
+
 def test_the_loading_band_goes_on_through_a_branch_point_it_passes():
     """n = 4 column, 1 -> 6.4 N and back (docs/paths.md's figure): unloading comes back along the buckled
     branch to the branch point and goes on straight; its band is drawn through the branch point, from
     its last point on the buckled branch to the first on the straight one."""
     from esba.analysis.path_analysis import analyse
-    from esba.figures.paths import path_figure
+    from esba.figures.paths import LOADING_BANDS, path_figure
     from esba.model.scene import Payload, Scene
     from esba.paths.continuation import PathOptions
 
@@ -244,7 +269,8 @@ def test_the_loading_band_goes_on_through_a_branch_point_it_passes():
     (bp,) = down.branch_points
     assert down.jumps == ()
     ax = drawn.axes(path_figure(run))[0]
-    bands = [ln for ln in drawn.lines(ax) if ln.get_linewidth() == 6 and ln.get_color() == "C2"]
+    _, down_colour, down_width = LOADING_BANDS[1]
+    bands = [ln for ln in drawn.lines(ax) if ln.get_linewidth() == down_width and ln.get_color() == down_colour]
     x = np.concatenate([drawn.xy(ln)[0] for ln in bands])
     assert x.min() == 1.0 and x.max() == 6.4
     # no stretch of the ramp left undrawn: every gap between drawn x values lies inside one band

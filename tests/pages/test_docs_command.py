@@ -35,6 +35,10 @@ def test_write_then_check_outside_a_checkout(capsys, tmp_path, monkeypatch):
     code, out, err = run(capsys, "--check", "validation")
     assert code == EXIT_FAILED and "validation  missing" in out
     assert err == "esba: validation is missing: run `esba docs --write validation` and commit the pages\n"
+    # its figures beside it (as `esba figures` there writes them): the page is the checkout's, and links them
+    (tmp_path / "figures").mkdir()
+    for figure in (ROOT / "docs" / "figures").glob("fig*.png"):
+        shutil.copy(figure, tmp_path / "figures" / figure.name)
     assert run(capsys, "--write", "validation")[0] == EXIT_OK
     assert (tmp_path / "validation.md").read_text() == (ROOT / "docs" / "validation.md").read_text()
     assert run(capsys, "--check", "validation")[0] == EXIT_OK

@@ -29,7 +29,7 @@ from esba.calibration.uncertainty import MonteCarloOptions, parse_sigma, resolve
 from esba.cli import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, main
 from esba.model.scene import MAIN_JOB, Payload, Scene
 from esba.statics.batch import BatchOptions, compiler
-from esba.studies.chunks import HEADER, StudyError, StudyFile, StudyStopped
+from esba.studies.chunks import StudyError, StudyFile, StudyStopped, read_header, sidecar
 from esba.studies.distributed import (
     DASK_EXTRA,
     DaskRunner,
@@ -98,14 +98,18 @@ def test_compiled_sweep_on_two_workers_is_bitwise_the_in_process_one(cluster):
 
 
 @needs_dask
-def test_streamed_file_is_the_in_process_csv_after_its_header(cluster, reference, tmp_path):
+def test_streamed_file_is_the_in_process_file(cluster, reference, tmp_path):
+    """One file format however the sweep ran: the same CSV (column names first) and the same
+    metadata beside it, from a study on Dask and from a sweep in this process."""
     out = tmp_path / "grid.csv"
     study = sweep_study(plan_sweep(BASE, **GRID), INTERPRETED, runner=cluster, chunk=9, out=out)
-    lines = out.read_text(encoding="utf-8").splitlines(keepends=True)
-    header = json.loads(lines[0][len(HEADER):])
+    header = read_header(out)
     assert header["kind"] == "sweep" and header["hash"] == study.hash and header["rows"] == len(reference.status)
     assert header["settings"]["compile"] == "never"
-    assert "".join(lines[1:]) == reference.to_csv()
+    assert out.read_text(encoding="utf-8") == reference.to_csv()
+    here = reference.write(tmp_path / "here.csv")
+    assert here.read_bytes() == out.read_bytes()
+    assert sidecar(here).read_bytes() == sidecar(out).read_bytes()
     assert read_rows(out) == reference.rows() and study.counts == reference.counts() and study.result is None
 
 
@@ -245,12 +249,14 @@ def test_resume_refuses_another_studys_file(tmp_path):
         sweep_study(other, INTERPRETED, out=out, resume=True)
     with pytest.raises(StudyError, match=r"differs in batch\.load_steps"):
         sweep_study(plan, BatchOptions(compile="never", load_steps=9), out=out, resume=True)
-    plain = tmp_path / "plain.csv"
-    sweep(Scene(pressure=0.1), payload=[0.0, 1.0, 2.0], options=INTERPRETED).write(plain)
+    here = tmp_path / "here.csv"  # a sweep in this process writes the same study file: resuming it solves nothing
+    sweep(Scene(pressure=0.1), payload=[0.0, 1.0, 2.0], options=INTERPRETED).write(here)
+    assert sweep_study(plan, INTERPRETED, out=here, resume=True).chunks == 0
+    sidecar(here).unlink()
     with pytest.raises(StudyError, match="not a study file"):
-        sweep_study(plan, INTERPRETED, out=plain, resume=True)
+        sweep_study(plan, INTERPRETED, out=here, resume=True)
     lines = out.read_text(encoding="utf-8").splitlines(keepends=True)
-    out.write_text("".join(lines[:3]) + "1,2,3\n" + "".join(lines[3:]), encoding="utf-8")
+    out.write_text("".join(lines[:2]) + "1,2,3\n" + "".join(lines[2:]), encoding="utf-8")
     with pytest.raises(StudyError, match="row 2 has 3 cells"):
         sweep_study(plan, INTERPRETED, out=out, resume=True)
 
@@ -267,7 +273,7 @@ def test_monte_carlo_streams_its_samples_and_resumes(cluster, tmp_path):
     assert info["resumed_from_sample"] == 50
     for name in ("code", "theta", "tip", "total_angle"):
         np.testing.assert_array_equal(getattr(mc, name), getattr(whole, name))
-    rows = list(csv.DictReader(io.StringIO(out.read_text().split("\n", 1)[1])))
+    rows = list(csv.DictReader(io.StringIO(out.read_text())))
     assert [int(r["sample"]) for r in rows] == list(range(120)) and rows[0]["outcome"] == "ok"
     with pytest.raises(StudyError, match="another study"):
         monte_carlo_study(MAIN_JOB, sig, MonteCarloOptions(samples=120, seed=2), out=out, resume=True)
@@ -292,7 +298,7 @@ def test_cli_sweep_on_workers_writes_the_in_process_rows(capsys, tmp_path):
     assert main(["sweep", *grid, "--workers", "2", "--chunk", "5", "--out", str(there)]) == EXIT_OK
     out = capsys.readouterr().out
     assert "study: 4 chunks of up to 5 points on a local Dask cluster of 2 worker processes" in out
-    assert there.read_text().split("\n", 1)[1] == here.read_text()
+    assert there.read_text() == here.read_text()
     assert main(["sweep", *grid, "--json"]) == EXIT_OK
     alone = json.loads(capsys.readouterr().out)
     assert main(["sweep", *grid, "--workers", "2", "--json"]) == EXIT_OK  # rows gathered in memory
@@ -370,6 +376,7 @@ def test_cli_resume_of_a_mismatched_file_is_one_line_exit_2(capsys, tmp_path):
     capsys.readouterr()
     _one_line_error(capsys, ["sweep", "--pressure", "0,0.2", "--no-compile", "--no-progress", "--resume", "--out", str(out)], "belongs to another study")
     out.write_text("pressure_mpa\n0.1\n", encoding="utf-8")
+    sidecar(out).unlink()
     _one_line_error(capsys, ["sweep", "--pressure", "0,0.1", "--no-progress", "--resume", "--out", str(out)], "not a study file")
 
 
@@ -504,7 +511,7 @@ def test_cli_sweep_on_a_scheduler_address_and_a_workers_address_refused(capsys, 
     address = cluster.client.scheduler.address
     assert main(["sweep", *grid, "--scheduler", address, "--chunk", "3", "--out", str(there)]) == EXIT_OK
     out, err = capsys.readouterr()
-    assert f"on the Dask cluster at {address}" in out and there.read_text().split("\n", 1)[1] == here.read_text()
+    assert f"on the Dask cluster at {address}" in out and there.read_text() == here.read_text()
     assert "error" not in err and "distributed." not in err
     worker = min(cluster.client.scheduler_info()["workers"])
     _one_line_error(capsys, ["sweep", *grid, "--scheduler", worker], f"--scheduler '{worker}': is not a Dask scheduler but a Dask Worker")
@@ -565,7 +572,7 @@ def test_a_lost_scheduler_stops_the_study_in_one_line_and_it_resumes(capfd, monk
     assert len(kept) in (0, 3, 6)  # whole chunks, before the third
     monkeypatch.undo()
     assert main([*grid, "--resume", "--out", str(out)]) == EXIT_OK
-    assert out.read_text().split("\n", 1)[1] == here.read_text()
+    assert out.read_text() == here.read_text()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -669,7 +676,7 @@ def test_a_study_file_that_another_run_writes_is_refused_and_left_alone(capsys, 
     assert main(argv[:-1] + [str(out)]) == EXIT_OK
     capsys.readouterr()
     lines = out.read_text().splitlines(keepends=True)
-    out.write_text("".join(lines[:4]))  # an interrupted study: 2 rows of 5
+    out.write_text("".join(lines[:3]))  # an interrupted study: 2 rows of 5
     before = out.read_bytes()
     fd = os.open(out, os.O_RDONLY)
     fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # another esba run is writing it
@@ -680,6 +687,7 @@ def test_a_study_file_that_another_run_writes_is_refused_and_left_alone(capsys, 
         mc = ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", str(out)]
         _one_line_error(capsys, mc, needle)
         _one_line_error(capsys, [*mc, "--resume"], needle)
+        _one_line_error(capsys, argv[:-5] + ["--out", str(out)], needle)  # a sweep in this process is a writer too
         with pytest.raises(StudyError, match="is being written by another esba run"):  # starting over does not truncate it either
             sweep_study(plan_sweep(Scene(), pressure=[0.0, 0.05, 0.1, 0.15, 0.2]), INTERPRETED, out=out)
         assert out.read_bytes() == before
@@ -698,7 +706,7 @@ def test_resume_refuses_a_row_with_a_stray_quote_and_leaves_the_file(capsys, tmp
     assert main(argv) == EXIT_OK
     capsys.readouterr()
     lines = out.read_text().splitlines(keepends=True)
-    lines[4] = lines[4].replace(",ok,", f",{damage},", 1)  # row 3
+    lines[3] = lines[3].replace(",ok,", f",{damage},", 1)  # row 3
     out.write_text("".join(lines))
     before = out.read_bytes()
     _one_line_error(capsys, argv, f"--resume {out}: row 3 cannot be read back exactly as CSV")
@@ -743,14 +751,14 @@ def test_a_full_disk_stops_a_streamed_study_in_one_line_and_it_resumes(capsys, m
     here, out = tmp_path / "here.csv", tmp_path / "s.csv"
     assert main([*grid[:-2], "--out", str(here)]) == EXIT_OK  # in this process: one batch, no --chunk
     capsys.readouterr()
-    monkeypatch.setattr("esba.studies.chunks.os", _FillingDisk(fail_at=3))  # the header, chunk 0, then half of chunk 1
+    monkeypatch.setattr("esba.studies.chunks.os", _FillingDisk(fail_at=3))  # the column names, chunk 0, then half of chunk 1
     assert main([*grid, "--resume", "--out", str(out)]) == EXIT_FAILED
     got, err = capsys.readouterr()
     assert got == "" and err == f"esba: error: {out}: cannot write (No space left on device); the rows solved so far are kept: rerun with --resume to go on\n"
     assert len(read_rows(out)) == 4 and out.read_bytes().endswith(b"\n")  # chunk 0 whole, nothing of chunk 1
     monkeypatch.undo()
     assert main([*grid, "--resume", "--out", str(out)]) == EXIT_OK
-    assert out.read_text().split("\n", 1)[1] == here.read_text()
+    assert out.read_text() == here.read_text()
     # the Monte Carlo's samples: the same line, with its own flag's words
     mc = ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "30", "--mc-chunk", "10", "--mc-out", str(tmp_path / "mc.csv")]
     monkeypatch.setattr("esba.studies.chunks.os", _FillingDisk(fail_at=2))
@@ -774,7 +782,10 @@ def test_bench_scaling_writes_its_page(capsys, tmp_path):
     assert data["overhead"]["round_trip_s"] > 0 and len(data["clusters"]) == 2
     text = page.read_text()
     assert f"`esba bench scaling --points 400 --segments 2 --repeat 1 --markdown {page}`" in text
-    for heading in ("## Throughput against the worker count", "## What the chunk size does", "## The overhead of one chunk", "dask-jobqueue"):
+    # the sweep in this process at two sizes: how its time grows with the grid (linear: the same time per equilibrium)
+    assert [g["points"] for g in data["growth"]] == [100, 400] and all(g["per_point_us"] > 0 for g in data["growth"])
+    for heading in ("## Throughput against the worker count", "## In this process against the grid's size", "## What the chunk size does",
+                    "## The overhead of one chunk", "dask-jobqueue"):
         assert heading in text
     assert "nan" not in text.lower() and "**no**" not in text
     # a second run of the benchmark finds the page up to date, times aside (rates, load averages, versions)

@@ -95,7 +95,7 @@ def test_every_figure_is_shown_on_a_page_beside_its_command(figure):
 
 def test_gitignore_lists_what_the_readme_commands_write():
     ignored = (ROOT / ".gitignore").read_text().split()
-    assert "esba-solve.png" in ignored and "sweep.csv" in ignored
+    assert "esba-solve.png" in ignored and "sweep.csv" in ignored and "sweep.study.json" in ignored
 
 
 def test_license_is_an_spdx_string():
@@ -135,3 +135,15 @@ def test_architecture_page_draws_the_floors_of_the_layer_test_and_is_linked():
     for a, b in re.findall(r"^\| Eq\. (\d+)(?:-(\d+))? \|", text, flags=re.M):
         covered |= set(range(int(a), int(b or a) + 1))
     assert covered == set(range(1, 20)), sorted(set(range(1, 20)) - covered)  # every equation of the paper has a row
+
+
+@pytest.mark.parametrize("number", range(len(re.findall(r"```python\n", README))))
+def test_each_readme_python_snippet_runs_on_its_own(number, tmp_path):
+    """A reader copies one snippet: it runs alone, in a fresh interpreter, with its own imports and names."""
+    import subprocess
+    import sys
+
+    code = re.findall(r"```python\n(.*?)```", README, flags=re.S)[number]
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, f"README snippet {number + 1}:\n{proc.stderr[-1500:]}"
+    assert proc.stdout.strip()
