@@ -126,7 +126,8 @@ class Propagation:
     status : str
         ``ok``; ``near_fold`` (no sensitivities: no numbers); ``beyond_linear_range`` (numbers
         given, but 3 sigma of some parameter reaches the fold's estimated distance: do not trust
-        them); ``not_stable`` (no stable equilibrium: no numbers).
+        them); ``not_stable`` (no stable equilibrium: no numbers); ``overflow`` (the sigmas are so
+        large that the covariance is not a finite number: no numbers).
     message : str
     cov_theta : ndarray, shape (n, n)
         rad^2.
@@ -214,8 +215,14 @@ def propagate(result: Equilibrium, sigmas: Sequence[Sigma], options: Sensitivity
     if sens.status in ("near_fold", "not_stable"):
         return Propagation(sigmas, sens.status, sens.message, np.full((n, n), np.nan), nan2, math.nan, {}, result.tip[:2].copy(), result.total_angle_deg)
     sd = np.array([s.sigma for s in sigmas])
-    S = np.vstack([sens.dtheta, sens.dtip, sens.dtotal[None, :]]) * sd[None, :]  # each column: one parameter's 1-sigma effect
-    cov = S @ S.T
+    with np.errstate(over="ignore", invalid="ignore"):
+        S = np.vstack([sens.dtheta, sens.dtip, sens.dtotal[None, :]]) * sd[None, :]  # each column: one parameter's 1-sigma effect
+    with np.errstate(over="ignore", invalid="ignore"):
+        cov = S @ S.T
+    if not np.all(np.isfinite(cov)):  # a sigma so large that its square overflows: no numbers, said so
+        given = ", ".join(s.given for s in sigmas)
+        message = f"the first-order covariance of {given} overflows (not a finite number): the sigmas are far beyond the model's range"
+        return Propagation(sigmas, "overflow", message, np.full((n, n), np.nan), nan2, math.nan, {}, result.tip[:2].copy(), result.total_angle_deg)
     shares = {}
     for k, (out, _) in enumerate(OUTPUTS):
         row = S[n + k] ** 2

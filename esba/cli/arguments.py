@@ -26,7 +26,7 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-_WHOLE = re.compile(r"\s*\d+\s*")
+_WHOLE = re.compile(r"\s*\d+\s*", re.ASCII)  # ASCII digits only: int() also reads other scripts' digits
 
 
 def segments_arg(text: str) -> int:

@@ -155,10 +155,12 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
         data["sensitivities"] = sensitivities(result).to_dict()
     if sigmas:
+        from esba.calibration.sigmas import outside_domain
         from esba.calibration.uncertainty import compare, monte_carlo, propagate
 
         propagation = propagate(result, sigmas)
         data["uncertainty"] = propagation.to_dict()
+        data["uncertainty"]["outside_domain"] = outside_domain(scene, sigmas)
         if mc_options is not None:
             if chunked:
                 from esba.studies.chunks import StudyStopped
@@ -186,6 +188,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         data["figure"] = str(save_figure(solve_figure(result, unloaded, tip_cov=cov, samples=tips), figure).resolve())
     print_result(args, data, _solve_table)
     warn_findings(result.validity)
+    for line in data.get("uncertainty", {}).get("outside_domain", ()):
+        print(f"esba: warning: {line}", file=sys.stderr)
     if mc is not None and mc.counts["ok"] < 2:
         print(f"esba: warning: {data['agreement']['verdict']}", file=sys.stderr)
     if not result.ok:

@@ -40,10 +40,31 @@ from typing import Any
 MAX_SEGMENTS = 256
 MAX_SEGMENTS_WHY = "the finest model of the accuracy benchmark; larger n costs n^2 memory and minutes to generate for no accuracy"
 
-#: A decimal number as people write it (no digit-group underscores, no hex), or nan/inf, which
+#: A decimal number as people write it (ASCII digits: no digit-group underscores, no hex, no
+#: other scripts' digits, which Python's ``float()`` reads), or nan/inf, which
 #: the field checks then refuse with their own message.
-_NUMBER = re.compile(r"\s*[+-]?((\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|nan|inf|infinity)\s*", re.IGNORECASE)
-_WHOLE = re.compile(r"\s*[+-]?\d+\s*")
+_NUMBER = re.compile(r"\s*[+-]?((\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|nan|inf|infinity)\s*", re.IGNORECASE | re.ASCII)
+_WHOLE = re.compile(r"\s*[+-]?\d+\s*", re.ASCII)
+
+
+#: The longest value a message quotes whole; a longer one is cut and its length said (a 10 MB
+#: string in a file must not come back as a 10 MB line).
+QUOTE_LIMIT = 60
+
+
+def quote(value: Any, limit: int = QUOTE_LIMIT) -> str:
+    """``repr(value)`` for a message, cut to about ``limit`` characters.
+
+    >>> quote("abc")
+    "'abc'"
+    >>> quote("x" * 1000)
+    "'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx'... (1000 characters)"
+    """
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    size = f" ({len(value)} characters)" if isinstance(value, str) else f" ({len(text)} characters)"
+    return text[:limit] + ("'" if text[:1] in "'\"" else "") + "..." + size
 
 
 def whole(name: str, value: Any, low: int, error: type[Exception] = ValueError, high: int | None = None, why: str = "") -> int:
