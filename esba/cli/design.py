@@ -74,7 +74,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
 
     if args.write_doc:
         refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot"], "with --write-doc (the page runs its own design cases)")
-        page = outputs.check_file(args.write_doc, "--write-doc")
+        page = outputs.check_file(args.write_doc, "--write-doc", (".md",))
     method = args.method or "ipopt"
     if method == "ipopt":
         refuse(args, ["particles", "iterations", "seed"], "with --method ipopt (they set the swarm: use --method pso or both)")

@@ -101,7 +101,7 @@ def _cmd_audit(args: argparse.Namespace) -> int:
             print(f"esba: {page} is {check.status}: run `esba audit` and commit it", file=sys.stderr)
             return EXIT_FAILED
         return EXIT_OK
-    page = outputs.check_file(page, "--out")
+    page = outputs.check_file(page, "--out", (".md",))
     written = PAGE.write(page)
     data = {"page": str(written.path), "verdicts": written.data.verdicts()}
     print_result(args, data, lambda d: "\n".join([f"wrote {d['page']}"] + [f"  {k:<26} {v}" for k, v in d["verdicts"].items()]))

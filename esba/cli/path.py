@@ -92,8 +92,12 @@ def _cmd_path(args: argparse.Namespace) -> int:
         raise UsageError("the following arguments are required: --to")
     if not math.isfinite(args.to):
         raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
-    out = None if args.no_out else outputs.check_file(args.out or DEFAULT_PATH_OUT, "--out", (".csv", ".json"))
-    plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_PATH_FIGURE, "--plot", DEFAULT_PATH_FIGURE)
+    if args.no_out and args.out is not None:
+        raise UsageError("--out and --no-out: give one of the two")
+    if args.no_plot and args.plot is not None:
+        raise UsageError("--plot and --no-plot: give one of the two")
+    out = None if args.no_out else outputs.check_file(DEFAULT_PATH_OUT if args.out is None else args.out, "--out", (".csv", ".json"))
+    plot = None if args.no_plot else outputs.figure_file(DEFAULT_PATH_FIGURE if args.plot is None else args.plot, "--plot", DEFAULT_PATH_FIGURE)
     from esba.analysis.path_analysis import analyse
     from esba.paths.continuation import PathOptions, write_branches
     from esba.paths.problem import PathError

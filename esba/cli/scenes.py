@@ -408,7 +408,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
     page = outputs.default_page("validation.md") if args.out is None else args.out
     if not args.check:
-        page = outputs.check_file(page, "--out")
+        page = outputs.check_file(page, "--out", (".md",))
     cases = PAGE.compute()
     rows = list(cases.paper)
     if args.check:

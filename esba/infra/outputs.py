@@ -158,6 +158,14 @@ def _probe(folder: Path) -> str:
     return ""
 
 
+def _no_trailing_separator(path: str | Path, flag: str) -> None:
+    """A name ending in ``/`` means a folder: refused when no such folder exists (``Path`` would
+    drop the slash and write a file of that name)."""
+    text = str(path) if not isinstance(path, Path) else ""
+    if text.endswith(("/", os.sep)) and not Path(text).is_dir():
+        raise OutputError(f"{flag} {_show(text)}: ends in '/' but is not an existing folder; expected a file name (or an existing folder)")
+
+
 def check_folder(path: str | Path, flag: str, create: bool = True) -> Path:
     """An output folder that exists (or, with ``create``, whose parent does) and can be written.
 
@@ -205,6 +213,7 @@ def check_file(path: str | Path, flag: str, suffixes: tuple[str, ...] | None = N
     """
     if str(path) == "":
         raise OutputError(f"{flag} '': expected a file name")
+    _no_trailing_separator(path, flag)
     file = Path(path)
     if suffixes is not None and file.suffix.lower() not in suffixes:
         got = f"'{file.suffix}'" if file.suffix else "no suffix"
@@ -240,6 +249,7 @@ def figure_file(path: str | Path, flag: str, default_name: str) -> Path:
     """
     if str(path) == "":
         raise OutputError(f"{flag} '': expected a figure file (e.g. shape.png) or a folder")
+    _no_trailing_separator(path, flag)
     file = Path(path)
     if file.is_dir():
         file = file / default_name

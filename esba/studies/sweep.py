@@ -105,7 +105,9 @@ def parse_values(text: str) -> list[float]:
     ...
     esba.studies.sweep.SweepError: '1:2': expected start:stop:count (count from 1 to 200000) or a comma-separated list of numbers
     """
-    msg = f"{text!r}: expected start:stop:count (count from 1 to {MAX_POINTS}) or a comma-separated list of numbers"
+    if not isinstance(text, str):
+        raise SweepError(f"values={checks.quote(text)}: expected a text start:stop:count or v1,v2,...")
+    msg = f"{checks.quote(text)}: expected start:stop:count (count from 1 to {MAX_POINTS}) or a comma-separated list of numbers"
     try:
         if ":" in text:
             parts = text.split(":")
@@ -118,7 +120,7 @@ def parse_values(text: str) -> list[float]:
             # 12 significant digits drop linspace's round-off (0.15000000000000002) and keep small values
             values = [a] if k == 1 else [float(f"{v:.12g}") for v in np.linspace(a, b, k)]
         else:
-            values = [checks.number("value", v) for v in text.split(",") if v.strip()]
+            values = [checks.number("value", v) for v in text.split(",")]  # an empty item (1,,2) is not a number
     except ValueError:
         raise SweepError(msg) from None
     if not values or not all(math.isfinite(v) for v in values) or len(values) > MAX_POINTS:
@@ -284,6 +286,7 @@ def check_resolvable(plan: SweepPlan) -> None:
             extreme = plan.base.replace(r2=r2_, d=d_)
         except SceneError:  # infeasible: reported as such, not solved
             continue
+        resolution.check_stiffness(extreme, DEFAULT_OPTIONS.stationarity_tol)
         resolution.check_domain(extreme)
         if plan.payload_swept:
             extreme = extreme.replace(payloads=(Payload(strongest, plan.fixed["payload_angle"], plan.at),))

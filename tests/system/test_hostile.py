@@ -640,3 +640,65 @@ def test_small_benchmark_batches_run(capsys, places):
     assert main(["bench", "batch", "--size", "10", "--json"]) == EXIT_OK
     data = strict_json(capsys.readouterr().out)
     assert data["size"] == 9 and data["ipopt_samples"] == 9  # a 3 x 3 grid of pressures and payloads
+
+
+# ---------------------------------------------------------------------------------------------
+# second round: flags that must agree, sigmas outside the model, the API's own errors, special
+# files, short messages, resumed studies that lie
+
+ROUND2_FLAGS = [
+    (["path", "--to", "0.2", "--out", "", "--no-plot"], "--out '': expected a file name"),
+    (["path", "--to", "0.2", "--out", "x.csv", "--no-out", "--no-plot"], "--out and --no-out: give one of the two"),
+    (["path", "--to", "0.2", "--plot", "x.png", "--no-plot", "--no-out"], "--plot and --no-plot: give one of the two"),
+    (["sweep", "--pressure", "1,,2", "--no-progress"], "'1,,2': expected start:stop:count"),
+    (["sweep", "--pressure", "0.1,", "--no-progress"], "'0.1,': expected start:stop:count"),
+    (["solve", "--no-plot", "--sigma", "E=1_0%"], "--sigma 'E=1_0%': expected NAME=SIGMA"),
+    (["solve", "--no-plot", "--sigma", "E=\u0661\u0660%"], "--sigma 'E=\u0661\u0660%': expected NAME=SIGMA"),
+    (["solve", "--no-plot", "--pressure", "\u0661"], "'\u0661' is not a number"),
+    (["solve", "--no-plot", "--segments", "\u0663"], "segments='\u0663'"),
+    (["solve", "--no-plot", "--sigma", "E=1e308"], "--sigma 'E=1e308': 3 sigma is not a finite number"),
+    (["design", "--write-doc", "d.txt"], "--write-doc 'd.txt': '.txt'; expected a file ending in .md"),
+    (["validate", "--out", "v.txt"], "--out 'v.txt': '.txt'; expected a file ending in .md"),
+    (["audit", "--out", "v.txt"], "--out 'v.txt': '.txt'; expected a file ending in .md"),
+    (["solve", "--plot", "x.png/"], "--plot 'x.png/': ends in '/' but is not an existing folder"),
+    (["sweep", "--pressure", "0.1", "--out", "g.csv/", "--no-progress"], "--out 'g.csv/': ends in '/'"),
+    (["design", "--max-pressure", "1e9"], "max_pressure=1e+09 MPa: its moment on a segment"),
+]
+
+
+@pytest.mark.parametrize("argv, needle", ROUND2_FLAGS, ids=[" ".join(a) for a, _ in ROUND2_FLAGS])
+def test_flags_agree_with_each_other(capsys, places, argv, needle):
+    line = one_line_error(capsys, argv, places)
+    assert needle in line
+    assert sorted(p.name for p in Path(places["tmp"]).iterdir()) in (["afile"], ["afile", "readonly"])  # nothing written
+
+
+@pytest.mark.parametrize("field, value, needle", [("L", "1e-300", "actuator.L=1e-300 mm: the bending stiffness"), ("E", "1e300", "actuator.E=1e+300 MPa: the bending stiffness")])
+def test_extreme_length_or_modulus_is_bad_input_naming_it(capsys, places, field, value, needle):
+    path = Path(places["tmp"]) / "extreme.toml"
+    path.write_text(f"[actuator]\n{field} = {value}\n")
+    line = one_line_error(capsys, ["solve", str(path), "--no-plot"], places)
+    assert needle in line
+
+
+def test_sigma_leaving_its_domain_is_warned_of_with_the_domain(capsys, places):
+    assert main(["solve", "--no-plot", "--json", "--sigma", "E=1000%", "--sigma", "rho=±100", "--sigma", "s1=±1", "--monte-carlo", "50"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    data = strict_json(out)
+    warned = data["uncertainty"]["outside_domain"]
+    assert len(warned) == 3
+    text = " | ".join(warned)  # in the scene's parameter order
+    assert "beyond the domain E > 0 MPa" in text and "beyond the domain 0 <= rho < 90 deg" in text and "0 < s1 <= 1" in text
+    for line in warned:
+        assert f"esba: warning: {line}" in err
+    c = data["monte_carlo"]["counts"]
+    assert c["invalid"] > 0 and c["ok"] + c["invalid"] + c["not_ok"] == 50  # counted, and said in the table
+    assert "Traceback" not in err and "RuntimeWarning" not in err
+
+
+def test_sigma_whose_covariance_overflows_is_not_ok(capsys, places):
+    assert main(["solve", "--no-plot", "--json", "--sigma", "E=1e200"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    u = strict_json(out)["uncertainty"]
+    assert u["status"] == "overflow" and u["std_tip_mm"] is None and "overflows" in u["message"]
+    assert "RuntimeWarning" not in err
