@@ -71,6 +71,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+from esba.infra import checks, inputs
 from esba.infra.errors import InputError
 from esba.model.scene import Payload, Scene, SceneError, scene_from_dict
 
@@ -185,30 +186,30 @@ def _column(where: str, name: str) -> tuple[str, str | None, str | None]:
     if m:
         k = int(m.group(1)) if m.group(1) else 1
         if k < 1:
-            raise MeasurementError(f"{where}: column {name!r}: payloads are numbered from 1 (payload_n, payload2_n, ...)")
+            raise MeasurementError(f"{where}: column {checks.quote(name)}: payloads are numbered from 1 (payload_n, payload2_n, ...)")
         return "payload", f"{k}:{m.group(2)}", None
     if re.fullmatch(r"payload\d*(_.*)?", name):
-        raise MeasurementError(f"{where}: column {name!r}: a payload's columns are payload_n (N), payload_angle_deg and payload_at")
+        raise MeasurementError(f"{where}: column {checks.quote(name)}: a payload's columns are payload_n (N), payload_angle_deg and payload_at")
     for quantity in sorted(_UNITS, key=len, reverse=True):
         for sd in ("_sd", ""):
             prefix = quantity + sd
             if name == prefix:
-                raise MeasurementError(f"{where}: column {name!r} states no unit: write {_either([f'{prefix}_{u}' for u in _UNITS[quantity]])}")
+                raise MeasurementError(f"{where}: column {checks.quote(name)} states no unit: write {_either([f'{prefix}_{u}' for u in _UNITS[quantity]])}")
             if name.startswith(prefix + "_"):
                 unit = name[len(prefix) + 1:]
                 if unit not in _UNITS[quantity]:
                     allowed = ", ".join(f"{prefix}_{u}" for u in _UNITS[quantity])
-                    raise MeasurementError(f"{where}: column {name!r}: unit {unit!r} is not accepted for {quantity}; write {allowed}")
+                    raise MeasurementError(f"{where}: column {checks.quote(name)}: unit {checks.quote(unit)} is not accepted for {quantity}; write {allowed}")
                 if sd:
                     if quantity not in QUANTITIES:
-                        raise MeasurementError(f"{where}: column {name!r}: only measured quantities ({', '.join(QUANTITIES)}) take a standard deviation")
+                        raise MeasurementError(f"{where}: column {checks.quote(name)}: only measured quantities ({', '.join(QUANTITIES)}) take a standard deviation")
                     return "sd", quantity, unit
                 kind = "actuator" if quantity in _ACTUATOR else "value"
                 return kind, quantity, unit
     allowed = "label, pressure_mpa, target_angle_deg, payload_n, payload_angle_deg, payload_at, " + ", ".join(
         f"{q}_{next(iter(u))}" for q, u in _UNITS.items() if q not in ("pressure", "target_angle")
     ) + ", and <quantity>_sd_<unit>"
-    raise MeasurementError(f"{where}: unknown column {name!r}; allowed are {allowed}")
+    raise MeasurementError(f"{where}: unknown column {checks.quote(name)}; allowed are {allowed}")
 
 
 def _number(where: str, name: str, raw: Any) -> float | None:
@@ -216,7 +217,7 @@ def _number(where: str, name: str, raw: Any) -> float | None:
     if raw is None:
         return None
     if isinstance(raw, bool):
-        raise MeasurementError(f"{where}, {name}={raw!r}: expected a number")
+        raise MeasurementError(f"{where}, {name}={checks.quote(raw)}: expected a number")
     if isinstance(raw, str):
         text = raw.strip()
         if text == "":
@@ -224,13 +225,13 @@ def _number(where: str, name: str, raw: Any) -> float | None:
         try:
             value = float(text)
         except ValueError:
-            raise MeasurementError(f"{where}, {name}={text!r}: expected a number") from None
+            raise MeasurementError(f"{where}, {name}={checks.quote(text)}: expected a number") from None
     elif isinstance(raw, (int, float)):
         value = float(raw)
     else:
-        raise MeasurementError(f"{where}, {name}={raw!r}: expected a number")
+        raise MeasurementError(f"{where}, {name}={checks.quote(raw)}: expected a number")
     if not math.isfinite(value):
-        raise MeasurementError(f"{where}, {name}={value!r}: expected a finite number (leave the cell empty when it was not measured)")
+        raise MeasurementError(f"{where}, {name}={checks.quote(value)}: expected a finite number (leave the cell empty when it was not measured)")
     return value
 
 
@@ -302,7 +303,7 @@ def measurements_from_rows(source: str, rows: list[tuple[str, Mapping[str, Any]]
     """
     base = Scene() if base is None else base
     if not isinstance(base, Scene):
-        raise MeasurementError(f"{source}: base={base!r}: expected a Scene")
+        raise MeasurementError(f"{source}: base={checks.quote(base)}: expected a Scene")
     if not rows:
         raise MeasurementError(f"{source}: no measurements (no data rows)")
     if len(rows) > MAX_ROWS:
@@ -316,21 +317,15 @@ def measurements_from_rows(source: str, rows: list[tuple[str, Mapping[str, Any]]
                 columns[name] = _column(f"{source}", str(name))
         m = _row(f"{source} {where}", row, base, columns, where)
         if m.label in labels:
-            raise MeasurementError(f"{source} {where}: label {m.label!r} is used twice (labels name rows in the report)")
+            raise MeasurementError(f"{source} {where}: label {checks.quote(m.label)} is used twice (labels name rows in the report)")
         labels.add(m.label)
         out.append(m)
     return MeasurementSet(source, base, tuple(out))
 
 
 def _read(path: Path) -> str:
-    try:
-        return path.read_bytes().decode("utf-8-sig")
-    except FileNotFoundError:
-        raise MeasurementError(f"measurement file {str(path)!r} does not exist") from None
-    except IsADirectoryError:
-        raise MeasurementError(f"measurement file {str(path)!r} is a folder, not a file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MeasurementError(f"measurement file {str(path)!r} cannot be read: {exc}") from None
+    """The file's text: a regular file of bounded size, BOM or not (:func:`esba.infra.inputs.read_text`)."""
+    return inputs.read_text(path, "measurement file", MeasurementError)
 
 
 def _csv_rows(source: str, text: str) -> list[tuple[str, dict]]:
@@ -382,10 +377,12 @@ def load_measurements(path: str | Path, base: Scene | None = None) -> Measuremen
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise MeasurementError(f"{source}: not valid TOML: {exc}") from None
+        raise MeasurementError(f"{source}: not valid TOML: {str(exc).splitlines()[0]}") from None
+    except RecursionError:
+        raise MeasurementError(f"{source}: not valid TOML: nested too deeply (arrays or tables inside each other)") from None
     unknown = sorted(set(data) - {"scene", "measurement"})
     if unknown:
-        raise MeasurementError(f"{source}: unknown table(s) {', '.join(unknown)}; allowed are [scene] and [[measurement]]")
+        raise MeasurementError(f"{source}: unknown table(s) {checks.some(unknown)}; allowed are [scene] and [[measurement]]")
     if base is None:
         try:
             base = scene_from_dict(data.get("scene", {}))

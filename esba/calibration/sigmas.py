@@ -16,7 +16,6 @@ Examples
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
@@ -28,14 +27,9 @@ from esba.analysis.sensitivity import (
     parameter_names,
     scene_parameters,
 )
-from esba.infra import checks, jsonsafe
+from esba.infra import checks, inputs, jsonsafe
 from esba.infra.errors import InputError
 from esba.model.scene import Scene
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["UncertaintyError", "SigmaSpec", "Sigma", "parse_sigma", "sigmas_from_table", "load_sigmas", "resolve_sigmas", "domain", "outside_domain"]
 
@@ -114,7 +108,7 @@ def parse_sigma(text: str, where: str = "--sigma") -> SigmaSpec:
     esba.calibration.sigmas.UncertaintyError: --sigma 'E=-1': expected NAME=SIGMA with SIGMA > 0 (0.05, 10%, ±0.1 or ±10%)
     """
     if not isinstance(text, str) or text.count("=") != 1:
-        raise UncertaintyError(f"{where} {text!r}: expected NAME=SIGMA, e.g. E=0.05, E=10%, r2=±0.1")
+        raise UncertaintyError(f"{where} {checks.quote(text)}: expected NAME=SIGMA, e.g. E=0.05, E=10%, r2=±0.1")
     name, raw = (s.strip() for s in text.split("="))
     return _spec(name, raw, where, text)
 
@@ -155,19 +149,13 @@ def _spec(name: str, raw: Any, where: str, given: str) -> SigmaSpec:
 def sigmas_from_table(table: Any, where: str = "[uncertainty]") -> tuple[SigmaSpec, ...]:
     """The specs of a scene file's ``[uncertainty]`` table (values: numbers or strings as for :func:`parse_sigma`)."""
     if not isinstance(table, dict):
-        raise UncertaintyError(f"{where}: expected a table of NAME = SIGMA, got {table!r}")
+        raise UncertaintyError(f"{where}: expected a table of NAME = SIGMA, got {checks.quote(table)}")
     return tuple(_spec(str(k), v, where, f"{k}={v}") for k, v in table.items())
 
 
 def load_sigmas(path: str | Path) -> tuple[SigmaSpec, ...]:
     """The ``[uncertainty]`` table of a scene file (empty when it has none)."""
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_bytes().decode("utf-8"))
-    except FileNotFoundError:
-        raise UncertaintyError(f"scene file {str(path)!r} does not exist") from None
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise UncertaintyError(f"scene file {str(path)!r} cannot be read: {exc}") from None
+    data = inputs.load_toml(path, "scene file", UncertaintyError)
     return sigmas_from_table(data.get("uncertainty", {}), f"scene file {str(path)!r} [uncertainty]")
 
 
@@ -182,7 +170,7 @@ def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec]) -> tuple[Sigma, ...
     by_name: dict[str, SigmaSpec] = {}
     for s in specs:
         if not isinstance(s, SigmaSpec):
-            raise UncertaintyError(f"sigmas: expected SigmaSpec, got {s!r}")
+            raise UncertaintyError(f"sigmas: expected SigmaSpec, got {checks.quote(s)}")
         by_name[s.name] = s
     try:
         check_names(scene, list(by_name), "sigma of")
@@ -196,7 +184,7 @@ def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec]) -> tuple[Sigma, ...
         s, p = by_name[name], params[name]
         width = s.value * abs(p.value) if s.relative else s.value
         if width <= 0:
-            raise UncertaintyError(f"sigma {s.given!r}: {name} is 0 in this scene, so a relative sigma is 0; give it in {p.unit}")
+            raise UncertaintyError(f"sigma {checks.quote(s.given)}: {name} is 0 in this scene, so a relative sigma is 0; give it in {p.unit}")
         sigma = width / math.sqrt(3.0) if s.distribution == "uniform" else width
         reach = width if s.distribution == "uniform" else 3.0 * sigma
         if not (math.isfinite(reach) and math.isfinite(p.value + reach) and math.isfinite(p.value - reach)):
@@ -212,7 +200,7 @@ def _checked_sigmas(scene: Scene | None, sigmas: Sequence[Sigma]) -> tuple[Sigma
         raise UncertaintyError("sigmas: give at least one uncertain parameter (e.g. --sigma E=0.05)")
     for s in sigmas:
         if not isinstance(s, Sigma):
-            raise UncertaintyError(f"sigmas: expected Sigma (from resolve_sigmas), got {s!r}")
+            raise UncertaintyError(f"sigmas: expected Sigma (from resolve_sigmas), got {checks.quote(s)}")
     if scene is not None:
         try:
             check_names(scene, [s.name for s in sigmas], "sigma of")

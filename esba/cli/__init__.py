@@ -57,9 +57,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: The longest error line printed: the messages cap what they quote (esba.infra.checks.quote);
+#: this is the last guard, for a message that quotes something unforeseen.
+MAX_LINE = 500
+
+
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
+    line = text[0] if text else type(exc).__name__
+    return line if len(line) <= MAX_LINE else line[:MAX_LINE] + f"... ({len(line)} characters)"
 
 
 def _run(argv: Sequence[str] | None) -> int:

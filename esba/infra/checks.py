@@ -67,19 +67,33 @@ def quote(value: Any, limit: int = QUOTE_LIMIT) -> str:
     return text[:limit] + ("'" if text[:1] in "'\"" else "") + "..." + size
 
 
+def some(names: Any, shown: int = 5, width: int = 40) -> str:
+    """The first ``shown`` of ``names``, each cut to ``width`` characters, and how many more.
+
+    >>> some(["a", "b"])
+    'a, b'
+    >>> some([f"k{i}" for i in range(1000)])
+    'k0, k1, k2, k3, k4 and 995 more'
+    """
+    names = [str(n) for n in names]
+    head = [n if len(n) <= width else n[:width] + "..." for n in names[:shown]]
+    more = f" and {len(names) - shown} more" if len(names) > shown else ""
+    return ", ".join(head) + more
+
+
 def whole(name: str, value: Any, low: int, error: type[Exception] = ValueError, high: int | None = None, why: str = "") -> int:
     """``value`` as an int if it is a whole number (not a bool) from ``low`` to ``high``."""
     bad = isinstance(value, bool) or not isinstance(value, Integral) or value < low or (high is not None and value > high)
     if bad:
         allowed = f">= {low}" if high is None else f"from {low} to {high}"
-        raise error(f"{name}={value!r}: expected a whole number {allowed}" + (f" ({why})" if why else ""))
+        raise error(f"{name}={quote(value)}: expected a whole number {allowed}" + (f" ({why})" if why else ""))
     return int(value)
 
 
 def finite(name: str, value: Any, error: type[Exception] = ValueError) -> float:
     """``value`` as a float if it is a finite real number (not a bool)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise error(f"{name}={value!r}: expected a finite number")
+        raise error(f"{name}={quote(value)}: expected a finite number")
     return float(value)
 
 
@@ -93,12 +107,12 @@ def segments(value: Any, error: type[Exception] = ValueError, name: str = "segme
 def number(name: str, text: str, error: type[Exception] = ValueError) -> float:
     """The number a command-line word spells; Python's own ``float()`` also takes ``0_1`` (= 1)."""
     if not isinstance(text, str) or not _NUMBER.fullmatch(text):
-        raise error(f"{name} {text!r}: not a number (expected decimal digits such as 0.1 or 2e-3)")
+        raise error(f"{name} {quote(text)}: not a number (expected decimal digits such as 0.1 or 2e-3)")
     return float(text)
 
 
 def whole_text(name: str, text: str, error: type[Exception] = ValueError) -> int:
     """The whole number a command-line word spells (no underscores, no signs other than -)."""
     if not isinstance(text, str) or not _WHOLE.fullmatch(text):
-        raise error(f"{name} {text!r}: not a whole number (expected digits such as 3)")
+        raise error(f"{name} {quote(text)}: not a whole number (expected digits such as 3)")
     return int(text)

@@ -206,7 +206,7 @@ def _axis(name: str, values) -> list[float] | None:
         return None
     vals = [float(v) for v in (values if isinstance(values, (list, tuple, np.ndarray)) else [values])]
     if not vals or not all(math.isfinite(v) for v in vals):
-        raise SweepError(f"{name}={values!r}: expected one or more finite numbers")
+        raise SweepError(f"{name}={checks.quote(values)}: expected one or more finite numbers")
     if name in ("pressure", "payload", "d") and min(vals) < 0:
         raise SweepError(f"{name}: {min(vals):g} {AXES[name]} given; expected values >= 0")
     if name == "r2" and min(vals) <= 0:
@@ -218,7 +218,7 @@ def plan_sweep(base: Scene | None = None, *, pressure=None, payload=None, payloa
     """The validated grid of :func:`sweep` (same arguments but the options), not solved."""
     base = Scene() if base is None else base
     if not isinstance(base, Scene):
-        raise SweepError(f"base={base!r}: expected a Scene")
+        raise SweepError(f"base={checks.quote(base)}: expected a Scene")
     given = {"pressure": pressure, "payload": payload, "payload_angle": payload_angle, "r2": r2, "d": d}
     axes = {k: v for k, v in ((k, _axis(k, given[k])) for k in AXES) if v is not None}
     if not axes:

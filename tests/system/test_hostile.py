@@ -702,3 +702,61 @@ def test_sigma_whose_covariance_overflows_is_not_ok(capsys, places):
     u = strict_json(out)["uncertainty"]
     assert u["status"] == "overflow" and u["std_tip_mm"] is None and "overflows" in u["message"]
     assert "RuntimeWarning" not in err
+
+
+def _special(tmp: Path, kind: str, name: str) -> Path:
+    path = tmp / name
+    if kind == "fifo":
+        os.mkfifo(path)  # a read would wait for a writer forever
+    elif kind == "dev-zero":
+        path.symlink_to("/dev/zero")  # a read would never end
+    elif kind == "link-to-fifo":
+        os.mkfifo(tmp / ("real-" + name))
+        path.symlink_to(tmp / ("real-" + name))
+    return path
+
+
+SPECIAL = {"fifo": "a FIFO (named pipe)", "dev-zero": "a character device (through a symlink)", "link-to-fifo": "a FIFO (named pipe) (through a symlink)"}
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not os.path.exists("/dev/zero"), reason="needs FIFOs and /dev/zero")
+@pytest.mark.parametrize("kind", list(SPECIAL))
+@pytest.mark.parametrize("argv, name, what", [(["solve", "{path}", "--no-plot"], "s.toml", "scene file"), (["fit", "{path}"], "m.csv", "measurement file"), (["fit", "{path}"], "m.toml", "measurement file")])
+def test_special_input_files_are_one_line_without_a_hang(capsys, places, kind, argv, name, what):
+    path = _special(Path(places["tmp"]), kind, name)
+    line = one_line_error(capsys, [a.replace("{path}", str(path)) for a in argv], places)
+    assert line == f"esba: error: {what} {str(path)!r} cannot be read: {SPECIAL[kind]}, not a regular file"
+
+
+@pytest.mark.parametrize("argv, name", [(["solve", "{path}", "--no-plot"], "deep.toml"), (["fit", "{path}"], "deep-m.toml")])
+def test_toml_nested_5000_deep_is_one_line(capsys, places, argv, name):
+    path = Path(places["tmp"]) / name
+    path.write_text("a = " + "[" * 5000 + "]" * 5000 + "\n")
+    line = one_line_error(capsys, [a.replace("{path}", str(path)) for a in argv], places)
+    assert "not valid TOML: nested too deeply" in line and name in line
+
+
+def test_a_byte_order_mark_is_read_alike_in_scene_and_measurement_files(capsys, places):
+    tmp = Path(places["tmp"])
+    (tmp / "bom.toml").write_bytes(b"\xef\xbb\xbfsegments = 2\n[loads]\npressure = 0.1\n")
+    (tmp / "bom.csv").write_bytes(b"\xef\xbb\xbfpressure_mpa,total_angle_deg\n0.1,50\n0.12,70\n")
+    assert main(["solve", str(tmp / "bom.toml"), "--no-plot", "--json"]) == EXIT_OK
+    assert strict_json(capsys.readouterr().out)["scene"].endswith("n=2, paper")
+    assert main(["fit", str(tmp / "bom.csv"), "--free", "E", "--json"]) == EXIT_OK
+    assert strict_json(capsys.readouterr().out)
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("[actuator]\n" + "".join(f"k{i} = 1\n" for i in range(100_000)), "unknown key(s) k0, k1, k10, k100, k1000 and 99995 more"),
+        ('variant = "' + "x" * 10_000_000 + '"\n', "variant='xxxx"),
+        ("[actuator]\nE = \"" + "y" * 10_000_000 + '"\n', "(10000000 characters): expected a finite number"),
+    ],
+    ids=["100000-unknown-keys", "10-MB-variant", "10-MB-E"],
+)
+def test_messages_cap_what_they_quote(capsys, places, text, needle):
+    path = Path(places["tmp"]) / "huge.toml"
+    path.write_text(text)
+    line = one_line_error(capsys, ["solve", str(path), "--no-plot"], places)
+    assert needle in line and len(line) < 300
