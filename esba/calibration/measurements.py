@@ -85,6 +85,13 @@ __all__ = ["MeasurementError", "Measurement", "MeasurementSet", "load_measuremen
 #: What can be measured, in the unit esba works in.
 QUANTITIES: dict[str, str] = {"total_angle": "deg", "tip_x": "mm", "tip_y": "mm", "stiffness": "N/m"}
 
+#: The smallest standard deviation of a measured value, in esba's unit of it (deg, mm, N/m).
+MIN_SD = 1e-6
+
+#: The largest angle a row may state (a target, or a measured total angle), degrees.
+MAX_ANGLE_DEG = 360.0
+_TURN = "beyond a full turn the actuator passes through itself: the model has no self-contact"
+
 #: The most rows a file may have (each row adds its equilibria to the fit's NLP).
 MAX_ROWS = 500
 
@@ -104,6 +111,7 @@ _UNITS: dict[str, dict[str, float]] = {
     "E": {"mpa": 1.0},
     "M": {"kg": 1.0},
 }
+_ESBA_UNIT = {"pressure": "MPa", "target_angle": "deg", **QUANTITIES}
 _ACTUATOR = {"L": "L", "r1": "r1", "r2": "r2", "d": "d", "rho": "rho_deg", "E": "E", "M": "M"}
 _PAYLOAD_FIELDS = {"n": "force", "angle_deg": "angle_deg", "at": "at"}
 
@@ -212,6 +220,12 @@ def _column(where: str, name: str) -> tuple[str, str | None, str | None]:
     raise MeasurementError(f"{where}: unknown column {checks.quote(name)}; allowed are {allowed}")
 
 
+def _raw(raw: Any) -> str:
+    """A cell as the file gives it, for a message (cut when long)."""
+    text = raw.strip() if isinstance(raw, str) else repr(raw)
+    return text if len(text) <= 30 else text[:30] + "..."
+
+
 def _number(where: str, name: str, raw: Any) -> float | None:
     """A finite number, or None for an empty cell."""
     if raw is None:
@@ -223,7 +237,7 @@ def _number(where: str, name: str, raw: Any) -> float | None:
         if text == "":
             return None
         try:
-            value = float(text)
+            value = checks.number(name, text)  # decimal ASCII digits: float() also takes 1_0 and other scripts' digits
         except ValueError:
             raise MeasurementError(f"{where}, {name}={checks.quote(text)}: expected a number") from None
     elif isinstance(raw, (int, float)):
@@ -242,6 +256,7 @@ def _row(where: str, row: Mapping[str, Any], base: Scene, columns: Mapping[str, 
     actuator: dict[str, float] = {}
     values: dict[str, float] = {}
     sds: dict[str, float] = {}
+    given: dict[tuple[str, str], tuple[str, float]] = {}  # (kind, quantity) -> (column, value in esba's unit)
     for name, raw in row.items():
         kind, detail, unit = columns[name]
         if kind == "label":
@@ -249,20 +264,38 @@ def _row(where: str, row: Mapping[str, Any], base: Scene, columns: Mapping[str, 
         value = _number(where, name, raw)
         if value is None:
             continue
+        if kind != "payload":  # one quantity in two units (pressure_mpa and pressure_kpa): they must agree
+            key, converted = (kind, detail), value * _UNITS[detail][unit]
+            if key in given:
+                other, before = given[key]
+                if not math.isclose(before, converted, rel_tol=1e-9, abs_tol=0.0):
+                    raise MeasurementError(
+                        f"{where}: {other}={_raw(row[other])} and {name}={_raw(raw)} disagree "
+                        f"({before:.6g} vs {converted:.6g} {_ESBA_UNIT.get(detail, '')}); give the {detail.replace('_', ' ')} once"
+                    )
+            given[key] = (name, converted)
         if kind == "payload":
             k, what = detail.split(":")
             payloads.setdefault(int(k), {})[_PAYLOAD_FIELDS[what]] = value
             continue
         value *= _UNITS[detail][unit]
         if detail in ("pressure", "target_angle"):
+            if detail == "target_angle" and not 0.0 < value <= MAX_ANGLE_DEG:
+                raise MeasurementError(f"{where}, {name}={value:g}: expected a target angle > 0 and <= {MAX_ANGLE_DEG:g} deg ({_TURN})")
             drive[detail] = value
         elif kind == "actuator":
             actuator[_ACTUATOR[detail]] = value
         elif kind == "sd":
             if value <= 0:
                 raise MeasurementError(f"{where}, {name}={value:g}: a standard deviation must be > 0")
+            if value < MIN_SD:  # its weight 1/sd^2 would swamp the fit (and overflow near 1e-154)
+                raise MeasurementError(
+                    f"{where}, {name}={value:g}: expected a standard deviation >= {MIN_SD:g} {QUANTITIES[detail]} (finer than any measurement)"
+                )
             sds[detail] = value
         else:
+            if detail == "total_angle" and abs(value) > MAX_ANGLE_DEG:
+                raise MeasurementError(f"{where}, {name}={value:g}: expected a measured angle from -{MAX_ANGLE_DEG:g} to {MAX_ANGLE_DEG:g} deg ({_TURN})")
             values[detail] = value
     if len(drive) != 1:
         given = ", ".join(drive) or "neither"

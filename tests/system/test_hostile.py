@@ -760,3 +760,30 @@ def test_messages_cap_what_they_quote(capsys, places, text, needle):
     path.write_text(text)
     line = one_line_error(capsys, ["solve", str(path), "--no-plot"], places)
     assert needle in line and len(line) < 300
+
+
+MEASUREMENTS = {
+    "two-pressures.csv": ("pressure_mpa,pressure_kpa,total_angle_deg\n0.1,120,50\n", "pressure_mpa=0.1 and pressure_kpa=120 disagree (0.1 vs 0.12 MPa); give the pressure once"),
+    "two-pressures.toml": ("[[measurement]]\npressure_mpa = 0.1\npressure_bar = 2\ntotal_angle_deg = 50\n", "pressure_mpa=0.1 and pressure_bar=2 disagree"),
+    "target-1e6.csv": ("target_angle_deg,tip_y_mm\n1e6,5\n", "target_angle_deg=1e+06: expected a target angle > 0 and <= 360 deg"),
+    "angle-1e6.csv": ("pressure_mpa,total_angle_deg\n0.1,1e6\n", "total_angle_deg=1e+06: expected a measured angle from -360 to 360 deg"),
+    "sd-1e-300.csv": ("pressure_mpa,total_angle_deg,total_angle_sd_deg\n0.1,50,1e-300\n", "total_angle_sd_deg=1e-300: expected a standard deviation >= 1e-06 deg"),
+    "underscore.csv": ("pressure_mpa,total_angle_deg\n0.1,5_0\n", "total_angle_deg='5_0': expected a number"),
+}
+
+
+@pytest.mark.parametrize("name", list(MEASUREMENTS))
+def test_measurement_files_that_contradict_themselves_or_leave_the_model_are_refused(capsys, places, name):
+    text, needle = MEASUREMENTS[name]
+    path = Path(places["tmp"]) / name
+    path.write_text(text)
+    line = one_line_error(capsys, ["fit", str(path)], places)
+    assert needle in line and name in line
+    assert "RuntimeWarning" not in line and "CasADi" not in line
+
+
+def test_one_pressure_in_two_units_that_agree_is_taken(capsys, places):
+    path = Path(places["tmp"]) / "agree.csv"
+    path.write_text("pressure_mpa,pressure_kpa,total_angle_deg\n0.1,100,50\n0.12,,70\n")
+    assert main(["fit", str(path), "--free", "E", "--json"]) == EXIT_OK
+    assert strict_json(capsys.readouterr().out)
