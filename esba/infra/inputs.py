@@ -35,7 +35,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["MAX_INPUT_BYTES", "read_text", "load_toml"]
+__all__ = ["MAX_INPUT_BYTES", "special_kind", "read_text", "load_toml"]
 
 #: The largest scene or measurement file read (bytes): thousands of rows of measurements fit in
 #: a few hundred kilobytes.
@@ -52,6 +52,23 @@ _KINDS = [
 
 def _show(path: str | Path) -> str:
     return repr(str(path))  # a path is bounded (PATH_MAX)
+
+
+def special_kind(path: str | Path) -> str:
+    """What ``path`` is when it exists and is not a regular file (``"a FIFO (named pipe) (through
+    a symlink)"``), else ``""``.
+
+    >>> special_kind("/dev/null")
+    'a character device'
+    """
+    try:
+        info = os.stat(path)
+    except (OSError, ValueError):
+        return ""
+    for test, kind in _KINDS:
+        if test(info.st_mode):
+            return kind + (" (through a symlink)" if os.path.islink(path) else "")
+    return ""
 
 
 def read_text(path: str | Path, what: str, error: type[Exception]) -> str:
@@ -72,10 +89,9 @@ def read_text(path: str | Path, what: str, error: type[Exception]) -> str:
         raise error(f"{where} does not exist") from None
     except (OSError, ValueError) as exc:
         raise error(f"{where} cannot be read: {getattr(exc, 'strerror', None) or exc}") from None
-    for test, kind in _KINDS:
-        if test(info.st_mode):
-            link = " (through a symlink)" if os.path.islink(path) else ""
-            raise error(f"{where} cannot be read: {kind}{link}, not a regular file")
+    kind = special_kind(path)
+    if kind:
+        raise error(f"{where} cannot be read: {kind}, not a regular file")
     if info.st_size > MAX_INPUT_BYTES:
         raise error(f"{where}: {info.st_size} bytes; expected a file of at most {MAX_INPUT_BYTES // 2**20} MiB")
     try:

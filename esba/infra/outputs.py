@@ -42,6 +42,7 @@ esba.infra.outputs.OutputError: --out '...page.md': the folder '...missing' does
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from functools import lru_cache
 from pathlib import Path
@@ -220,6 +221,12 @@ def check_file(path: str | Path, flag: str, suffixes: tuple[str, ...] | None = N
         raise OutputError(f"{flag} {_show(file)}: {got}; expected a file ending in {', '.join(suffixes)}")
     if file.is_dir():
         raise OutputError(f"{flag} {_show(file)}: is a folder, expected a file")
+    try:
+        mode = os.stat(file).st_mode
+    except (OSError, ValueError):
+        mode = 0
+    if stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode):  # a write would wait for a reader
+        raise OutputError(f"{flag} {_show(file)}: is a FIFO or socket, expected a file (a write would wait for a reader)")
     folder = file.resolve().parent if not file.is_symlink() else file.parent
     if not folder.exists():
         raise OutputError(f"{flag} {_show(file)}: the folder {_show(file.parent)} does not exist (create it first)")

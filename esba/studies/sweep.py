@@ -45,7 +45,7 @@ from esba.infra.errors import InputError
 from esba.model import resolution
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import Finding, assess_arrays
-from esba.statics.batch import BatchOptions, check_size, decide_backend, solve_arrays
+from esba.statics.batch import METHODS, BatchOptions, check_size, decide_backend, solve_arrays
 from esba.statics.equilibrium import (
     DEFAULT_OPTIONS,
     EquilibriumError,
@@ -454,6 +454,106 @@ def parse_row(cells: Mapping[str, str]) -> dict[str, Any]:
     {'pressure_mpa': 0.1, 'tip_x_mm': None, 'status': 'ok'}
     """
     return {k: (v if k in TEXT_FIELDS else (float(v) if v != "" else None)) for k, v in cells.items()}
+
+
+_AXIS_COLUMNS = {"pressure": "pressure_mpa", "payload": "payload_n", "payload_angle": "payload_angle_deg", "r2": "r2_mm", "d": "d_mm"}
+_STATUSES = ("ok", "not ok", "infeasible")
+
+
+def _cell_number(text: Any) -> float | None:
+    """A numeric cell as the writer writes it: '' (None) or a finite decimal number; else ValueError."""
+    if text is None or text == "":
+        return None
+    value = checks.number("cell", text) if isinstance(text, str) else float(text)
+    if not math.isfinite(value):
+        raise ValueError(text)
+    return value
+
+
+def resumed_row_problem(plan: SweepPlan, index: int, cells: Mapping[str, Any], points: Mapping[str, np.ndarray] | None = None) -> str:
+    """Why row ``index`` (0-based) of a study file cannot be point ``index`` of ``plan`` solved,
+    or ``""`` when it can.
+
+    The row's axis values must be the plan's point ``index`` (the pressure too, unless the grid
+    finds each point's pressure from a target angle), exactly: numbers are written in their
+    shortest round-trip form. Its result cells must be what a solved row holds: a status the
+    sweep writes; for ``ok`` a stable equilibrium with finite angles, tip and pressure, a total
+    angle that is the sum of the angles and a tip within the actuator's length of the base; for
+    ``infeasible`` no result; never NaN or infinity. ``cells`` are text (as read from the file)
+    or numbers; ``points`` are the plan's axis columns of the rows around ``index``
+    (:meth:`SweepPlan.columns`; computed when not given).
+
+    This takes the plan and a row, not a file: any reader of a study's rows can call it.
+
+    >>> from esba.model.scene import Scene
+    >>> plan = plan_sweep(Scene(pressure=0.1), pressure=[0.0, 0.1])
+    >>> resumed_row_problem(plan, 1, {"pressure_mpa": "0.123456", "status": "infeasible"})
+    'has pressure_mpa=0.123456 where the plan has 0.1 (an edited or misplaced row)'
+    """
+    if points is None:
+        points = plan.columns(index, index + 1)
+        at = 0
+    else:
+        at = index
+    for axis, column in _AXIS_COLUMNS.items():
+        if axis == "pressure" and plan.angle_mode:
+            continue
+        raw = cells.get(column)
+        try:
+            value = _cell_number(raw)
+        except ValueError:
+            return f"has a {column} cell that is not a finite number"
+        want = float(points[axis][at])
+        if value != want:
+            shown = raw if isinstance(raw, str) else repr(value)
+            return f"has {column}={shown} where the plan has {want!r} (an edited or misplaced row)"
+    status = cells.get("status")
+    if status not in _STATUSES:
+        return f"has status={checks.quote(status, 30)}; a sweep writes {', '.join(_STATUSES)}"
+    numbers = ["pressure_mpa", "total_angle_deg", "tip_x_mm", "tip_y_mm"] + [f"theta{k + 1}_deg" for k in range(plan.base.segments)]
+    got: dict[str, float | None] = {}
+    for column in numbers:
+        try:
+            got[column] = _cell_number(cells.get(column))
+        except ValueError:
+            return f"has a {column} cell that is neither a finite number nor empty"
+    results = numbers[1:]
+    if status == "infeasible":
+        filled = [c for c in results if got[c] is not None]
+        return f"is infeasible but has {filled[0]}={cells.get(filled[0])}" if filled else ""
+    if status == "not ok":
+        return ""
+    missing = [c for c in numbers if got[c] is None]
+    if missing:
+        return f"is ok but has no {missing[0]}"
+    if cells.get("stability") != "stable" or cells.get("method") not in METHODS[:-1]:
+        return f"is ok but its stability is {checks.quote(cells.get('stability'), 30)} and method {checks.quote(cells.get('method'), 30)}"
+    if got["pressure_mpa"] < 0:
+        return f"is ok at pressure_mpa={cells.get('pressure_mpa')} < 0"
+    total = sum(got[f"theta{k + 1}_deg"] for k in range(plan.base.segments))
+    if abs(total - got["total_angle_deg"]) > 1e-9 * max(1.0, abs(total)):
+        return f"has total_angle_deg={cells.get('total_angle_deg')}, not the sum of its angles ({total:.12g})"
+    if math.hypot(got["tip_x_mm"], got["tip_y_mm"]) > plan.base.actuator.L * (1 + 1e-9):
+        return f"has its tip ({cells.get('tip_x_mm')}, {cells.get('tip_y_mm')}) mm further from the base than the length L"
+    return ""
+
+
+def check_resumed_rows(plan: SweepPlan, rows: Sequence[Mapping[str, Any]], where: str = "study file") -> int:
+    """:func:`resumed_row_problem` for every row, in order; the number of rows.
+
+    Raises
+    ------
+    SweepError
+        naming the first bad row (1-based) and what is wrong with it.
+    """
+    if len(rows) > plan.size:
+        raise SweepError(f"{where}: {len(rows)} rows; the plan has {plan.size} points")
+    points = plan.columns(0, len(rows))
+    for i, row in enumerate(rows):
+        problem = resumed_row_problem(plan, i, row, points)
+        if problem:
+            raise SweepError(f"{where}: row {i + 1} {problem}")
+    return len(rows)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -787,3 +787,62 @@ def test_one_pressure_in_two_units_that_agree_is_taken(capsys, places):
     path.write_text("pressure_mpa,pressure_kpa,total_angle_deg\n0.1,100,50\n0.12,,70\n")
     assert main(["fit", str(path), "--free", "E", "--json"]) == EXIT_OK
     assert strict_json(capsys.readouterr().out)
+
+
+RESUME = ["sweep", "--pressure", "0:0.2:5", "--resume", "--out", "s.csv", "--no-progress", "--no-compile"]
+
+
+def _edit_line(path: Path, k: int, old: str, new: str) -> None:
+    lines = path.read_text().split("\n")
+    assert old in lines[k], lines[k]
+    lines[k] = lines[k].replace(old, new, 1)
+    path.write_text("\n".join(lines))
+
+
+def _swap_rows(path: Path) -> None:
+    lines = path.read_text().split("\n")
+    lines[3], lines[4] = lines[4], lines[3]
+    path.write_text("\n".join(lines))
+
+
+LIES = {
+    "edited-pressure": (lambda p: _edit_line(p, 4, "0.1,", "0.123456,"), "row 3 has pressure_mpa=0.123456 where the plan has 0.1"),
+    "nan-result": (lambda p: _edit_line(p, 3, ",newton,29.224099507465084,", ",newton,nan,"), "row 2 has a total_angle_deg cell that is neither a finite number nor empty"),
+    "swapped-rows": (_swap_rows, "row 2 has pressure_mpa=0.1 where the plan has 0.05"),
+    "edited-plan-same-hash": (lambda p: p.write_text(p.read_text().replace("[0.0, 0.05, 0.1, 0.15, 0.2]", "[0.0, 0.05, 0.1, 0.15, 0.3]", 1)), "its header was edited"),
+    "total-not-the-sum": (lambda p: _edit_line(p, 3, "29.224", "39.224"), "row 2 has total_angle_deg=39.224"),
+}
+
+
+@pytest.mark.parametrize("lie", list(LIES))
+def test_a_resumed_study_never_keeps_a_damaged_row(capsys, places, lie):
+    assert main(RESUME) == EXIT_OK
+    capsys.readouterr()
+    path = Path(places["tmp"]) / "s.csv"
+    edit, needle = LIES[lie]
+    edit(path)
+    before = path.read_bytes()
+    line = one_line_error(capsys, RESUME, places)
+    assert needle in line and "s.csv" in line
+    assert path.read_bytes() == before  # the file is left as it is
+
+
+def test_a_resumed_study_whose_rows_are_right_goes_on(capsys, places):
+    assert main(RESUME) == EXIT_OK
+    capsys.readouterr()
+    assert main([*RESUME, "--json"]) == EXIT_OK
+    data = strict_json(capsys.readouterr().out)
+    assert data["study"]["resumed_from_row"] == 5 and data["counts"]["ok"] == 5
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not os.path.exists("/dev/full"), reason="needs FIFOs and /dev/full")
+@pytest.mark.parametrize("target", ["/dev/full", "/dev/zero", "fifo"])
+def test_a_study_file_that_is_a_device_or_fifo_is_one_line_no_hang(capsys, places, target):
+    tmp = Path(places["tmp"])
+    if target == "fifo":
+        os.mkfifo(tmp / "pipe")
+        target = str(tmp / "pipe")
+    (tmp / "s.csv").symlink_to(target)
+    line = one_line_error(capsys, RESUME, places)
+    assert "'s.csv'" in line or "s.csv:" in line
+    assert "not a regular file" in line or "FIFO" in line
