@@ -88,9 +88,11 @@ QUANTITIES: dict[str, str] = {"total_angle": "deg", "tip_x": "mm", "tip_y": "mm"
 #: The smallest standard deviation of a measured value, in esba's unit of it (deg, mm, N/m).
 MIN_SD = 1e-6
 
-#: The largest angle a row may state (a target, or a measured total angle), degrees.
-MAX_ANGLE_DEG = 360.0
-_TURN = "beyond a full turn the actuator passes through itself: the model has no self-contact"
+#: The largest angle a row may state (a target, or a measured total angle), degrees: ten turns.
+#: A bend past one turn is fitted with a warning (the actuator would pass through itself);
+#: one past ten is no measurement of a bending actuator (1e6 deg is a typo).
+MAX_ANGLE_DEG = 3600.0
+_TURN = "ten turns; past one the model already warns that the actuator passes through itself"
 
 #: The most rows a file may have (each row adds its equilibria to the fit's NLP).
 MAX_ROWS = 500
@@ -399,6 +401,8 @@ def load_measurements(path: str | Path, base: Scene | None = None) -> Measuremen
     MeasurementError
         naming the file, the row and the field.
     """
+    if isinstance(path, bytes) or not isinstance(path, (str, Path)) or not str(path).strip():
+        raise MeasurementError(f"measurement file {checks.quote(path)}: expected the path of a .csv or .toml file")
     path = Path(path)
     source = str(path)
     suffix = path.suffix.lower()

@@ -167,6 +167,12 @@ def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec]) -> tuple[Sigma, ...
     UncertaintyError
         for a name that is not a parameter of the scene, or a relative sigma of a parameter at 0.
     """
+    if not isinstance(scene, Scene):
+        raise UncertaintyError(f"scene={checks.quote(scene)}: expected an esba.model.scene.Scene")
+    if isinstance(specs, SigmaSpec):
+        specs = [specs]
+    if isinstance(specs, (str, bytes)) or not isinstance(specs, (list, tuple)):
+        raise UncertaintyError(f"specs={checks.quote(specs)}: expected a list of SigmaSpec (from parse_sigma)")
     by_name: dict[str, SigmaSpec] = {}
     for s in specs:
         if not isinstance(s, SigmaSpec):
@@ -195,6 +201,8 @@ def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec]) -> tuple[Sigma, ...
 
 def _checked_sigmas(scene: Scene | None, sigmas: Sequence[Sigma]) -> tuple[Sigma, ...]:
     """``sigmas`` as a tuple if they are resolved sigmas of parameters of ``scene``."""
+    if isinstance(sigmas, (str, bytes)) or not isinstance(sigmas, (list, tuple)):
+        raise UncertaintyError(f"sigmas={checks.quote(sigmas)}: expected a list of Sigma (from resolve_sigmas)")
     sigmas = tuple(sigmas)
     if not sigmas:
         raise UncertaintyError("sigmas: give at least one uncertain parameter (e.g. --sigma E=0.05)")

@@ -107,11 +107,12 @@ def ellipse(cov: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, float]:
     >>> [round(float(a), 4) for a in axes], round(angle, 6)
     ([4.8955, 2.4477], 0.0)
     """
-    if not 0.0 < level < 1.0:
-        raise UncertaintyError(f"level={level!r}: expected 0 < level < 1")
+    if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0.0 < level < 1.0:
+        raise UncertaintyError(f"level={checks.quote(level)}: expected 0 < level < 1")
+    cov = checks.covariance("cov", cov, 2, UncertaintyError)
     k = math.sqrt(-2.0 * math.log(1.0 - level))
-    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
-    w = np.maximum(w, 0.0)[::-1]
+    w, v = np.linalg.eigh(cov)
+    w = np.maximum(w, 0.0)[::-1]  # round-off below 0 (check_covariance refused more)
     v = v[:, ::-1]
     return k * np.sqrt(w), float(math.atan2(v[1, 0], v[0, 0]) % math.pi)
 
@@ -297,6 +298,10 @@ def draw_samples(sigmas: Sequence[Sigma], samples: int, seed: int) -> np.ndarray
     One generator (``numpy.random.default_rng(seed)``) draws every column in order, so a sample
     does not depend on how the samples are later split.
     """
+    sigmas = _checked_sigmas(None, sigmas)
+    samples = checks.whole("samples", samples, 1, UncertaintyError, high=MAX_SAMPLES, why="the Monte Carlo's bound")
+    seed = checks.whole("seed", seed, 0, UncertaintyError)
+    check_samples(samples, 1, len(sigmas))
     rng = np.random.default_rng(seed)
     out = np.empty((len(sigmas), samples))
     for i, s in enumerate(sigmas):

@@ -104,6 +104,36 @@ def segments(value: Any, error: type[Exception] = ValueError, name: str = "segme
     return whole(name, value, 1, error, high=MAX_SEGMENTS, why=MAX_SEGMENTS_WHY)
 
 
+def covariance(name: str, cov: Any, size: int | None = None, error: type[Exception] = ValueError) -> Any:
+    """``cov`` as a float array if it is a covariance: square (``size`` x ``size`` when given),
+    finite, symmetric and positive semi-definite (eigenvalues >= -1e-12 of the largest, round-off);
+    else ``error`` naming ``name``.
+
+    >>> covariance("cov", [[1.0, 0.0], [0.0, -1.0]])
+    Traceback (most recent call last):
+    ...
+    ValueError: cov has a negative eigenvalue (-1): expected a positive semi-definite covariance (variances >= 0)
+    """
+    import numpy as np  # here: the command line's parser imports this module and no numerics
+
+    try:
+        a = np.asarray(cov, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise error(f"{name}={quote(cov)}: expected a square array of numbers (a covariance)") from None
+    shape = f"{size} x {size}" if size else "square"
+    if a.ndim != 2 or a.shape[0] != a.shape[1] or (size is not None and a.shape[0] != size) or a.size == 0:
+        raise error(f"{name} has shape {a.shape}: expected a {shape} covariance")
+    if not np.all(np.isfinite(a)):
+        raise error(f"{name} holds a value that is not a finite number: expected a finite covariance")
+    scale = float(np.max(np.abs(a)))
+    if not np.allclose(a, a.T, rtol=1e-9, atol=1e-12 * scale):
+        raise error(f"{name} is not symmetric: expected a covariance (cov[i, j] == cov[j, i])")
+    low = float(np.min(np.linalg.eigvalsh(0.5 * (a + a.T))))
+    if low < -1e-12 * max(scale, 1e-300):
+        raise error(f"{name} has a negative eigenvalue ({low:.3g}): expected a positive semi-definite covariance (variances >= 0)")
+    return 0.5 * (a + a.T)
+
+
 def number(name: str, text: str, error: type[Exception] = ValueError) -> float:
     """The number a command-line word spells; Python's own ``float()`` also takes ``0_1`` (= 1)."""
     if not isinstance(text, str) or not _NUMBER.fullmatch(text):

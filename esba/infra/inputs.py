@@ -30,6 +30,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from . import checks
+
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10
@@ -82,6 +84,8 @@ def read_text(path: str | Path, what: str, error: type[Exception]) -> str:
     error : type
         The caller's error class (``SceneError``, ``MeasurementError``, ...).
     """
+    if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)) or str(path).strip() == "":
+        raise error(f"{what} {checks.quote(path)}: expected the path of a file")
     where = f"{what} {_show(path)}"
     try:
         info = os.stat(path)  # follows a symlink: its target is what would be read

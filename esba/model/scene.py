@@ -416,6 +416,8 @@ def load_scene(path: str | Path) -> Scene:
     SceneError
         when the file is missing, is not valid TOML (with the line), or holds a bad value.
     """
+    if isinstance(path, bytes) or not isinstance(path, (str, Path)) or not str(path).strip():
+        raise SceneError(f"scene file {checks.quote(path)}: expected the path of a TOML scene file")
     path = Path(path)
     data = inputs.load_toml(path, "scene file", SceneError)  # a regular file of bounded size, BOM or not
     try:

@@ -35,6 +35,7 @@ import dataclasses
 import io
 import math
 from dataclasses import dataclass
+from numbers import Real
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -204,7 +205,19 @@ class SweepPlan:
 def _axis(name: str, values) -> list[float] | None:
     if values is None:
         return None
-    vals = [float(v) for v in (values if isinstance(values, (list, tuple, np.ndarray)) else [values])]
+    if isinstance(values, str):  # as the command line takes it: start:stop:count or v1,v2,...
+        try:
+            vals = parse_values(values)
+        except SweepError as exc:
+            raise SweepError(f"{name}: {exc}") from None
+    else:
+        items = values.tolist() if isinstance(values, np.ndarray) else values
+        items = items if isinstance(items, (list, tuple)) else [items]
+        if not all(isinstance(v, Real) and not isinstance(v, bool) for v in items):
+            raise SweepError(f"{name}={checks.quote(values)}: expected one or more finite numbers, or a text start:stop:count")
+        vals = [float(v) for v in items]
+    if len(vals) > MAX_POINTS:
+        raise SweepError(f"{name}: {len(vals)} values; expected at most {MAX_POINTS}")
     if not vals or not all(math.isfinite(v) for v in vals):
         raise SweepError(f"{name}={checks.quote(values)}: expected one or more finite numbers")
     if name in ("pressure", "payload", "d") and min(vals) < 0:

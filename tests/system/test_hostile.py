@@ -765,8 +765,8 @@ def test_messages_cap_what_they_quote(capsys, places, text, needle):
 MEASUREMENTS = {
     "two-pressures.csv": ("pressure_mpa,pressure_kpa,total_angle_deg\n0.1,120,50\n", "pressure_mpa=0.1 and pressure_kpa=120 disagree (0.1 vs 0.12 MPa); give the pressure once"),
     "two-pressures.toml": ("[[measurement]]\npressure_mpa = 0.1\npressure_bar = 2\ntotal_angle_deg = 50\n", "pressure_mpa=0.1 and pressure_bar=2 disagree"),
-    "target-1e6.csv": ("target_angle_deg,tip_y_mm\n1e6,5\n", "target_angle_deg=1e+06: expected a target angle > 0 and <= 360 deg"),
-    "angle-1e6.csv": ("pressure_mpa,total_angle_deg\n0.1,1e6\n", "total_angle_deg=1e+06: expected a measured angle from -360 to 360 deg"),
+    "target-1e6.csv": ("target_angle_deg,tip_y_mm\n1e6,5\n", "target_angle_deg=1e+06: expected a target angle > 0 and <= 3600 deg"),
+    "angle-1e6.csv": ("pressure_mpa,total_angle_deg\n0.1,1e6\n", "total_angle_deg=1e+06: expected a measured angle from -3600 to 3600 deg"),
     "sd-1e-300.csv": ("pressure_mpa,total_angle_deg,total_angle_sd_deg\n0.1,50,1e-300\n", "total_angle_sd_deg=1e-300: expected a standard deviation >= 1e-06 deg"),
     "underscore.csv": ("pressure_mpa,total_angle_deg\n0.1,5_0\n", "total_angle_deg='5_0': expected a number"),
 }
@@ -846,3 +846,72 @@ def test_a_study_file_that_is_a_device_or_fifo_is_one_line_no_hang(capsys, place
     line = one_line_error(capsys, RESUME, places)
     assert "'s.csv'" in line or "s.csv:" in line
     assert "not a regular file" in line or "FIFO" in line
+
+
+def _api_round2():
+    from esba.analysis.path_analysis import column_buckling_load
+    from esba.calibration.fit import FitError, fit, predict
+    from esba.calibration.measurements import MeasurementError, load_measurements, measurements_from_rows
+    from esba.calibration.uncertainty import UncertaintyError, draw_samples, ellipse, parse_sigma, propagate, resolve_sigmas
+    from esba.model.generated import load_model
+    from esba.model.scene import MAIN_JOB, SceneError, load_scene
+    from esba.paths.loading import history
+    from esba.paths.problem import PathError, PathProblem
+    from esba.statics.batch import BatchOptionsError, solve_arrays
+    from esba.statics.equilibrium import SolverOptionsError, solve
+    from esba.studies.sweep import SweepError, plan_sweep
+
+    sig = resolve_sigmas(MAIN_JOB, [parse_sigma("E=10%")])
+    data = measurements_from_rows("rows", [("row 1", {"pressure_mpa": 0.1, "total_angle_deg": 60.0})])
+    result = lambda: solve(MAIN_JOB)  # noqa: E731
+    problem = lambda: PathProblem.from_scene(MAIN_JOB.replace(pressure=0.0), "pressure")  # noqa: E731
+    nan = float("nan")
+    return [
+        ("propagate(r, None)", lambda: propagate(result(), None), UncertaintyError, "sigmas=None: expected a list of Sigma"),
+        ("resolve_sigmas(None, ...)", lambda: resolve_sigmas(None, [parse_sigma("E=1")]), UncertaintyError, "scene=None: expected an esba.model.scene.Scene"),
+        ("resolve_sigmas(s, 'E=1')", lambda: resolve_sigmas(MAIN_JOB, "E=1"), UncertaintyError, "specs='E=1': expected a list of SigmaSpec"),
+        ("draw_samples(s, -5, 0)", lambda: draw_samples(sig, -5, 0), UncertaintyError, "samples=-5: expected a whole number from 1 to 1000000"),
+        ("draw_samples(s, 10**12, 0)", lambda: draw_samples(sig, 10**12, 0), UncertaintyError, "samples=1000000000000"),
+        ("draw_samples(s, 10, -1)", lambda: draw_samples(sig, 10, -1), UncertaintyError, "seed=-1"),
+        ("ellipse('cov')", lambda: ellipse("cov"), UncertaintyError, "cov='cov': expected a square array"),
+        ("ellipse(not PSD)", lambda: ellipse(np.diag([1.0, -1.0])), UncertaintyError, "cov has a negative eigenvalue"),
+        ("ellipse(3 x 3)", lambda: ellipse(np.eye(3)), UncertaintyError, "expected a 2 x 2 covariance"),
+        ("ellipse(nan)", lambda: ellipse(np.diag([nan, 1.0])), UncertaintyError, "not a finite number"),
+        ("history(p, th, lam, 'abc')", lambda: history(problem(), [0.0] * 3, 0.0, "abc"), PathError, "values='abc': expected a list"),
+        ("history(None, ...)", lambda: history(None, [0.0] * 3, 0.0, [1.0]), PathError, "problem=None: expected a PathProblem"),
+        ("history(p, [nan]*3, ...)", lambda: history(problem(), [nan] * 3, 0.0, [0.1]), PathError, "theta0 has shape (3,): expected 3 finite angles"),
+        ("column_buckling_load(segments=0)", lambda: column_buckling_load(segments=0), SceneError, "segments=0: expected a whole number from 1 to 256"),
+        ("column_buckling_load(segments=2.5)", lambda: column_buckling_load(segments=2.5), SceneError, "segments=2.5"),
+        ("column_buckling_load(segments=10**6)", lambda: column_buckling_load(segments=10**6), SceneError, "segments=1000000"),
+        ("fit(d, free=None)", lambda: fit(data, free=None), FitError, "free=None: expected names of parameters"),
+        ("predict(d, negative variance)", lambda: predict(data, {"E": 0.54}, [[-1.0]]), FitError, "covariance has a negative eigenvalue"),
+        ("predict(None)", lambda: predict(None), FitError, "data=None"),
+        ("load_measurements(None)", lambda: load_measurements(None), MeasurementError, "measurement file None: expected the path"),
+        ("load_scene(None)", lambda: load_scene(None), SceneError, "scene file None: expected the path of a TOML scene file"),
+        ("plan_sweep(pressure='abc')", lambda: plan_sweep(MAIN_JOB, pressure="abc"), SweepError, "pressure: 'abc': expected start:stop:count"),
+        ("plan_sweep(pressure=[None])", lambda: plan_sweep(MAIN_JOB, pressure=[None]), SweepError, "pressure=[None]: expected one or more finite numbers"),
+        ("solve_arrays(model, {})", lambda: solve_arrays(load_model(3), {}), BatchOptionsError, "values: missing parameter(s) L, r1, r2, d, rho and 5 more"),
+        ("solve_arrays(model, P=nan)", lambda: solve_arrays(load_model(3), {**MAIN_JOB.parameters(0.1), "P": [nan]}), BatchOptionsError, "P[0] is not a finite number"),
+        ("solve_arrays(None, {})", lambda: solve_arrays(None, {}), BatchOptionsError, "model=None: expected a Model"),
+        ("solve(theta0=[1e308]*3)", lambda: solve(MAIN_JOB, theta0=[1e308] * 3), SolverOptionsError, "theta0=[1e+308, 1e+308, 1e+308]: expected 3 angles (rad) with |angle| <= 1000"),
+    ]
+
+
+API2 = _api_round2()
+
+
+@pytest.mark.parametrize("case", API2, ids=[c[0] for c in API2])
+def test_python_api_raises_esba_errors_second_round(case):
+    _, call, error, needle = case
+    with pytest.raises(error) as info:
+        call()
+    message = str(info.value)
+    assert needle in message and "\n" not in message and len(message) < 300
+    assert type(info.value).__module__.split(".")[0] == "esba"
+
+
+def test_plan_sweep_takes_what_the_cli_takes():
+    from esba.model.scene import MAIN_JOB
+    from esba.studies.sweep import parse_values, plan_sweep
+
+    assert plan_sweep(MAIN_JOB, pressure="0:0.3:4").axes["pressure"] == parse_values("0:0.3:4") == [0.0, 0.1, 0.2, 0.3]
