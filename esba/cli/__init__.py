@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from typing import Callable, Sequence
 
 from derive.effects import EffectError
@@ -108,7 +109,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     console.show_library_messages()
     try:
-        code = console.run(lambda: _run(argv))
+        with warnings.catch_warnings():
+            # NumPy's floating-point RuntimeWarnings are no message for the user: a result that is
+            # not finite is reported by the command itself (jsonsafe, validity, status); ESBA_DEBUG=1 shows them
+            if not os.environ.get("ESBA_DEBUG"):
+                warnings.simplefilter("ignore", RuntimeWarning)
+            code = console.run(lambda: _run(argv))
     except KeyboardInterrupt:
         print("esba: interrupted", file=sys.stderr)
         code = EXIT_INTERRUPTED

@@ -96,7 +96,7 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     if args.check:
         check = PAGE.check(page)
         stale = not check.ok
-        print_result(args, {"page": str(page), "stale": stale}, lambda d: f"{d['page']} is {'STALE' if d['stale'] else 'up to date'}")
+        print_result(args, {"page": str(page), "stale": stale, "status": check.status}, lambda d: f"{d['page']} is {'up to date' if not d['stale'] else d['status'].upper()}")
         if stale:
             print(f"esba: {page} is {check.status}: run `esba audit` and commit it", file=sys.stderr)
             return EXIT_FAILED

@@ -4,6 +4,7 @@ sensitivities and uncertainty, and its Monte Carlo (in this process or on Dask).
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 import time
@@ -277,7 +278,10 @@ def _stiffness_table(d: dict) -> str:
     for f, dl, k, tip in zip(d["payloads_n"], d["displacement_mm"], d["stiffness_n_per_m"], d["tip_mm"]):
         lines.append(f"{f:8.3f} {dl:11.3f} {k:9.3f} {tip[0]:8.2f}, {tip[1]:7.2f}")
     t = d["tangent"]
-    lines.append(f"tangent at F = 0: horizontal {t['horizontal_n_per_m']:.3f} N/m, vertical {t['vertical_n_per_m']:.3f} N/m")
+    def k(v):
+        return "unbounded (the tip does not move that way to first order)" if v is None or not math.isfinite(v) else f"{v:.3f} N/m"
+
+    lines.append(f"tangent at F = 0: horizontal {k(t['horizontal_n_per_m'])}, vertical {k(t['vertical_n_per_m'])}")
     if t["matrix_n_per_m"] is not None:
         m = t["matrix_n_per_m"]
         lines.append(f"K_tip (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]")

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 from numbers import Integral
 from typing import Any
 
@@ -138,7 +139,10 @@ def number(name: str, text: str, error: type[Exception] = ValueError) -> float:
     """The number a command-line word spells; Python's own ``float()`` also takes ``0_1`` (= 1)."""
     if not isinstance(text, str) or not _NUMBER.fullmatch(text):
         raise error(f"{name} {quote(text)}: not a number (expected decimal digits such as 0.1 or 2e-3)")
-    return float(text)
+    value = float(text)
+    if value != 0.0 and abs(value) < sys.float_info.min:  # subnormal: 1e-320 would come back as 9.99989e-321
+        raise error(f"{name} {quote(text)}: below the smallest normal double ({sys.float_info.min:.3g}); give 0 or a larger number")
+    return value
 
 
 def whole_text(name: str, text: str, error: type[Exception] = ValueError) -> int:

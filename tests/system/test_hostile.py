@@ -915,3 +915,54 @@ def test_plan_sweep_takes_what_the_cli_takes():
     from esba.studies.sweep import parse_values, plan_sweep
 
     assert plan_sweep(MAIN_JOB, pressure="0:0.3:4").axes["pressure"] == parse_values("0:0.3:4") == [0.0, 0.1, 0.2, 0.3]
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device whose writes fail: disk full)")
+@pytest.mark.parametrize(
+    "argv, name",
+    [
+        (["path", "--to", "0.15", "--out", "p.csv", "--no-plot"], "p.csv"),
+        (["path", "--to", "0.15", "--plot", "p.png", "--no-out"], "p.png"),
+        (["audit", "--out", "a.md"], "a.md"),
+        (["validate", "--out", "v.md"], "v.md"),
+        (["solve", "--plot", "s.png"], "s.png"),
+        (["sweep", "--pressure", "0.1", "--plot", "w.png", "--no-progress"], "w.png"),
+    ],
+)
+def test_a_full_disk_names_the_file_in_every_command(capsys, places, argv, name):
+    (Path(places["tmp"]) / name).symlink_to("/dev/full")
+    line = one_line_error(capsys, argv, places, code=EXIT_FAILED)
+    assert line == f"esba: error: {name}: cannot write (No space left on device)"
+
+
+def test_no_runtime_warning_and_no_value_the_user_did_not_give(capsys, places):
+    assert main(["stiffness", "--pressure", "0", "--json"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    tangent = strict_json(out)["tangent"]
+    assert tangent["vertical_n_per_m"] is None and tangent["horizontal_n_per_m"] > 0
+    assert "RuntimeWarning" not in err and "inf" not in err
+    assert main(["stiffness", "--pressure", "0"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    assert "vertical unbounded" in out and "inf N/m" not in out and "Warning" not in err
+    line = one_line_error(capsys, ["path", "--to", "1e-320", "--no-plot", "--no-out"], places)
+    assert "'1e-320': below the smallest normal double" in line
+    assert main(["pressure", "--total-angle", "-90"]) == EXIT_FAILED  # not reachable: said, naming no pressure the user did not give
+    out, err = capsys.readouterr()
+    assert "pressure=-" not in err and "Warning" not in err and "the target is not reachable" in err
+
+
+def test_check_of_a_missing_page_says_missing(capsys, places):
+    assert main(["audit", "--check"]) == EXIT_FAILED
+    out, err = capsys.readouterr()
+    assert "is MISSING" in out and "STALE" not in out and "derivations.md is missing" in err
+    assert main(["docs", "--check", "validation", "--dir", places["tmp"]]) == EXIT_FAILED
+    out, err = capsys.readouterr()
+    assert "missing" in out and "stale" not in out.lower()
+
+
+def test_closed_stdout_ends_without_a_traceback(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.run(f"{sys.executable} -m esba.cli solve --no-plot >&-", shell=True, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    assert p.returncode == EXIT_OK, p.stderr
+    assert "Traceback" not in p.stderr
+    assert p.stderr.strip().splitlines()[-1] == "esba: warning: standard output was closed: what the command printed is lost"
