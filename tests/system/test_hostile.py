@@ -966,3 +966,27 @@ def test_closed_stdout_ends_without_a_traceback(tmp_path):
     assert p.returncode == EXIT_OK, p.stderr
     assert "Traceback" not in p.stderr
     assert p.stderr.strip().splitlines()[-1] == "esba: warning: standard output was closed: what the command printed is lost"
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None and shutil.which("cc") is None, reason="needs a C compiler")
+def test_damaged_compiled_library_with_a_matching_checksum_does_not_crash(tmp_path):
+    """Truncated, and its checksum record rewritten to match: the checksum cannot tell. A child
+    process loads it first and dies of the bus error instead of esba."""
+    import hashlib
+
+    env = {**os.environ, "ESBA_CACHE_DIR": str(tmp_path / "cache")}
+    argv = [sys.executable, "-m", "esba.cli", "sweep", "--pressure", "0:0.2:600", "--no-progress", "--json"]
+    first = subprocess.run(argv, env=env, capture_output=True, text=True, cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    lib = next((tmp_path / "cache" / "compiled").glob("esba_batch_*.so"))
+    data = lib.read_bytes()[:4096]
+    lib.write_bytes(data)
+    cache.record_path(lib).write_text(json.dumps({"bytes": len(data), "sha256": hashlib.sha256(data).hexdigest()}))
+    assert cache.damage(lib) is None  # the checksum is satisfied
+    again = subprocess.run(argv, env=env, capture_output=True, text=True, cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    lines = again.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"esba: compiled batch solver {lib} is damaged (") and "building it again" in lines[0]
+    assert "Traceback" not in again.stderr
+    assert strict_json(again.stdout)["counts"]["ok"] == 600
+    assert cache.library_damage(lib) is None  # rebuilt
