@@ -990,3 +990,11 @@ def test_damaged_compiled_library_with_a_matching_checksum_does_not_crash(tmp_pa
     assert "Traceback" not in again.stderr
     assert strict_json(again.stdout)["counts"]["ok"] == 600
     assert cache.library_damage(lib) is None  # rebuilt
+
+
+def test_a_path_of_a_million_steps_is_bounded_or_said_up_front(capsys, places):
+    line = one_line_error(capsys, ["path", "-n", "16", "--to", "1", "--max-steps", "1000000", "--ds-max", "1e-6", "--no-plot", "--no-out"], places)
+    assert "--max-steps 1000000 at n = 16: the branches could hold about 3.2 GiB of points (limit 2 GiB): at most" in line
+    assert main(["path", "--to", "0.13", "--max-steps", "200000", "--no-plot", "--no-out"]) == EXIT_OK
+    err = capsys.readouterr().err
+    assert err.startswith("esba: note: --max-steps 200000 at n = 3: up to 0.3 GiB of points and minutes of work")
