@@ -210,6 +210,8 @@ def with_parameters(scene: Scene, values: Mapping[str, float]) -> Scene:
     >>> s.actuator.E, s.payloads[0].angle_deg
     (0.6, 0.0)
     """
+    if not isinstance(values, Mapping):
+        raise SensitivityError(f"values={checks.quote(values)}: expected a mapping of parameter name to value, such as {{'E': 0.6}}")
     check_names(scene, list(values))
     act, top = {}, {}
     payloads = list(scene.payloads)

@@ -596,6 +596,8 @@ class Agreement:
 
 def compare(first: Propagation, mc: MonteCarlo) -> Agreement:
     """Set first-order propagation and Monte Carlo side by side; say whether they agree."""
+    if not isinstance(first, Propagation) or not isinstance(mc, MonteCarlo):
+        raise UncertaintyError(f"compare({type(first).__name__}, {type(mc).__name__}): expected a Propagation (propagate) and a MonteCarlo (monte_carlo)")
     tol = mc.options.agree_rel
     counts = mc.counts
     rows = []

@@ -507,6 +507,8 @@ def solve_scenes(scenes: Sequence[Scene], options: BatchOptions | None = None) -
     BatchOptionsError
         for an empty batch or mixed segment counts.
     """
+    if isinstance(scenes, Scene) or not isinstance(scenes, (list, tuple)):
+        raise BatchOptionsError(f"scenes={checks.quote(scenes)}: expected a list of Scene")
     scenes = list(scenes)
     if not scenes:
         raise BatchOptionsError("scenes: the batch is empty")

@@ -853,6 +853,7 @@ def _api_round2():
     from esba.calibration.fit import FitError, fit, predict
     from esba.calibration.measurements import MeasurementError, load_measurements, measurements_from_rows
     from esba.calibration.uncertainty import UncertaintyError, draw_samples, ellipse, parse_sigma, propagate, resolve_sigmas
+    from esba.infra.errors import InputError
     from esba.model.generated import load_model
     from esba.model.scene import MAIN_JOB, SceneError, load_scene
     from esba.paths.loading import history
@@ -893,6 +894,9 @@ def _api_round2():
         ("solve_arrays(model, {})", lambda: solve_arrays(load_model(3), {}), BatchOptionsError, "values: missing parameter(s) L, r1, r2, d, rho and 5 more"),
         ("solve_arrays(model, P=nan)", lambda: solve_arrays(load_model(3), {**MAIN_JOB.parameters(0.1), "P": [nan]}), BatchOptionsError, "P[0] is not a finite number"),
         ("solve_arrays(None, {})", lambda: solve_arrays(None, {}), BatchOptionsError, "model=None: expected a Model"),
+        ("with_parameters(scene, None)", lambda: __import__("esba.analysis.sensitivity", fromlist=["x"]).with_parameters(MAIN_JOB, None), InputError, "values=None: expected a mapping"),
+        ("compare(None, None)", lambda: __import__("esba.calibration.uncertainty", fromlist=["x"]).compare(None, None), UncertaintyError, "compare(NoneType, NoneType): expected a Propagation"),
+        ("solve_scenes(None)", lambda: __import__("esba.statics.batch", fromlist=["x"]).solve_scenes(None), BatchOptionsError, "scenes=None: expected a list of Scene"),
         ("solve(theta0=[1e308]*3)", lambda: solve(MAIN_JOB, theta0=[1e308] * 3), SolverOptionsError, "theta0=[1e+308, 1e+308, 1e+308]: expected 3 angles (rad) with |angle| <= 1000"),
     ]
 
