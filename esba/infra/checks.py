@@ -135,12 +135,15 @@ def covariance(name: str, cov: Any, size: int | None = None, error: type[Excepti
     return 0.5 * (a + a.T)
 
 
-def number(name: str, text: str, error: type[Exception] = ValueError) -> float:
-    """The number a command-line word spells; Python's own ``float()`` also takes ``0_1`` (= 1)."""
+def number(name: str, text: str, error: type[Exception] = ValueError, subnormal: bool = False) -> float:
+    """The number a command-line word spells; Python's own ``float()`` also takes ``0_1`` (= 1).
+
+    A subnormal number (``1e-320``, whose digits the double does not keep) is refused unless
+    ``subnormal`` (a file esba wrote itself may hold any double)."""
     if not isinstance(text, str) or not _NUMBER.fullmatch(text):
         raise error(f"{name} {quote(text)}: not a number (expected decimal digits such as 0.1 or 2e-3)")
     value = float(text)
-    if value != 0.0 and abs(value) < sys.float_info.min:  # subnormal: 1e-320 would come back as 9.99989e-321
+    if not subnormal and value != 0.0 and abs(value) < sys.float_info.min:  # subnormal: 1e-320 would come back as 9.99989e-321
         raise error(f"{name} {quote(text)}: below the smallest normal double ({sys.float_info.min:.3g}); give 0 or a larger number")
     return value
 

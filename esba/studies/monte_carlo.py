@@ -107,7 +107,7 @@ def _number(text: str) -> float:
     reads 'nan' or 'inf' was not written by the study: ValueError)."""
     if text == "":
         return math.nan
-    value = checks.number("cell", text)
+    value = checks.number("cell", text, subnormal=True)  # as written: any double
     if not math.isfinite(value):
         raise ValueError(text)
     return value

@@ -477,7 +477,7 @@ def _cell_number(text: Any) -> float | None:
     """A numeric cell as the writer writes it: '' (None) or a finite decimal number; else ValueError."""
     if text is None or text == "":
         return None
-    value = checks.number("cell", text) if isinstance(text, str) else float(text)
+    value = checks.number("cell", text, subnormal=True) if isinstance(text, str) else float(text)  # as written: any double
     if not math.isfinite(value):
         raise ValueError(text)
     return value
