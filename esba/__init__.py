@@ -54,6 +54,8 @@ _FACADE = {
     "solve": "esba.statics.equilibrium",
     "BatchOptions": "esba.statics.batch",
     "solve_scenes": "esba.statics.batch",
+    "equilibria": "esba.statics.equilibria",
+    "EquilibriaOptions": "esba.statics.equilibria",
     # analyses
     "secant_stiffness": "esba.analysis.stiffness",
     "tangent_stiffness": "esba.analysis.stiffness",
@@ -64,6 +66,7 @@ _FACADE = {
     "fit": "esba.calibration.fit",
     "load_measurements": "esba.calibration.measurements",
     "propagate": "esba.calibration.uncertainty",
+    "estimate_load": "esba.calibration.sensing",
     # studies
     "sweep": "esba.studies.sweep",
     "plan_sweep": "esba.studies.sweep",

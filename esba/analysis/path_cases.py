@@ -10,9 +10,11 @@ is, where it buckles. This module computes; :mod:`esba.pages.paths` renders.
   payload at which it is born (the cusp);
 * the payload direction at the 90 degree pressure (2 N): the bistable range near 120 degrees;
 * the fold pressures against n (how many segments the folds need);
+* the payload magnitude at directions around 122.2 degrees: the narrow window of directions in
+  which loading snaps, and its two sides;
 * the straight actuator pushed along its axis, n = 1..8: the buckling load found by the trace
-  against the closed form (:func:`esba.analysis.path_analysis.column_buckling_load`), and what each side of
-  the crossing branch does.
+  against the closed form (:func:`esba.analysis.path_analysis.column_buckling_load`), the branch
+  point's type (transcritical or pitchfork, computed) and what each side of the crossing branch does.
 """
 
 from __future__ import annotations
@@ -27,13 +29,14 @@ from esba.paths.continuation import (
     PathOptions,
     PathProblem,
     bifurcating_branches,
+    side_of,
     trace,
 )
 from esba.statics.equilibrium import solve
 
 from .path_analysis import PathAnalysis, analyse, column_buckling_load
 
-__all__ = ["PathCases", "path_cases", "PAYLOADS", "FOLD_NS", "COLUMN_NS", "OPTIONS"]
+__all__ = ["PathCases", "path_cases", "PAYLOADS", "FOLD_NS", "COLUMN_NS", "OPTIONS", "WINDOW_OMEGAS", "WINDOW_TO"]
 
 #: Payloads of the bistable-range table, N.
 PAYLOADS = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
@@ -57,7 +60,9 @@ class PathCases:
     are born (None when the table does not bracket it); ``history_mpa``: the pressure above which
     :func:`esba.statics.equilibrium.solve`'s history reaches the upper state (None when not
     found); ``by_segments``: the folds under 2 N per n; ``buckling``: per n, the closed-form and the
-    traced buckling loads and what each side of the crossing branch does.
+    traced buckling loads, the branch point's type and what each side of the crossing branch does;
+    ``window``: the payload magnitude (0 to 6 N) at the 90 degree pressure for the directions of
+    :data:`WINDOW_OMEGAS` (:func:`_window_case`).
     """
 
     pressure: PathAnalysis
@@ -68,6 +73,7 @@ class PathCases:
     history_mpa: float | None
     by_segments: list[dict[str, Any]]
     buckling: list[dict[str, Any]]
+    window: list[dict[str, Any]]
 
 
 def _folds(problem: PathProblem, theta: np.ndarray, lam0: float, to: float) -> list[float]:
@@ -78,6 +84,32 @@ def _folds(problem: PathProblem, theta: np.ndarray, lam0: float, to: float) -> l
 def _pressure_folds(force: float, segments: int = 3, to: float = 0.4) -> list[float]:
     scene = Scene(pressure=0.0, payloads=(Payload(force, 90.0),), segments=segments)
     return _folds(PathProblem.from_scene(scene, "pressure"), solve(scene).theta, 0.0, to)
+
+
+#: Payload directions (deg) of the snapping window: a payload path from 0 to 6 N at the 90 degree
+#: pressure folds and snaps for directions inside the window (here 122.179 and 122.19) and is
+#: monotonic on both sides of it (122.17: it bends back towards the chamber; 122.28: past the cusp
+#: where the two folds meet, it bends on away from it).
+WINDOW_OMEGAS = (122.17, 122.179, 122.19, 122.28)
+#: The payload path's end, N (``esba path --param payload --target-angle 90 --payload-angle OMEGA --from 0 --to 6``).
+WINDOW_TO = 6.0
+
+
+def _window_case(omega: float) -> dict[str, Any]:
+    """The payload path of a 2 N-scene at direction ``omega`` from 0 to :data:`WINDOW_TO` N at the 90
+    degree pressure, with the default path settings of ``esba path`` (the case where a step once
+    jumped to a neighbouring branch): its folds, branch points, jumps and where it ends."""
+    run = analyse(Scene(payloads=(Payload(2.0, omega),)), "payload", WINDOW_TO, start=0.0, options=PathOptions(ds_max=0.1), switch=False)
+    up, down = (list(r.jumps) for r in run.loading) if len(run.loading) == 2 else ([], [])
+    return {
+        "omega_deg": omega,
+        "folds": [(f.lam, f.total_angle_deg) for f in run.main.folds],
+        "branch_points": [bp.lam for bp in run.main.branch_points],
+        "jumps_up": [(j.kind, j.lam, j.distance_mm, float(np.degrees(np.sum(j.theta_before))), float(np.degrees(np.sum(j.theta_after)))) for j in up],
+        "jumps_down": [(j.kind, j.lam, j.distance_mm, float(np.degrees(np.sum(j.theta_before))), float(np.degrees(np.sum(j.theta_after)))) for j in down],
+        "end_angle_deg": float(run.main.total_angle_deg[-1]),
+        "reached": bool(run.main.stopped == "bound" and run.main.lam[-1] == WINDOW_TO),
+    }
 
 
 def _bisect(low: float, high: float, above, tol: float) -> float:
@@ -131,11 +163,11 @@ def path_cases(progress: Callable[[str], None] | None = None) -> PathCases:
             bp = b.branch_points[0]
             row["traced_n"] = bp.lam
             row["status"] = bp.status
+            row["bifurcation"], row["cubic"] = bp.bifurcation, bp.cubic
             for side in bifurcating_branches(problem, bp, bounds=(0.5 * f_cr, 1.5 * f_cr), options=OPTIONS):
-                bend = float(np.degrees(np.sum(side.theta[min(1, len(side) - 1)])))
                 row["sides"].append(
                     {
-                        "direction": "towards the chamber (theta > 0)" if bend > 0 else "away from the chamber (theta < 0)",
+                        "direction": side_of(side.theta[min(1, len(side) - 1)], bp.theta),
                         "load_after": "falls" if len(side) > 1 and side.lam[1] < bp.lam else "rises",
                         "stable_at_first": bool(side.stable[min(1, len(side) - 1)]),
                         "folds_n": [f.lam for f in side.folds],
@@ -143,6 +175,8 @@ def path_cases(progress: Callable[[str], None] | None = None) -> PathCases:
                     }
                 )
         buckling.append(row)
+    say("payload magnitude near 122.2 deg: the snapping window")
+    window = [_window_case(omega) for omega in WINDOW_OMEGAS]
     say("column, n = 4, for the figure")
     c_run = analyse(Scene(pressure=0.0, payloads=(Payload(1.0, 180.0),), segments=4), "payload", 6.4, options=OPTIONS)
-    return PathCases(p_run, d_run, c_run, by_payload, cusp, history_p, by_segments, buckling)
+    return PathCases(p_run, d_run, c_run, by_payload, cusp, history_p, by_segments, buckling, window)

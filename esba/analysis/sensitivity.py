@@ -44,8 +44,10 @@ Examples
 >>> s = sensitivities(solve(MAIN_JOB))
 >>> s.status, round(s.total_angle("E"), 2), round(s.total_angle("F1"), 2)   # deg per MPa, per N
 ('ok', 101.76, -27.47)
->>> abs(s.total_angle("rho")) < 1e-9   # at a target angle the pressure absorbs the fibres entirely
-True
+>>> s.total_angle("rho")   # at a target angle the pressure absorbs the fibres entirely (round-off: ROUND_OFF)
+0.0
+>>> s.held["parameter"]     # what the derivatives hold fixed: the target angle, so the pressure moves
+'target_angle'
 """
 
 from __future__ import annotations
@@ -74,8 +76,11 @@ __all__ = [
     "parameter_names",
     "with_parameters",
     "model_values",
+    "implicit_functions",
     "sensitivities",
     "UNITS",
+    "ROUND_OFF",
+    "held_fixed",
 ]
 
 #: User units of every kind of scene parameter (as in the scene file).
@@ -110,6 +115,43 @@ _DESCRIPTIONS = {
     "Omega": "direction of payload",
     "s": "point of payload (fraction of L)",
 }
+
+#: A derivative is round-off, and reported as 0, when the change it predicts for a change of its
+#: parameter by the parameter's own size (|p|, or one unit where p = 0) is at most this fraction of
+#: the largest such change of the same quantity (theta_i, the total angle, tip x or tip y) over all the
+#: scene's parameters. Such a derivative is exactly zero in the model (d/d rho at a held target
+#: angle: the pressure absorbs the fibres entirely), and what the arithmetic leaves of it is about
+#: 1e-16 of the others.
+ROUND_OFF = 1e-12
+
+
+def _zero_round_off(d: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """``d`` (rows: quantities, columns: parameters) with the entries :data:`ROUND_OFF` calls round-off set to 0."""
+    change = np.abs(d) * scale
+    largest = np.max(change, axis=1, keepdims=True) if d.size else change
+    return np.where(change <= ROUND_OFF * largest, 0.0, d)
+
+
+def held_fixed(scene: Scene) -> dict[str, Any]:
+    """What every derivative holds fixed besides the other parameters: the pressure or, when the
+    scene sets the pressure by an unloaded target angle, that angle (the pressure then moves)."""
+    if scene.pressure is None:
+        value = float(scene.target_angle_deg)
+        return {
+            "parameter": "target_angle",
+            "value": value,
+            "unit": "deg",
+            "meaning": f"the unloaded target angle is held at {value:g} deg, so the pressure moves with every other parameter "
+            "(closed form) and each derivative includes that move; give the pressure (--pressure) to hold it instead",
+        }
+    value = float(scene.pressure)
+    return {
+        "parameter": "P",
+        "value": value,
+        "unit": "MPa",
+        "meaning": f"the pressure is held at {value:g} MPa; set the pressure by an unloaded target angle (--target-angle) to hold that angle instead",
+    }
+
 
 class SensitivityError(InputError):
     """A parameter name or option that is not allowed: the message names it and what is allowed."""
@@ -298,9 +340,11 @@ class SensitivityOptions:
 # ---------------------------------------------------------------------------------------------
 # the CasADi functions (one set per model and pressure mode)
 
-def _functions(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...]) -> ca.Function:
+def implicit_functions(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...]) -> ca.Function:
     """(theta, p, fixed, v) -> G, dG/dtheta, dG/dp, tip, dtip/dtheta, dtip/dp, d(v'Hv)/dtheta, d(v'Hv)/dp
-    (in the model's registry, per set of parameter names)."""
+    (in the model's registry, per set of parameter names): p are scene parameters ``names`` in
+    scene-file units, ``fixed`` the model parameters ``fixed_names`` that are not among them. The
+    load estimate (:mod:`esba.calibration.sensing`) builds on the same function."""
     return model.derived("sensitivity", lambda: _build(model, names, fixed_names), settings=(names, fixed_names), persist=False)
 
 
@@ -370,6 +414,11 @@ class Sensitivities:
         Why there are no numbers.
     eigenvalue_ratio : float
         Smallest over largest Hessian eigenvalue.
+    held : dict
+        What each derivative holds fixed besides the other parameters (:func:`held_fixed`): the
+        pressure, or the unloaded target angle (then the pressure moves with the parameter).
+
+    Derivatives that are round-off of an exact zero are 0 (:data:`ROUND_OFF`).
     """
 
     parameters: tuple[Parameter, ...]
@@ -380,6 +429,7 @@ class Sensitivities:
     status: str
     message: str
     eigenvalue_ratio: float
+    held: dict = dataclasses.field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -408,7 +458,14 @@ class Sensitivities:
 
     def to_dict(self) -> dict:
         """JSON-ready form (``esba solve --sensitivities --json``): per unit of each parameter; None unless ok."""
-        out: dict[str, Any] = {"status": self.status, "message": self.message, "eigenvalue_ratio": jsonsafe.clean(self.eigenvalue_ratio)}
+        out: dict[str, Any] = {
+            "status": self.status,
+            "message": self.message,
+            "eigenvalue_ratio": jsonsafe.clean(self.eigenvalue_ratio),
+            "held_fixed": dict(self.held),
+            "round_off": f"a derivative is 0 when the change it predicts for a change of its parameter by the parameter's own size "
+            f"(or one unit where it is 0) is at most {ROUND_OFF:g} of the largest such change of the same quantity",
+        }
         rows = {}
         ok = self.ok
         for j, p in enumerate(self.parameters):
@@ -453,7 +510,7 @@ def sensitivities(result: Equilibrium, parameters: Sequence[str] | None = None, 
     p = np.array([q.value for q in params])
     fixed_names = tuple(k for k in model.parameters if k == "g" and "g" not in names)
     fixed = np.array([scene.g for _ in fixed_names])
-    fun = _functions(model, names, fixed_names)
+    fun = implicit_functions(model, names, fixed_names)
     theta = np.asarray(result.theta, dtype=float)
     n, m = model.n, len(names)
     eig, vecs = np.linalg.eigh(np.asarray(model.hessian(theta, model.param_vector(result.parameters))))
@@ -485,14 +542,19 @@ def sensitivities(result: Equilibrium, parameters: Sequence[str] | None = None, 
             "is at or next to a fold (a snap-through), where dtheta/dp grows without bound and a first-order answer holds for no "
             "finite change"
         )
+    # round-off of exact zeros, judged against every parameter of the scene (whatever subset is asked for)
+    scale = np.where(p != 0.0, np.abs(p), 1.0)
+    dtotal = _zero_round_off(np.sum(dtheta, axis=0)[None, :], scale)[0]
+    dtheta, dtip = _zero_round_off(dtheta, scale), _zero_round_off(dtip, scale)
     cols = [names.index(c) for c in chosen]
     return Sensitivities(
         parameters=tuple(params[j] for j in cols),
         dtheta=dtheta[:, cols],
-        dtotal=np.sum(dtheta[:, cols], axis=0),
+        dtotal=dtotal[cols],
         dtip=dtip[:, cols],
         fold_distance=np.asarray(dist)[cols],
         status=status,
         message=message,
         eigenvalue_ratio=ratio,
+        held=held_fixed(scene),
     )

@@ -88,6 +88,14 @@ def _unit(angle_deg: float) -> np.ndarray:
     return np.array([math.cos(om), -math.sin(om)])
 
 
+#: Where :attr:`SecantStiffness.tangent` is taken, and how its two readings differ (``esba stiffness``).
+TANGENT_STATE = (
+    "the unloaded state (F = 0), where every secant K starts; along a direction u, 1 / (u^T C u) is the stiffness "
+    "with the tip free to move across the force (what the secant K tends to as F -> 0), while K_tip = C^-1 holds the "
+    "tip in the other direction, so its diagonal entries are larger"
+)
+
+
 @dataclass(frozen=True, eq=False)
 class TangentStiffness:
     """The tip's tangent stiffness at one equilibrium (loads held as dead loads).
@@ -202,7 +210,7 @@ class SecantStiffness:
             "tip_mm": [r.tip_mm for r in self.loaded],
             "initial_tip_mm": self.initial.tip_mm,
             "initial_angle_deg": self.initial.total_angle_deg,
-            "tangent": self.tangent.to_dict(),
+            "tangent": {**self.tangent.to_dict(), "state": TANGENT_STATE},
             "segments": self.initial.scene.segments,
             "variant": self.initial.scene.variant,
             "messages": [r.message for r in (self.initial, *self.loaded) if r.message],

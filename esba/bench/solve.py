@@ -14,7 +14,11 @@ section of ``docs/performance.md`` with :mod:`esba.pages.performance`):
   naive PSO (1500 naive stiffness evaluations) is estimated from one measured naive evaluation;
 * loading a model ready to call (n = 100): executing the generated Python file against esba's
   cached form;
-* the command line's wall time (``esba solve --no-plot``, ``esba --help``) in a fresh interpreter.
+* the command line's wall time (``esba solve --no-plot``, ``esba --help``) in a fresh interpreter;
+* the multistability check of ``solve()`` (:func:`esba.statics.equilibria.check_multistability`) and
+  the full search of every equilibrium (:func:`esba.statics.equilibria.equilibria`: the load history,
+  the completeness check, the barriers) for n = 3, 16, 100, for the Table 2 scene and in the bistable
+  window (P = 0.17 MPa under the 2 N horizontal tip payload), against ``solve()`` without the check.
 """
 
 from __future__ import annotations
@@ -39,10 +43,12 @@ from esba.statics.equilibrium import pressure_for_angle, solve
 from .accuracy import naive_solve
 from .timing import growth_exponent, median_time
 
-__all__ = ["SOLVE_NS", "solve_benchmark"]
+__all__ = ["SOLVE_NS", "MULTISTABILITY_NS", "solve_benchmark", "multistability_rows"]
 
 #: Segment counts of the solve rows (the growth is fitted from 16 to 128).
 SOLVE_NS = (3, 16, 64, 100, 128)
+#: Segment counts of the multistability rows.
+MULTISTABILITY_NS = (3, 16, 100)
 #: The naive BFGS is timed up to this n (one run beyond 16: it may take seconds).
 NAIVE_MAX_N = 128
 
@@ -157,9 +163,48 @@ def solve_benchmark(ns: Sequence[int] = SOLVE_NS, repeat: int = 11, progress=Non
     rows.append({"call": "esba solve --no-plot (wall)", "n": 3, "esba_s": _wall(["solve", "--no-plot"], max(3, repeat // 2)), "naive_s": None, "compiled_s": None, "ok": True})
     rows.append({"call": "esba --help (wall)", "n": 0, "esba_s": _wall(["--help"], max(3, repeat // 2)), "naive_s": None, "compiled_s": None, "ok": True})
     say("command line")
+    multistability = multistability_rows(repeat=repeat, progress=say)
     solve_rows = [r for r in rows if r["call"].startswith("solve()") and 16 <= r["n"] <= 128]
     growth = growth_exponent([r["n"] for r in solve_rows], [r["esba_s"] for r in solve_rows]) if len(solve_rows) >= 2 else None
-    return {"rows": rows, "growth_16_128": growth}
+    return {"rows": rows, "growth_16_128": growth, "multistability": multistability}
+
+
+def multistability_rows(ns: Sequence[int] = MULTISTABILITY_NS, repeat: int = 11, progress=None) -> list[dict]:
+    """Per scene and n: ``solve()`` without the check, its multistability check alone, and
+    ``equilibria()`` (medians, s), for the Table 2 scene (one stable state; solve() on its fast path)
+    and in the bistable window (P = 0.17 MPa under the 2 N horizontal tip payload)."""
+    from esba.statics.equilibria import AUTO_MAX_SEGMENTS, check_multistability, equilibria
+    from esba.statics.equilibrium import SolverOptions
+
+    say = progress or (lambda msg: None)
+    out = []
+    never = SolverOptions(multistability="never")
+    scenes = (("Table 2 scene", MAIN_JOB), ("P = 0.17 MPa, 2 N", Scene(pressure=0.17, payloads=(Payload(2.0, 90.0),))))
+    for (label, base), n in ((sc, n) for sc in scenes for n in ns):
+        scene = base.replace(segments=int(n))
+        r = solve(scene, never)
+        model = r.model
+
+        def check():
+            return check_multistability(scene, model, r.pressure, r.theta, "inflate-then-load", "")
+
+        found = check()
+        full = equilibria(scene)
+        out.append(
+            {
+                "scene": label,
+                "n": int(n),
+                "solve_s": median_time(lambda: solve(scene, never), repeat),
+                "check_s": median_time(check, repeat),
+                "equilibria_s": median_time(lambda: equilibria(scene), max(1, repeat // 4)),
+                "stable_found": len(found.stable),
+                "states": len(full.states),
+                "complete": full.complete,
+                "by_default": int(n) <= AUTO_MAX_SEGMENTS,
+            }
+        )
+        say(f"multistability, {label}, n = {n}")
+    return out
 
 
 def _model_load_row(n: int, repeat: int) -> dict:

@@ -81,7 +81,7 @@ from esba.statics.equilibrium import (
 
 from .measurements import QUANTITIES, Measurement, MeasurementError, MeasurementSet
 
-__all__ = ["FitError", "FitOptions", "FitResult", "fit", "predict", "Prediction", "identifiability", "Identifiability", "FITTABLE", "DEFAULT_FREE", "DEFAULT_SD"]
+__all__ = ["FitError", "FitOptions", "FitResult", "fit", "predict", "Prediction", "identifiability", "Identifiability", "identifiability_rule", "FITTABLE", "DEFAULT_FREE", "DEFAULT_SD"]
 
 #: Parameters a fit may free (the actuator's; pressures and payloads are each row's own).
 FITTABLE = ("L", "r1", "r2", "d", "rho", "E", "M")
@@ -460,11 +460,13 @@ class FitResult:
         })
 
 
-def _identifiability(F: np.ndarray, count: int, free: tuple[str, ...], scale: np.ndarray, estimate: np.ndarray, at_bound: Sequence[str],
-                     tol: float, floor: float) -> tuple[bool, float, np.ndarray, list[str], dict]:
+def identifiability_rule(F: np.ndarray, count: int, free: tuple[str, ...], scale: np.ndarray, estimate: np.ndarray, at_bound: Sequence[str],
+                         tol: float, floor: float, units: Sequence[str] | None = None) -> tuple[bool, float, np.ndarray, list[str], dict]:
     """(identifiable, eigenvalue ratio, parameters in an undetermined direction, warnings, the first
     undetermined direction as relative changes {name: dp/p}) of a Fisher matrix of ``count``
-    weighted residuals.
+    weighted residuals. ``units`` name each parameter's unit in the warnings (default: by name,
+    from :data:`esba.analysis.sensitivity.UNITS`). The load estimate of
+    :mod:`esba.calibration.sensing` judges its loads by this same rule.
 
     Judged on the Fisher matrix of *relative* parameter changes, S F S with S = diag(scale) (each
     parameter's start value, or 1 where that is 0), in two steps:
@@ -476,6 +478,7 @@ def _identifiability(F: np.ndarray, count: int, free: tuple[str, ...], scale: np
       largest, or below that same absolute floor.
     """
     k = len(free)
+    unit = dict(zip(free, units)) if units is not None else {name: UNITS[name] for name in free}
     warnings = []
     Frel = scale[:, None] * F * scale[None, :]
     w_all = np.linalg.eigvalsh(Frel)
@@ -485,7 +488,7 @@ def _identifiability(F: np.ndarray, count: int, free: tuple[str, ...], scale: np
     direction: dict = {}
     for j in np.flatnonzero(unknown):
         where = " (on its bound)" if free[j] in at_bound else ""
-        warnings.append(f"not identifiable: the predictions do not depend on {free[j]} at {estimate[j]:.4g} {UNITS[free[j]]}{where} "
+        warnings.append(f"not identifiable: the predictions do not depend on {free[j]} at {estimate[j]:.4g} {unit[free[j]]}{where} "
                         f"(a 100 % change of it moves the residuals by less than {math.sqrt(floor):.0e} of their standard deviations), "
                         "so these data do not determine it")
         if not direction:
@@ -509,7 +512,7 @@ def _identifiability(F: np.ndarray, count: int, free: tuple[str, ...], scale: np
             if len(names) == 1:
                 j = free.index(names[0])
                 where = " (on its bound)" if names[0] in at_bound else ""
-                warnings.append(head + f"the predictions hardly depend on {names[0]} at {estimate[j]:.4g} {UNITS[names[0]]}{where}, "
+                warnings.append(head + f"the predictions hardly depend on {names[0]} at {estimate[j]:.4g} {unit[names[0]]}{where}, "
                                 "so these data do not determine it")
                 continue
             combo = ", ".join(f"d{free[j]}/{free[j]} = {full[j]:+.3g}" for j in range(k) if involved[j])
@@ -517,7 +520,7 @@ def _identifiability(F: np.ndarray, count: int, free: tuple[str, ...], scale: np
                             "leaves every prediction unchanged to first order")
     identifiable = not bool(np.any(unknown))
     for name in at_bound:
-        warnings.append(f"{name} ended on its bound ({estimate[free.index(name)]:.4g} {UNITS[name]}): the fit would take it further; "
+        warnings.append(f"{name} ended on its bound ({estimate[free.index(name)]:.4g} {unit[name]}): the fit would take it further; "
                         "its interval is not meaningful")
     return identifiable, ratio, unknown, warnings, direction
 
@@ -528,7 +531,7 @@ def _statistics(J: np.ndarray, r: np.ndarray, free: tuple[str, ...], scale: np.n
     m, k = J.shape
     F = J.T @ J
     dof = m - k
-    identifiable, ratio, unknown, warnings, _ = _identifiability(F, m, free, scale, estimate, at_bound, options.identifiability_tol,
+    identifiable, ratio, unknown, warnings, _ = identifiability_rule(F, m, free, scale, estimate, at_bound, options.identifiability_tol,
                                                                  options.identifiability_floor)
     rss = float(r @ r)
     s2 = rss / dof if dof > 0 else math.nan
@@ -854,5 +857,5 @@ def identifiability(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, pa
         for j, q in enumerate(quantities):
             rows.append(dy[j] / m.sds.get(q, DEFAULT_SD[q]))
     F = np.array(rows).T @ np.array(rows)
-    ok, ratio, _, warnings, direction = _identifiability(F, len(rows), free, scale, p, [], options.identifiability_tol, options.identifiability_floor)
+    ok, ratio, _, warnings, direction = identifiability_rule(F, len(rows), free, scale, p, [], options.identifiability_tol, options.identifiability_floor)
     return Identifiability(free, dict(zip(free, map(float, p))), F, ratio, ok, tuple(warnings), direction)

@@ -34,9 +34,12 @@ from .arguments import Parser, UsageError
 from .bench import add_bench
 from .design import add_design
 from .docs import add_docs
+from .equilibria import add_equilibria
+from .estimate import add_estimate
 from .export import add_export
 from .figures import add_figures
 from .fit import add_experiments, add_fit
+from .map import add_map
 from .models import add_audit, add_generate
 from .path import add_path
 from .results import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
@@ -46,7 +49,7 @@ from .sweep import add_sweep
 __all__ = ["main", "build_parser", "COMMANDS", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [add_generate, add_audit, add_solve, add_path, add_stiffness, add_pressure, add_validate, add_sweep, add_bench, add_figures, add_design, add_fit, add_experiments, add_export, add_docs]
+COMMANDS: list[Callable] = [add_generate, add_audit, add_solve, add_equilibria, add_path, add_stiffness, add_pressure, add_validate, add_sweep, add_bench, add_figures, add_design, add_fit, add_experiments, add_estimate, add_map, add_export, add_docs]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -129,6 +129,20 @@ def _cmd_bench_solve(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_bench_maps(args: argparse.Namespace) -> int:
+    from esba.pages.performance import PAGE, MapsSettings, maps_table
+
+    if args.markdown:
+        outputs.check_file(args.markdown, "--markdown", (".md",))
+    settings = MapsSettings(args.repeat, args.k, f"esba bench maps --repeat {args.repeat} --markdown {args.markdown}")
+    rows = PAGE.compute_section("maps", settings, _bench_progress(args, "  {} done"))
+    data = {"rows": [dict(r.__dict__, points_per_s=r.points_per_s, cell_ms=r.cell_ms, speedup=r.speedup) for r in rows]}
+    print_result(args, data, lambda d: maps_table(rows))
+    if args.markdown:
+        print(f"wrote {PAGE.write_section(args.markdown, 'maps', rows, settings)}", file=sys.stderr)
+    return EXIT_OK
+
+
 def _cmd_bench_path(args: argparse.Namespace) -> int:
     from esba.pages.performance import PAGE, PathSettings, path_table
 
@@ -288,6 +302,12 @@ def add_bench(sub) -> None:
     pa.add_argument("--markdown", metavar="FILE", help="also write the path section of a docs page (docs/performance.md)")
     pa.add_argument("--json", action="store_true")
     pa.set_defaults(func=_cmd_bench_path)
+    mp = bsub.add_parser("maps", help="time to trace the fold curves of each map of docs/maps.md against the brute-force grid of stable-state counts")
+    mp.add_argument("--repeat", type=segments_arg, default=3, help="runs per timing of the fold curves, median reported (default 3)")
+    mp.add_argument("--k", type=count_arg("--k", 2, 100, "k x k brute-force cells"), default=20, help="cells per side of the brute-force grid (default 20)")
+    mp.add_argument("--markdown", metavar="FILE", help="also write the maps section of a docs page (docs/performance.md)")
+    mp.add_argument("--json", action="store_true")
+    mp.set_defaults(func=_cmd_bench_maps)
     sc = bsub.add_parser("scaling", help="equilibria per second of a sweep in this process and on Dask (1, 2 workers), chunk sizes, overhead per chunk (docs/scaling.md)")
     sc.add_argument("--points", type=count_arg("points", 20, 200_000, "the rows are compared in memory"), default=12_000, help="grid size, 20 to 200000 (default 12000)")
     sc.add_argument("--segments", "-n", type=segments_arg, default=16, help="segment count (default 16)")

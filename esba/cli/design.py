@@ -60,7 +60,84 @@ def _design_table(d: dict) -> str:
     return "\n".join(lines)
 
 
+def _envelope_table(d: dict) -> str:
+    def one(r: dict) -> list[str]:
+        c = r["clearance"] or {}
+        near = c.get("nearest_fold")
+        where = "none up to twice the payload bound" if not near else (
+            f"{near['kind']} at P = {near['pressure_mpa']:.6g} MPa, F = {near['payload_n']:.6g} N, Omega = {near['direction_deg']:g} deg"
+        )
+        lines = [
+            f"    status: {r['status']}" + (f": {r['message']}" if r.get("message") else ""),
+            f"     r2, d: {r['r2_mm']:.5f}, {r['d_mm']:.5f} mm",
+            f"  pressure: {r['pressure_mpa']:.6f} MPa (unloaded 90 deg)",
+            f" stiffness: {r['stiffness_n_per_m']:.5f} N/m",
+            f"      fold: nearest {where}; clear: {c.get('clear')} (c = {c.get('value') if c.get('value') is None else format(c['value'], '.3g')})",
+            f"    active: {', '.join(r['active_constraints']) or 'none'}",
+            f"      time: {r['solve_time_s']:.2f} s ({r['evaluations']} designs)",
+        ]
+        return lines
+
+    first = d if d.get("method") != "both" else d["map"]
+    u = first["unconstrained"]
+    lines = [first["problem"], f"envelope: {d.get('envelope_text', '')}"]
+    if u.get("clearance"):
+        uc = u["clearance"]
+        snap = "snaps inside the envelope" if uc["snaps_inside"] else ("is clear of folds" if uc["clear"] else "has a fold within the margin")
+        lines.append(f"without the fold constraint (IPOPT): r2 = {u['r2_mm']:.5f}, d = {u['d_mm']:.5f} mm, K = {u['stiffness_n_per_m']:.5f} N/m: {snap}")
+    for name in ("map", "pso") if d.get("method") == "both" else (d["method"],):
+        r = d if d.get("method") != "both" else d[name]
+        lines.append(f"-- {name}")
+        lines += one(r)
+    if d.get("method") == "both":
+        diff = d["differences"]
+        lines.append(f"-- PSO - map: r2 {diff['r2_mm']:+.2e} mm, d {diff['d_mm']:+.2e} mm, K {diff['stiffness_rel']:+.2e} (relative)")
+    return "\n".join(lines)
+
+
+def _cmd_envelope(args: argparse.Namespace) -> int:
+    """``esba design --envelope-pressure P --envelope-payload F``: the stiffest design clear of folds."""
+    from esba.design.envelope import Envelope, optimise_envelope
+    from esba.design.problem import DesignError, DesignOptions, DesignProblem
+    from esba.solvers.pso import PSOOptions, PSOOptionsError
+
+    refuse(args, ["write_doc", "plot", "min_stiffness", "target_angle"], "with an operating envelope (it optimises the stiffness)")
+    if args.objective not in (None, "stiffness"):
+        raise UsageError(f"--objective {args.objective}: an operating envelope goes with the stiffness objective")
+    if args.envelope_pressure is None or args.envelope_payload is None:
+        raise UsageError("an operating envelope needs both --envelope-pressure P and --envelope-payload F")
+    method = {"ipopt": "map", None: "map", "pso": "pso", "both": "both"}[args.method]
+    try:
+        envelope = Envelope(
+            args.envelope_pressure, args.envelope_payload, tuple(args.envelope_angle or (90.0,)),
+            1.0 if args.envelope_at is None else args.envelope_at, 0.1 if args.fold_margin is None else args.fold_margin,
+        )
+        problem = DesignProblem(segments=args.segments, variant=args.variant or DEFAULT_VARIANT, max_pressure=args.max_pressure,
+                                min_wall=0.0 if args.min_wall is None else args.min_wall)
+        options = DesignOptions(starts=4 if args.starts is None else args.starts)
+        pso_options = PSOOptions(particles=12 if args.particles is None else args.particles, iterations=15 if args.iterations is None else args.iterations,
+                                 seed=0 if args.seed is None else args.seed)
+    except (DesignError, PSOOptionsError) as exc:
+        raise UsageError(str(exc)) from None
+    run = optimise_envelope(problem, envelope, method, options, pso_options)
+    if method == "both":
+        m, p = run
+        data = {"method": "both", "map": m.to_dict(), "pso": p.to_dict(),
+                "differences": {"r2_mm": p.r2_mm - m.r2_mm, "d_mm": p.d_mm - m.d_mm, "stiffness_rel": (p.stiffness_n_per_m - m.stiffness_n_per_m) / m.stiffness_n_per_m}}
+        results = [m, p]
+    else:
+        data, results = run.to_dict(), [run]
+    data["envelope_text"] = envelope.describe()
+    print_result(args, data, _envelope_table)
+    bad = [r for r in results if r.status != "optimal"]
+    for r in bad:
+        print(f"esba: design {r.status} ({r.method}): {r.message}", file=sys.stderr)
+    return EXIT_FAILED if bad else EXIT_OK
+
+
 def _cmd_design(args: argparse.Namespace) -> int:
+    if any(getattr(args, k) is not None for k in ("envelope_pressure", "envelope_payload", "envelope_angle", "envelope_at", "fold_margin")):
+        return _cmd_envelope(args)
     from esba.design.optimise import (
         DesignError,
         DesignOptions,
@@ -172,5 +249,10 @@ def add_design(sub) -> None:
     p.add_argument("--starts", type=count_arg("starts", 1, 8), default=None, help="IPOPT starts (1 to 8, default 4)")
     p.add_argument("--plot", metavar="FILE|DIR", help="write the stiffness map with the design(s) (and the swarm); a folder gets esba-design.png")
     p.add_argument("--write-doc", metavar="FILE", help="run every design case of the page (both methods, every problem; minutes) and write it, e.g. docs/design.md")
+    p.add_argument("--envelope-pressure", type=float_arg, metavar="P", help="operating envelope: pressures up to P MPa; with --envelope-payload, the stiffest design with no fold in the envelope (docs/maps.md)")
+    p.add_argument("--envelope-payload", type=float_arg, metavar="F", help="operating envelope: tip payloads up to F N")
+    p.add_argument("--envelope-angle", type=float_arg, action="append", metavar="DEG", help="a payload direction of the envelope, degrees from the vertical (repeatable; default 90)")
+    p.add_argument("--envelope-at", type=float_arg, metavar="FRACTION", help="the envelope's payload point, a fraction of L (default 1, the tip)")
+    p.add_argument("--fold-margin", type=float_arg, metavar="M", help="no fold up to (1 + M) times the envelope (default 0.1)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_cmd_design)

@@ -40,10 +40,13 @@ def _path_table(d: dict) -> str:
             lines.append(head)
         for sp in b["special_points"]:
             tip = f"{sp['tip_mm'][0]:7.2f}, {sp['tip_mm'][1]:7.2f}"
+            kind = f"; {sp['bifurcation']}" if sp.get("bifurcation") else ""
             lines.append(
                 f"  {sp['label']:2} {sp['kind']:<13} {sp['lambda']:16.9g} {sp['total_angle_deg']:10.3f} {tip:>17}  "
-                f"{sp['morse_before']} -> {sp['morse_after']}  {sp['status']}"
+                f"{sp['morse_before']} -> {sp['morse_after']}  {sp['status']}{kind}"
             )
+    if any(b["label"].endswith(("away from chamber", "towards chamber")) for b in d["branches"]):
+        lines.append("the branches off a branch point are named by the way they bend: away from the chamber (the total angle rises), towards it (falls)")
     for r in d["loading"]:
         what = f"quasi-static {d['parameter']} {r['from']:g} -> {r['to']:g}{unit}"
         for lam in r["branch_points_crossed"]:

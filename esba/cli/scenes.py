@@ -9,7 +9,7 @@ import re
 import sys
 import time
 
-from esba.infra import outputs
+from esba.infra import checks, outputs
 
 from .arguments import (
     UsageError,
@@ -53,6 +53,10 @@ def _solve_table(d: dict) -> str:
     ]
     if d.get("message"):
         rows.append(("NOT OK", d["message"]))
+    if d.get("history"):
+        rows.append(("history", d["history"]))
+    if d.get("multistability"):
+        rows.append(("other states", d["multistability"]["message"]))
     for note in d.get("notes", []):
         rows.append(("note", note))
     if d.get("sensitivities"):
@@ -68,7 +72,11 @@ def _sensitivity_rows(d: dict) -> list[tuple[str, str]]:
     s = d["sensitivities"]
     if s["status"] != "ok":
         return [("sensitivity", s["message"])]
-    rows = [("sensitivity", "per unit of each parameter (implicit function theorem, exact AD); fold: linear estimate of the change that reaches it")]
+    rows = [("sensitivity", "per unit of each parameter, the others held (implicit function theorem, exact AD); fold: linear estimate of the change that reaches it")]
+    if s.get("held_fixed"):
+        rows.append(("held fixed", s["held_fixed"]["meaning"]))
+    if s.get("round_off"):
+        rows.append(("round-off", s["round_off"]))
     rows.append(("", f"{'parameter':<14} {'value':>10} {'unit':<6} {'d angle (deg)':>14} {'d tip x (mm)':>13} {'d tip y (mm)':>13} {'fold':>10}"))
     for name, r in s["parameters"].items():
         fold = "-" if r["fold_distance"] is None else f"{r['fold_distance']:+.3g}"
@@ -81,14 +89,15 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
     u = d["uncertainty"]
     given = ", ".join(f"{s['name']} {s['sigma']:.4g} {s['unit']}" + (" (uniform)" if s["distribution"] == "uniform" else "") for s in u["sigmas"])
     rows = [("sigmas", given)]
-    if u["std_total_angle_deg"] is None:
+    first = u["std_total_angle_deg"] is not None
+    if not first:  # first order refuses (near a fold): the Monte Carlo, when run, is still reported below
         rows.append(("uncertainty", f"{u['status']}: {u['message']}"))
-        return rows
-    e = u["tip_ellipse_95"]
-    rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
-                                f"95 % tip ellipse {e['semi_axes_mm'][0]:.3g} x {e['semi_axes_mm'][1]:.3g} mm at {e['angle_deg']:.1f} deg from x"))
-    if u["status"] != "ok":
-        rows.append(("NOT LINEAR", u["message"]))
+    else:
+        e = u["tip_ellipse_95"]
+        rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
+                                    f"95 % tip ellipse {e['semi_axes_mm'][0]:.3g} x {e['semi_axes_mm'][1]:.3g} mm at {e['angle_deg']:.1f} deg from x"))
+        if u["status"] != "ok":
+            rows.append(("NOT LINEAR", u["message"]))
     mc = d.get("monte_carlo")
     if mc:
         c = mc["counts"]
@@ -104,12 +113,15 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
         if st:
             where = f"; samples in {st['out']}" + (f" (resumed at sample {st['resumed_from_sample']})" if st.get("resumed_from_sample") else "") if st.get("out") else ""
             rows.append(("solved", f"{st['runner']} in {st['seconds']:.1f} s{where}"))
-        rows.append(("agreement", d["agreement"]["verdict"]))
+        if first:
+            rows.append(("agreement", d["agreement"]["verdict"]))
+        else:
+            rows.append(("agreement", f"none to judge: first order gives no answer ({u['status']}, above); the Monte Carlo is the estimate"))
     return rows
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    from esba.statics.equilibrium import EquilibriumError, SolverOptions, solve
+    from esba.statics.equilibrium import EquilibriumError, SolverOptions, SolverOptionsError, solve
 
     if args.no_plot and args.plot is not None:
         raise UsageError("--plot and --no-plot: give one of the two")
@@ -142,7 +154,17 @@ def _cmd_solve(args: argparse.Namespace) -> int:
             check_samples(args.monte_carlo, scene.segments, len(sigmas))  # before the nominal solve
         except UncertaintyError as exc:
             raise UsageError(f"--monte-carlo: {exc}") from None
-    options = SolverOptions(max_iter=args.max_iter, continuation=not args.no_continuation)
+    if args.no_continuation and args.history is not None:
+        raise UsageError("--history and --no-continuation: a history is a continuation; give one of the two")
+    try:
+        options = SolverOptions(
+            max_iter=args.max_iter,
+            continuation=not args.no_continuation,
+            history=args.history or "inflate-then-load",
+            multistability=args.multistability,
+        )
+    except SolverOptionsError as exc:
+        raise UsageError(f"--history: {exc}") from None
     try:
         result = solve(scene, options)
     except EquilibriumError as exc:
@@ -183,12 +205,14 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if figure is not None:
         from esba.figures.scenes import save_figure, solve_figure
 
-        unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False), pressure=result.pressure)
+        unloaded = solve(scene.replace(payloads=tuple(p.scaled(0.0) for p in scene.payloads), gravity=False), SolverOptions(multistability="never"), pressure=result.pressure)
         cov = propagation.cov_tip if propagation is not None and propagation.has_numbers else None
         tips = mc.tip[mc.ok] if mc is not None else None
         data["figure"] = str(save_figure(solve_figure(result, unloaded, tip_cov=cov, samples=tips), figure).resolve())
     print_result(args, data, _solve_table)
     warn_findings(result.validity)
+    if result.multistable:
+        print(f"esba: warning: {result.multistability.message}", file=sys.stderr)
     for line in data.get("uncertainty", {}).get("outside_domain", ()):
         print(f"esba: warning: {line}", file=sys.stderr)
     if mc is not None and mc.counts["ok"] < 2:
@@ -251,6 +275,23 @@ def _seed(text: str) -> int:
     return value
 
 
+def _history_arg(text: str):
+    """``--history``: a name, or steps ``P:L,P:L,...`` of pressure and load fractions."""
+    text = text.strip()
+    if ":" not in text:
+        return text  # a name: SolverOptions says which are allowed
+    steps = []
+    for part in text.split(","):
+        bits = part.split(":")
+        if len(bits) != 2:
+            raise argparse.ArgumentTypeError(f"--history {text!r}: each step is P:L (pressure and load fractions, 0 to 1), e.g. 0:1,1:1")
+        try:
+            steps.append((checks.number("--history", bits[0]), checks.number("--history", bits[1])))
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    return tuple(steps)
+
+
 def add_solve(sub) -> None:
     p = sub.add_parser("solve", help="solve a scene's equilibrium (no arguments: the paper's Table 2 case, n = 3)")
     add_scene_flags(p)
@@ -258,6 +299,19 @@ def add_solve(sub) -> None:
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--max-iter", type=count_arg("max_iter", 1, _MAX_ITER, "an equilibrium takes tens of iterations"), default=200, metavar="N", help="IPOPT iterations per solve (default 200, at most 100000)")
     p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
+    p.add_argument(
+        "--history",
+        type=_history_arg,
+        metavar="HISTORY",
+        help="the load history: inflate-then-load (default), load-then-inflate, together, or steps of (pressure, load) "
+        "fractions P:L,P:L,... ending at 1:1 (e.g. 0.5:0,0.5:1,1:1); where the scene is multistable it decides the state",
+    )
+    p.add_argument(
+        "--multistability",
+        choices=("auto", "always", "never"),
+        default="auto",
+        help="look for other stable states (auto: when n <= 8, where it costs about a solve)",
+    )
     p.add_argument("--sensitivities", action="store_true", help="d(angles, tip)/d(parameter) for every scene parameter (exact, implicit function theorem)")
     p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="uncertain parameter: E=0.05 (in its unit), E=10%%, r2=±0.1 (a tolerance); repeatable; propagated to first order")
     p.add_argument("--monte-carlo", type=_sample_count, metavar="N", help="check the first-order uncertainty with N Monte Carlo samples on the batch path (e.g. 10000)")
@@ -281,12 +335,16 @@ def _stiffness_table(d: dict) -> str:
     def k(v):
         return "unbounded (the tip does not move that way to first order)" if v is None or not math.isfinite(v) else f"{v:.3f} N/m"
 
-    lines.append(f"tangent at F = 0: horizontal {k(t['horizontal_n_per_m'])}, vertical {k(t['vertical_n_per_m'])}")
+    lines.append(f"tangent stiffness of the unloaded state (F = 0, {d['initial_angle_deg']:.2f} deg), where every secant K starts "
+                 "(C = J H^-1 J^T the tip's compliance there):")
+    lines.append(f"  along the force, the tip free to move across it, 1 / (u^T C u) (the limit of K as F -> 0): "
+                 f"horizontal {k(t['horizontal_n_per_m'])}, vertical {k(t['vertical_n_per_m'])}")
     if t["matrix_n_per_m"] is not None:
         m = t["matrix_n_per_m"]
-        lines.append(f"K_tip (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]")
+        lines.append(f"  K_tip = C^-1 (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]: "
+                     "each diagonal entry holds the tip still in the other direction, so it is stiffer than the value above")
     else:
-        lines.append("K_tip: singular (one segment moves the tip along one direction only)")
+        lines.append("  K_tip: singular (one segment moves the tip along one direction only)")
     for msg in d["messages"]:
         lines.append(f"NOT OK: {msg}")
     return "\n".join(lines)

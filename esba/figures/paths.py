@@ -96,6 +96,14 @@ def draw_loading(ax: Axes, ramps: Sequence[Ramp], y: str = "total-angle", swap: 
                 xs, ys = ys, xs
             ax.plot(xs, ys, color=color, lw=6, alpha=0.25, solid_capstyle="round", label=names[k % 2] if first else None)
             first = False
+        # a branch point passed without a jump: the state goes on from it to the crossing branch's first point
+        for a, b in zip(ramp.pieces, ramp.pieces[1:]):
+            if len(a) and len(b) and any(abs(float(a.lam[-1]) - bp.lam) <= 1e-9 * (1.0 + abs(bp.lam)) for bp in ramp.branch_points):
+                xs = np.array([a.lam[-1], b.lam[0]])
+                ys = np.array([branch_values(a, y)[-1], branch_values(b, y)[0]])
+                if swap:
+                    xs, ys = ys, xs
+                ax.plot(xs, ys, color=color, lw=6, alpha=0.25, solid_capstyle="round")
         for j in ramp.jumps:
             a = _point_value(j.theta_before, j.tip_before, y)
             b = _point_value(j.theta_after, j.tip_after, y)

@@ -13,8 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from esba.analysis.path_cases import COLUMN_NS, FOLD_NS, PathCases, path_cases
+from esba.analysis.path_cases import COLUMN_NS, FOLD_NS, WINDOW_TO, PathCases, path_cases
 from esba.figures.paths import path_figure
+from esba.paths.continuation import SIDES
 
 from .page import TIMES, Page, Progress, Rendered, Times
 
@@ -32,6 +33,109 @@ def _fold_row(label: str, folds: list[float]) -> str:
 
 def _fmt_folds(folds: list[float], digits: int = 5) -> str:
     return ", ".join(f"{f:.{digits}f}" for f in folds) if folds else "none"
+
+
+def _side_rows(data: PathCases) -> list[tuple[dict, dict | None, dict | None]]:
+    rows = []
+    for row in data.buckling:
+        sides = {s["direction"]: s for s in row["sides"]}
+        rows.append((row, sides.get(SIDES[0]), sides.get(SIDES[1])))
+    return rows
+
+
+def _column_summary(data: PathCases) -> list[str]:
+    """What the buckling table says, in words computed from it: the branch points' types and which
+    side carries load and is stable."""
+    kinds = sorted({row.get("bifurcation") for row in data.buckling if row.get("bifurcation")})
+    if not kinds:
+        return ["No branch point was found on these traces."]
+    out = [f"The branch point is classified from the third derivative of U along the null vector phi, c = d3U[phi, phi, phi]"
+           " (transcritical when c is not zero: the crossing branch passes through with the load changing; pitchfork"
+           f" when it is: both sides leave at constant load). Here every one is **{' / '.join(kinds)}**"
+           + (" (the eccentric chamber makes U not even in theta)." if kinds == ["transcritical"] else ".")]
+    for name, other in ((SIDES[0], SIDES[1]), (SIDES[1], SIDES[0])):
+        idx = 1 if name == SIDES[0] else 2
+        rows = [r[idx] for r in _side_rows(data) if r[idx] is not None]
+        if rows and all(s["load_after"] == "falls" and not s["stable_at_first"] for s in rows):
+            folded = all(s["folds_n"] for s in rows)
+            out.append(
+                f"Bending {name.replace('chamber', 'the chamber')} sheds load and is unstable"
+                + (", and turns stable again only at a fold far from the straight state; between that fold and the"
+                   " buckling load the straight actuator and the bent one are both stable." if folded else ".")
+            )
+        elif rows and all(s["load_after"] == "rises" and s["stable_at_first"] for s in rows):
+            out.append(f"Bending {name.replace('chamber', 'the chamber')} carries more load and is stable: the actuator buckles smoothly that way.")
+    return [" ".join(out)]
+
+
+def _designer_column(data: PathCases) -> str:
+    """The designer's sentence about buckling: which way it bends, from the table."""
+    rows = _side_rows(data)
+    stable = [name for name, idx in ((SIDES[0], 1), (SIDES[1], 2)) if rows and all(r[idx] is not None and r[idx]["stable_at_first"] and r[idx]["load_after"] == "rises" for r in rows)]
+    if len(stable) != 1:
+        return "with no one side stable at every n (the table above)."
+    other = SIDES[1] if stable[0] == SIDES[0] else SIDES[0]
+    return (f"bending {stable[0].replace('chamber', 'its chamber')}; bent {other.replace('chamber', 'the chamber')} it is stable only"
+            " beyond the fold, so a small disturbance that way near the buckling load can make it snap to a large bend.")
+
+
+def _window_section(data: PathCases) -> list[str]:
+    """The snapping window of the payload magnitude near 122.2 degrees, each direction's behaviour computed."""
+    crossing = _window_crossing(data)
+    lines = [
+        f"## Payload magnitude near {np.mean([w['omega_deg'] for w in data.window]):.1f} degrees: a narrow window that snaps",
+        "",
+        f"With the pressure held at its 90 degree value and the payload's magnitude raised from 0 to {WINDOW_TO:g} N",
+        f"(`esba path --param payload --target-angle 90 --payload-angle OMEGA --from 0 --to {WINDOW_TO:g}`, default steps),",
+        f"two branches almost cross {crossing}, and hundredths of a degree decide the path:",
+        "",
+        "| Omega (deg) | folds, N (total angle, deg) | loading 0 -> 6 N | unloading 6 -> 0 N | angle at 6 N (deg) |",
+        "|---|---|---|---|---|",
+    ]
+
+    def jumps(js: list) -> str:
+        return "; ".join(f"snaps at the {k} {lam:.6f} N by {dist:.1f} mm ({a:.1f} -> {b:.1f} deg)" for k, lam, dist, a, b in js) or "no jump"
+
+    for w in data.window:
+        folds = ", ".join(f"{lam:.6f} ({ang:.1f})" for lam, ang in w["folds"]) or "none"
+        if w["branch_points"]:
+            folds += "; branch points " + ", ".join(f"{lam:.6f}" for lam in w["branch_points"])
+        lines.append(f"| {w['omega_deg']:g} | {folds} | {jumps(w['jumps_up'])} | {jumps(w['jumps_down'])} | {w['end_angle_deg']:.1f} |")
+    lines.append("")
+    for w in data.window:
+        o = f"{w['omega_deg']:g} deg"
+        if w["folds"] and w["jumps_up"]:
+            _, _, _, before, after = w["jumps_up"][0]
+            way = "further away from the chamber" if after > before else "back towards the chamber"
+            back = f"; unloading snaps back at {w['jumps_down'][0][1]:.6f} N" if w["jumps_down"] else "; unloading does not snap back"
+            lines.append(
+                f"- At {o} the stable branch bends on until the fold at **{w['folds'][0][0]:.6f} N**, where loading snaps"
+                f" to the far branch, bending {way}{back}."
+            )
+        elif not w["folds"] and not w["jumps_up"]:
+            way = "back towards the chamber" if w["end_angle_deg"] < 90 else "on away from the chamber"
+            lines.append(f"- At {o} the path is monotonic: no fold, no snap; the actuator bends {way} ({w['end_angle_deg']:.1f} deg at {WINDOW_TO:g} N).")
+    lines += [
+        "",
+        "Inside the window a neighbouring branch passes close to the path's first fold, and a long step of the",
+        "continuation can land on it. The trace rejects such a step: a change of stability is a",
+        "branch point only when the extended system says so (dg/dlambda orthogonal to the null vector, as at a",
+        "branch point, not at a fold), and a step whose stability changes while lambda does not turn back and",
+        "that test fails has left the branch; it is halved until the fold is resolved."
+        + (" Every special point of these paths is a fold; none is a branch point." if not any(w["branch_points"] for w in data.window) else ""),
+        "",
+    ]
+    return lines
+
+
+def _window_crossing(data: PathCases) -> str:
+    """Where the branches of the window cross over: between the last direction whose path bends back
+    towards the chamber and the first whose path folds (from the cases, not a fixed number)."""
+    back = [w["omega_deg"] for w in data.window if not w["folds"] and w["end_angle_deg"] < 90]
+    folded = [w["omega_deg"] for w in data.window if w["folds"]]
+    if back and folded and max(back) < min(folded):
+        return f"between Omega = {max(back):g} and {min(folded):g} deg"
+    return "in this range of Omega"
 
 
 def render_page(data: PathCases, command: str) -> str:
@@ -82,6 +186,10 @@ def render_page(data: PathCases, command: str) -> str:
             if data.history_mpa is not None
             else "."
         ),
+        "That is `solve`'s default history; `--history load-then-inflate` (or `together`, or a list of steps)",
+        "chooses another, and `solve` names the other stable state when there is one. Every equilibrium of",
+        "the window, the saddle between the two stable states and the energy barriers are on",
+        "[equilibria.md](equilibria.md).",
         "",
         f"![pressure path under 2 N]({fig_rel / rel['pressure']})",
         "",
@@ -122,20 +230,26 @@ def render_page(data: PathCases, command: str) -> str:
         "",
         "`esba path --param omega --to 150` draws this figure.",
         "",
+    ]
+    lines += _window_section(data)
+    lines += [
         "## The straight actuator pushed along its axis",
         "",
         "At P = 0 the straight state is an equilibrium under any compressive tip load (Omega = 180 deg). It",
         "loses stability at a branch point where the Hessian at theta = 0 turns singular; the closed form",
         "is F = k0 / lambda_max(-X''), with k0 the elastic stiffness of a segment at theta = 0 (Eq. 8 and",
-        "Eq. 13) and X'' the Hessian of the tip's x (`esba.analysis.path_analysis.column_buckling_load`). The trace finds:",
+        "Eq. 13) and X'' the Hessian of the tip's x (`esba.analysis.path_analysis.column_buckling_load`).",
+        "The two sides of the crossing branch are named by the way they bend: the chamber lies on the convex",
+        "side of a theta > 0 bend (inflating bends the actuator away from its chamber), so theta > 0 bends",
+        "*away from* the chamber and theta < 0 *towards* it. The trace finds:",
         "",
-        "| n | closed form (N) | traced (N) | relative difference | towards the chamber | away from it |",
-        "|---|---|---|---|---|---|",
+        "| n | closed form (N) | traced (N) | relative difference | type | bending away from the chamber (theta > 0) | bending towards it (theta < 0) |",
+        "|---|---|---|---|---|---|---|",
     ]
     for row in data.buckling:
         diff = "-" if row["traced_n"] is None else f"{abs(row['traced_n'] / row['closed_form_n'] - 1):.1e}"
         traced = "-" if row["traced_n"] is None else f"{row['traced_n']:.6f}"
-        sides = {s["direction"].split(" (")[0]: s for s in row["sides"]}
+        sides = {s["direction"]: s for s in row["sides"]}
 
         def describe(s: dict | None) -> str:
             if s is None:
@@ -145,18 +259,13 @@ def render_page(data: PathCases, command: str) -> str:
                 text += f"; fold at {s['folds_n'][0]:.4f} N ({s['fold_angles_deg'][0]:.1f} deg)"
             return text
 
+        kind = row.get("bifurcation") or "-"
         lines.append(
-            f"| {row['n']} | {row['closed_form_n']:.6f} | {traced} | {diff} | {describe(sides.get('towards the chamber'))} | "
-            f"{describe(sides.get('away from the chamber'))} |"
+            f"| {row['n']} | {row['closed_form_n']:.6f} | {traced} | {diff} | {kind} | {describe(sides.get(SIDES[0]))} | "
+            f"{describe(sides.get(SIDES[1]))} |"
         )
+    lines += ["", *_column_summary(data), ""]
     lines += [
-        "",
-        "The eccentric chamber makes the energy not even in theta, so the bifurcation is transcritical, not",
-        "a symmetric pitchfork: bending away from the chamber carries more load and is stable (the actuator",
-        "buckles smoothly that way), while bending towards the chamber sheds load, is unstable, and turns",
-        "stable again only at a fold far from the straight state. Between that fold and the buckling load",
-        "the straight actuator and the bent one are both stable.",
-        "",
         f"![column path, n = 4]({fig_rel / rel['column']})",
         "",
         "`esba path --param payload --pressure 0 --payload 1 --payload-angle 180 -n 4 --to 6.4` draws this figure.",
@@ -172,8 +281,10 @@ def render_page(data: PathCases, command: str) -> str:
         f"  flips back only below {d_folds[0]:.1f} degrees: tasks with the load in that direction are where a snap is to",
         "  be expected.",
         f"- A straight, unpressurised actuator pushed along its axis buckles at {column_text},",
-        "  bending away from its chamber; bent towards the chamber it is stable only beyond the fold, so a",
-        "  small disturbance in that direction near the buckling load can make it snap to a large bend.",
+        f"  {_designer_column(data)}",
+        f"- Near a payload direction where two branches almost cross ({_window_crossing(data)}, at the 90 degree",
+        "  pressure), a change of the direction by hundredths of a degree decides whether loading snaps and",
+        "  which way the actuator ends up bending (the window above).",
         f"- The folds converge fast in n: n = 3, as in the paper, places them within {fold_gap:.2f} kPa of n = {FOLD_NS[-1]}.",
         "",
     ]

@@ -1,6 +1,6 @@
 """``docs/performance.md``: the benchmarks' page, one section per ``esba bench`` command.
 
-Three sections, each written by its own command (:mod:`esba.pages.sections`) from the data of a
+Four sections, each written by its own command (:mod:`esba.pages.sections`) from the data of a
 benchmark in :mod:`esba.bench`:
 
 ==========  ====================================================  =====================================
@@ -9,6 +9,7 @@ section     command                                               data
 generation  ``esba bench generation --markdown docs/performance.md``  :func:`esba.bench.timing.generation`
 solve       ``esba bench solve --markdown docs/performance.md``       :func:`esba.bench.solve.solve_benchmark`
 path        ``esba bench path --markdown docs/performance.md``        :func:`esba.bench.path.path_benchmark`
+maps        ``esba bench maps --markdown docs/performance.md``        :func:`esba.bench.maps.maps_benchmark`
 ==========  ====================================================  =====================================
 
 Each renderer writes its times through :class:`esba.pages.page.Times`, so that ``esba docs --check
@@ -36,7 +37,10 @@ __all__ = [
     "PathSettings",
     "generation_table",
     "solve_table",
+    "multistability_table",
     "path_table",
+    "MapsSettings",
+    "maps_table",
     "PERFORMANCE_TITLE",
     "SECTIONS",
 ]
@@ -44,7 +48,7 @@ __all__ = [
 #: The title of the benchmarks' page.
 PERFORMANCE_TITLE = "# Performance"
 #: The sections, in the page's order.
-SECTIONS = ("generation", "solve", "path")
+SECTIONS = ("generation", "solve", "path", "maps")
 #: Where the commands' ``--markdown`` writes in the committed page.
 _DOC = "docs/performance.md"
 
@@ -209,7 +213,43 @@ def _solve_body(data: dict, t: Times) -> str:
             "NumPy with one BLAS thread (`esba/infra/threads.py`).",
             f"At n = {first['n']} the compiled ramp alone takes {_ms(first['compiled_s'], t)} ms of esba's {_ms(first['esba_s'], t)} ms.",
         ]
+        + _multistability_section(data.get("multistability") or [], t)
     )
+
+
+def multistability_table(rows: list[dict], t: Times = TIMES) -> str:
+    """The cost of looking for other stable states, against the solve (milliseconds)."""
+    head = f"{'scene':<18} {'n':>4} {'solve() ms':>11} {'check ms':>9} {'check/solve':>11} {'by default':>10} {'equilibria() ms':>15} {'stable':>6} {'all':>4}"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(
+            f"{r['scene']:<18} {r['n']:>4} {_ms(r['solve_s'], t):>11} {_ms(r['check_s'], t):>9} {t(r['check_s'] / r['solve_s'], '.1f') + 'x':>11} "
+            f"{'yes' if r['by_default'] else 'no':>10} {_ms(r['equilibria_s'], t):>15} {r['stable_found']:>6} {r['states']:>4}"
+        )
+    return "\n".join(lines)
+
+
+def _multistability_section(rows: list[dict], t: Times) -> list[str]:
+    if not rows:
+        return []
+    return [
+        "",
+        "### Looking for other stable states",
+        "",
+        "`solve()` says when its scene is multistable (`esba/statics/equilibria.py`): a deflated Newton search",
+        "(9 constant-curvature starts, 15 Newton steps per round, the state the history reached deflated from",
+        "the first round; each round one call of a compiled CasADi graph around the O(n) Newton kernel).",
+        "It runs by default up to n = 8, where it costs about as much as the solve on the Table 2 scene (whose",
+        "solve() takes the fast path); beyond, the result says that it did not look (`--multistability always`",
+        "looks). `equilibria()` (`esba equilibria`) is the full search: the load history, 25 starts, the",
+        "completeness check from fresh starts and the barriers (descent from each saddle). Second scene: the",
+        "bistable window (P = 0.17 MPa under the 2 N horizontal tip payload). solve() here without the check;",
+        "stable: the stable states the check found; all: the equilibria `equilibria()` found.",
+        "",
+        "```",
+        multistability_table(rows, t),
+        "```",
+    ]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -280,6 +320,61 @@ def _path_body(rows: Sequence[Any], t: Times) -> str:
 
 
 # ---------------------------------------------------------------------------------------------
+# stability maps
+
+
+@dataclass(frozen=True)
+class MapsSettings:
+    """``esba bench maps``: runs per timing of the fold curves, the brute-force grid's size, and the command the section names."""
+
+    repeat: int = 3
+    k: int = 20
+    command: str = f"esba bench maps --repeat 3 --markdown {_DOC}"
+
+
+def maps_table(rows: Sequence[Any], t: Times = TIMES) -> str:
+    """The maps benchmark as a fixed-width table."""
+    head = f"{'map':<18} {'curves':>6} {'points':>6} {'special':>7} {'trace s':>8} {'points/s':>9} {'grid':>7} {'grid s':>7} {'ms/cell':>8} {'grid/trace':>10} {'cells agree':>12}"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(
+            f"{r.name:<18} {r.curves:>6} {r.points:>6} {r.special:>7} {t(r.trace_s, '.3f'):>8} {t(r.points_per_s, '.0f'):>9} "
+            f"{f'{r.brute_k}x{r.brute_k}':>7} {t(r.brute_s, '.1f'):>7} {t(r.cell_ms, '.1f'):>8} {t(r.speedup, '.0f') + 'x':>10} "
+            f"{f'{r.agree}/{r.brute_k ** 2}':>12}"
+        )
+    lines += [
+        "trace: esba.analysis.folds.fold_curves (seeding path traces, continuation of the extended system, cusps and",
+        "  fold/branch-point meetings located to round-off); grid: the stable states counted at every cell centre by a",
+        "  multistart Newton descent (esba.analysis.maps.stable_states), the map's regions compared cell by cell",
+    ]
+    return "\n".join(lines)
+
+
+def _maps_body(rows: Sequence[Any], t: Times) -> str:
+    disagree = [f"{r.name}: {r.brute_k ** 2 - r.agree}" for r in rows if r.agree < r.brute_k**2]
+    return "\n".join(
+        [
+            "## Stability maps",
+            "",
+            "The time to trace each map of [maps.md](maps.md) (its fold curves in two parameters, with their cusps",
+            "and fold/branch-point meetings) against the brute-force grid the map replaces: the number of stable",
+            "states counted at each cell of a grid by a multistart Newton descent. The grid resolves a fold to half",
+            "a cell; the curves locate it to round-off. Medians of the traces over repeated runs, the grid once, on",
+            "a shared 2-core machine.",
+            "",
+            t.word(_versions()),
+            "",
+            "```",
+            maps_table(rows, t),
+            "```",
+            "",
+            "Every cell of each grid agrees with the map's regions." if not disagree else
+            "Cells where the grid and the map differ (each next to a fold curve): " + "; ".join(disagree) + ".",
+        ]
+    )
+
+
+# ---------------------------------------------------------------------------------------------
 # the page
 
 
@@ -289,7 +384,7 @@ class PerformancePage(Page):
     name = "performance"
 
     def settings(self) -> dict[str, Any]:
-        return {"generation": GenerationSettings(), "solve": SolveSettings(), "path": PathSettings()}
+        return {"generation": GenerationSettings(), "solve": SolveSettings(), "path": PathSettings(), "maps": MapsSettings()}
 
     def check_settings(self) -> dict[str, Any]:
         return {k: dataclasses.replace(s, repeat=1) for k, s in self.settings().items()}
@@ -309,6 +404,10 @@ class PerformancePage(Page):
             from esba.bench.solve import solve_benchmark
 
             return solve_benchmark(repeat=settings.repeat, progress=progress)
+        if key == "maps":
+            from esba.bench.maps import maps_benchmark
+
+            return maps_benchmark(repeat=settings.repeat, k=settings.k, progress=progress)
         if key == "path":
             from esba.bench.path import path_benchmark
 
@@ -317,7 +416,7 @@ class PerformancePage(Page):
 
     def section(self, key: str, data: Any, settings: Any, times: Times = TIMES) -> str:
         """One section's block, as it stands in the page."""
-        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body}[key](data, times)
+        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body}[key](data, times)
         return section_block(key, body, settings.command)
 
     def render(self, data: dict[str, Any], settings: dict[str, Any], path: Path, times: Times = TIMES) -> Rendered:
@@ -325,7 +424,7 @@ class PerformancePage(Page):
 
     def write_section(self, path: str | Path, key: str, data: Any, settings: Any) -> Path:
         """Write (or replace) one section of the page at ``path``, keeping the others as they are."""
-        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body}[key](data, TIMES)
+        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body}[key](data, TIMES)
         return write_section(path, key, body, settings.command, PERFORMANCE_TITLE)
 
 

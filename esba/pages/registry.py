@@ -6,7 +6,7 @@ page's module when it is asked for.
 Examples
 --------
 >>> list(ENTRIES)
-['derivations', 'validation', 'design', 'paths', 'experiments', 'accuracy-vs-time', 'performance', 'scaling']
+['derivations', 'validation', 'design', 'paths', 'experiments', 'sensing', 'accuracy-vs-time', 'performance', 'scaling', 'equilibria', 'maps']
 >>> [e.name for e in ENTRIES.values() if e.slow]
 ['accuracy-vs-time', 'performance', 'scaling']
 >>> check_names(["paths", "paths", "validation"])
@@ -58,6 +58,8 @@ ENTRIES: dict[str, Entry] = {
               "folds, hysteresis and buckling of the Table 1 actuator"),
         Entry("experiments", "experiments.md", "esba.pages.experiments", "esba experiments --write-doc docs/experiments.md", False,
               "the paper's EXP and FEM values, fits, cross-validation"),
+        Entry("sensing", "sensing.md", "esba.pages.sensing", "esba docs --write sensing", False,
+              "the payload from the shape: errors by measurement, the blind region, Table 3 read back"),
         Entry("accuracy-vs-time", "accuracy-vs-time.md", "esba.pages.accuracy", "esba bench accuracy", True,
               "error against n, tolerance, effects, naive scripts, the batch"),
         Entry("performance", "performance.md", "esba.pages.performance",
@@ -65,6 +67,10 @@ ENTRIES: dict[str, Entry] = {
               "generation, single calls, path tracing"),
         Entry("scaling", "scaling.md", "esba.pages.scaling", "esba bench scaling --markdown docs/scaling.md", True,
               "sweeps in this process and on Dask workers"),
+        Entry("equilibria", "equilibria.md", "esba.pages.equilibria", "esba docs --write equilibria", False,
+              "every equilibrium of the bistable window and the detached branch, barriers"),
+        Entry("maps", "maps.md", "esba.pages.maps", "esba map --write-doc docs/maps.md", False,
+              "stability maps: fold curves, cusps, regions by stable states, designs clear of folds"),
     )
 }
 

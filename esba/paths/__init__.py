@@ -8,7 +8,8 @@ parameters affine in lambda), :mod:`.corrector` (Newton on the bordered system, 
 O(n) kernel), :mod:`.locate` (folds and branch points, located), :mod:`.branch` (the result: a
 Branch and its special points), :mod:`.continuation` (the engine, PALC's trace and branch
 switching) and :mod:`.loading` (quasi-static load histories: natural first, pseudo-arclength
-through folds, jumps where the stable branch ends). :func:`esba.statics.equilibrium.solve`, the
+through folds, jumps where the stable branch ends) and :mod:`.extended` (curves of an extended
+system in two parameters, such as fold curves, with the zeros of their test functions located). :func:`esba.statics.equilibrium.solve`, the
 batch, the design evaluator and the stiffness all stand on it. May import :mod:`esba.solvers`,
 :mod:`esba.model` and :mod:`esba.infra`.
 """

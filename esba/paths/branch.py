@@ -65,6 +65,18 @@ class SpecialPoint:
         How it was located.
     index : int
         Its row in the branch's arrays.
+    orthogonality : float
+        |phi . dg/dlambda| / |dg/dlambda| at the point (phi its critical vector): 0 at a branch point,
+        where dg/dlambda is orthogonal to the null vector (Moore's extended system), not at a fold;
+        nan for user points. :data:`esba.paths.locate.BRANCH_ORTHOGONALITY` separates the two.
+    bifurcation : str
+        For a branch point, its type from the third derivative of U along the null vector,
+        c = d3U[phi, phi, phi] (:func:`esba.paths.locate.classify_branch_point`): ``transcritical``
+        (c != 0: the crossing branch passes through with lambda changing, so one side carries more
+        load than the branch point and the other less) or ``pitchfork`` (c = 0: the crossing branch
+        leaves tangent to lambda = const, both sides alike to first order); empty for other points.
+    cubic : float
+        That c, N mm/rad^3 (nan when not a branch point).
     """
 
     kind: str
@@ -80,6 +92,9 @@ class SpecialPoint:
     method: str
     index: int = -1
     arclength: float = math.nan
+    orthogonality: float = math.nan
+    bifurcation: str = ""
+    cubic: float = math.nan
 
     @property
     def label(self) -> str:
@@ -108,6 +123,9 @@ class SpecialPoint:
             "bracket": list(self.bracket),
             "method": self.method,
             "index": self.index,
+            "orthogonality": None if not math.isfinite(self.orthogonality) else self.orthogonality,
+            "bifurcation": self.bifurcation or None,
+            "cubic": None if not math.isfinite(self.cubic) else self.cubic,
         }
 
 

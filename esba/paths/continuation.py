@@ -22,7 +22,9 @@ BifurcationKit), with the model's exact derivatives:
   [[H, dg/dlambda], [t^T]] with the arclength ds^2 = w |dtheta|^2 + (dlambda / sigma)^2 (w = n, so
   that a step means about the same change of the total angle whatever n is; sigma a typical size of
   lambda), adaptive step (grown or shrunk towards ``target_iterations`` corrector iterations,
-  rejected and halved on a failed corrector, a sharp turn or two eigenvalue crossings in one step),
+  rejected and halved on a failed corrector, a sharp turn, a chord far steeper than the turn (a landing on another branch),
+  two eigenvalue crossings in one step, or a change of stability that is neither a turn of lambda
+  (a fold) nor a branch point by the extended system: the step left the branch),
   stops exactly at the parameter bounds, at a step count, a total-angle or user event, at the
   model's domain boundary, or on returning to the start;
 * **stability** at every point: the Hessian's eigenvalues, the Morse index (the number of negative
@@ -31,7 +33,9 @@ BifurcationKit), with the model's exact derivatives:
   extended system g = 0, H v = 0, v0 . v = 1 (Newton with third derivatives by AD), or by eigenvalue
   bisection (Brent's method on the crossing eigenvalue along the arclength) (``locate``); branch
   points through Moore's extended system (regular there, where the fold system is not), else by
-  bisection. Each has its type, lambda, theta, tip, the critical eigenvector, and a status
+  bisection. A stability change is a branch point only where dg/dlambda is orthogonal to the null
+  vector (:data:`esba.paths.locate.BRANCH_ORTHOGONALITY`); a branch point is classified transcritical
+  or pitchfork from d3U along the null vector (:func:`esba.paths.locate.classify_branch_point`). Each has its type, lambda, theta, tip, the critical eigenvector, and a status
   (``converged`` / ``guess``). A step in which lambda runs against both end tangents (two folds
   inside one step, near a cusp) is halved until they are resolved;
 * **branch switching** (:func:`bifurcating_branches`): at a branch point the directions of the
@@ -75,7 +79,7 @@ from esba.solvers.newton import ACCEPTANCE, FINAL, NEWTON, STEPS, Acceptance, ru
 
 from .branch import Branch, SpecialPoint, branches_csv, write_branches
 from .corrector import Corrector, Point
-from .locate import locate_crossing, locate_value, special_from
+from .locate import BRANCH_ORTHOGONALITY, locate_crossing, locate_value, special_from
 from .problem import PARAMETERS, PathError, PathProblem
 
 _log = logging.getLogger("esba.paths.continuation")
@@ -93,6 +97,8 @@ __all__ = [
     "bifurcating_branches",
     "bifurcation_tangents",
     "crossing_start",
+    "side_of",
+    "SIDES",
     "PARAMETERS",
     "LOCATE_METHODS",
     "branches_csv",
@@ -433,7 +439,12 @@ def trace(
             # this branch, or the step landed on another one
             res = b.residuals
             slack = len(res) >= 3 and res[1] > 1e3 * opts.tol and res[2] > CORRECTOR_CONTRACTION * res[1]
-            reject = (sharp or double or hidden or slack) and ds > opts.ds_min * 1.0000001
+            # the corrector moved far from the predictor: on a smooth arc the chord from a to b leaves
+            # a's tangent by about half the turn between the two tangents (exactly half on a circle);
+            # a chord much steeper than that landed on a neighbouring branch running alongside
+            chord = math.atan2(corr.norm(b.x - a.x - ds * a.tangent), ds)
+            elsewhere = chord > max(CHORD_FACTOR * 0.5 * turn, CHORD_FLOOR)
+            reject = (sharp or double or hidden or slack or elsewhere) and ds > opts.ds_min * 1.0000001
         found = []
         if not reject:
             found = _events_on_segment(corr, a, b, ds, lo, hi, marks, events, opts)
@@ -503,6 +514,14 @@ def trace(
 #: Newton iteration from a predictor inside its region of convergence contracts far faster).
 CORRECTOR_CONTRACTION = 0.25
 
+#: A step is rejected when the angle between its chord and the tangent it started along is more
+#: than CHORD_FACTOR times half the turn between the tangents at its ends (the angle on a smooth
+#: arc) and more than CHORD_FLOOR (radians: below it a nearly straight step is not judged): it landed
+#: on another branch. Halving a step on a smooth arc brings the two angles together, so the rule
+#: cannot stall a trace.
+CHORD_FACTOR = 3.0
+CHORD_FLOOR = math.radians(2.0)
+
 #: The smallest eigenvalue is watched for a hidden sign change (two crossings inside one step) when it
 #: is below this fraction of the largest at both ends of the step.
 WATCH = 0.05
@@ -561,7 +580,15 @@ def _events_on_segment(corr: Corrector, a: Point, b: Point, s_b: float, lo: floa
             idx = int(np.argmin(np.abs(b.eig)))
         kind = "fold" if turned else "branch point"
         pt, status, method, vector = locate_crossing(corr, a, b, s_b, turned, idx, opts.locate)
-        found.append((corr.arclength_of(a, pt), kind, pt, special_from(corr, kind, pt, idx, a, b, status, method, vector)))
+        sp = special_from(corr, kind, pt, idx, a, b, status, method, vector)
+        if kind == "branch point" and not sp.orthogonality <= BRANCH_ORTHOGONALITY:
+            # the stability changed without lambda turning back, but dg/dlambda is not orthogonal to the
+            # null vector: the zero eigenvalue is a fold's, not a branch point's, so the step did not
+            # stay on one branch (it jumped across a fold to a neighbouring one): unlocated, it is rejected
+            why = f"a fold (phi . dg/dlambda / |dg/dlambda| = {sp.orthogonality:.2g}) where lambda did not turn: the step left the branch"
+            sp = replace(sp, kind="fold", status="guess", method=why, bifurcation="", cubic=math.nan)
+            kind = "fold"
+        found.append((corr.arclength_of(a, pt), kind, pt, sp))
         ended = any(k == "end" for _, k, _, _ in found)
         for bound in (lo, hi):
             if turned and not ended and math.isfinite(bound) and (a.lam - bound) * (pt.lam - bound) < 0:
@@ -872,20 +899,27 @@ def crossing_start(corr: Corrector, point: SpecialPoint, sign: float, traced_tan
     """The first point of the crossing branch off a branch point on side ``sign`` (+1 or -1), with its
     tangent and spectrum; None when the corrector cannot land on the new branch.
 
-    The step is halved until the point lands on the new branch, not back on the traced one (its
-    component along the null vector at least half the predicted one).
+    The step is halved until the point lands on the new branch, not back on the traced one: its
+    offset from the branch point lies nearer the new branch's tangent line than half its distance
+    from the traced one's. (That holds whichever of the two crosses the other: leaving the straight
+    column for a bent branch, and leaving a bent branch for the straight column, whose tangent has
+    no component along the null vector.)
     """
-    direction = sign * bifurcation_tangents(corr.prob, point, _branch_tangent(corr.prob, point, traced_tangent), corr.w, corr.sigma)
-    phi = point.eigenvector / np.linalg.norm(point.eigenvector)
+    traced = _branch_tangent(corr.prob, point, traced_tangent)
+    direction = sign * bifurcation_tangents(corr.prob, point, traced, corr.w, corr.sigma)
     anchor = corr.point(point.theta.copy(), point.lam)
     anchor.tangent = direction
+
+    def off_line(d: np.ndarray, t: np.ndarray) -> float:
+        t = t / corr.norm(t)
+        return corr.norm(d - corr.dot(d, t) * t)
+
     ds = corr.opts.ds
     while ds >= corr.opts.ds_min:
         start = corr.on_segment(anchor, ds)
         if start is not None:
-            moved = float((start.theta - point.theta) @ phi)
-            predicted = float(ds * direction[:-1] @ phi)
-            if predicted != 0 and moved / predicted > 0.5:
+            d = start.x - anchor.x
+            if off_line(d, direction) < 0.5 * off_line(d, traced):
                 start.tangent = corr.tangent(start, anchor.tangent)
                 if start.tangent is not None:
                     corr.spectrum(start)
@@ -905,7 +939,9 @@ def bifurcating_branches(
     options: PathOptions | None = None,
     label: str = "",
 ) -> list[Branch]:
-    """Trace the branch that crosses at a branch point, on both sides (two :class:`Branch`).
+    """Trace the branch that crosses at a branch point, on both sides (two :class:`Branch`), each
+    labelled by the way it bends (:func:`side_of`): ``label + "away from chamber"`` or
+    ``label + "towards chamber"`` (the total angle rising or falling from the branch point's).
 
     Parameters
     ----------
@@ -925,13 +961,28 @@ def bifurcating_branches(
         bounds = (min(point.lam, to), max(point.lam, to)) if to is not None else problem.domain
     lo, hi = max(bounds[0], problem.domain[0]), min(bounds[1], problem.domain[1])
     corr = Corrector.for_trace(problem, lo, hi, opts)
+    starts = [crossing_start(corr, point, sign, branch_tangent) for sign in (1.0, -1.0)]
+    sides = [None if st is None else side_of(st.theta, point.theta) for st in starts]
+    if sides[0] is not None and sides[0] == sides[1]:  # both bend the same way (a mode of zero total angle)
+        sides = [f"{sides[0]}, mode +", f"{sides[1]}, mode -"]
     out = []
-    for side, sign in (("+", 1.0), ("-", -1.0)):
-        name = f"{label}{side}" if label else f"bifurcating {side}"
-        start = crossing_start(corr, point, sign, branch_tangent)
+    for start, side, sign in zip(starts, sides, ("+", "-")):
         if start is None:
-            out.append(_branch(corr, [], [], "start", f"no point found off the branch point on side {side}", name))
+            name = f"{label}mode {sign}" if label else f"bifurcating mode {sign}"
+            out.append(_branch(corr, [], [], "start", f"no point found off the branch point along the mode's {sign} side", name))
             continue
+        name = f"{label}{side}" if label else f"bifurcating {side}"
         side_bounds = (min(lo, start.lam), max(hi, start.lam))
         out.append(trace(problem, start.theta, start.lam, bounds=side_bounds, options=opts, tangent=start.tangent, label=name))
     return out
+
+
+#: The two sides of a crossing branch, named by the way they bend: theta > 0 bends the actuator away
+#: from its chamber (the chamber lies on the convex side: inflating bends it away), theta < 0 towards it.
+SIDES = ("away from chamber", "towards chamber")
+
+
+def side_of(theta: np.ndarray, at: np.ndarray) -> str:
+    """Which way a crossing branch leaving the branch point ``at`` through ``theta`` bends: its total
+    angle grows (``"away from chamber"``) or falls (``"towards chamber"``)."""
+    return SIDES[0] if float(np.sum(theta) - np.sum(at)) > 0 else SIDES[1]

@@ -25,11 +25,53 @@ import numpy as np
 from .branch import SpecialPoint
 from .corrector import Corrector, Point
 
-__all__ = ["locate_crossing", "locate_value", "special_from"]
+__all__ = ["locate_crossing", "locate_value", "special_from", "orthogonality", "classify_branch_point", "BRANCH_ORTHOGONALITY", "PITCHFORK_TOL"]
+
+#: A zero eigenvalue of H with critical vector phi is a branch point when |phi . dg/dlambda| is at most
+#: this fraction of |dg/dlambda| (Moore's extended system: dg/dlambda in the range of H), a fold when
+#: it is more. A branch point located to the corrector's tolerance gives about 1e-11; a fold next to
+#: a branch point (an imperfect bifurcation, a near-cusp) gives 1e-3 and more.
+BRANCH_ORTHOGONALITY = 1e-6
+
+#: A branch point is a pitchfork when its cubic coefficient c = d3U[phi, phi, phi] is at most this
+#: fraction of the largest third derivative along phi, ||d(H phi)/dtheta||_2 (or when there is no third
+#: derivative at all: below 1e-12 of ||H||_2), transcritical otherwise.
+PITCHFORK_TOL = 1e-6
 
 
 class _SegmentError(Exception):
     pass
+
+
+def orthogonality(corr: Corrector, pt: Point, phi: np.ndarray) -> float:
+    """|phi . dg/dlambda| / |dg/dlambda| at ``pt`` for its unit critical vector ``phi``: 0 at a branch
+    point, not at a fold. Where dg/dlambda itself vanishes, within 1e3 times the corrector's
+    tolerance over the trace's scale of lambda (|dg/dlambda| sigma <= 1e3 tol: the straight column,
+    an equilibrium under every load), it is 0: the zero eigenvalue there is a branch point's."""
+    gl = pt.gl
+    size = float(np.linalg.norm(gl))
+    if not size * corr.sigma > 1e3 * corr.opts.tol:
+        return 0.0
+    return float(abs(phi @ gl)) / size
+
+
+def classify_branch_point(problem, theta: np.ndarray, lam: float, phi: np.ndarray) -> tuple[str, float]:
+    """(``"transcritical"`` or ``"pitchfork"``, c) at a branch point with unit null vector ``phi``.
+
+    c = phi . D2g[phi, phi] = d3U[phi, phi, phi] is the coefficient of beta^2 in the algebraic
+    bifurcation equation (:func:`esba.paths.continuation.bifurcation_tangents`): with c = 0 the crossing
+    branch leaves along (phi, 0), at constant lambda (a pitchfork); with c != 0 its lambda changes
+    linearly with the amplitude along phi, rising on one side and falling on the other
+    (transcritical). The rule: :data:`PITCHFORK_TOL`."""
+    phi = np.asarray(phi, dtype=float)
+    phi = phi / np.linalg.norm(phi)
+    _, h, _ = problem.ghl(theta, lam)
+    _, hv_t, _, _ = problem.fold_terms(theta, lam, phi)
+    cubic = float(phi @ hv_t @ phi)
+    third = float(np.linalg.norm(hv_t, 2))
+    if third <= 1e-12 * float(np.linalg.norm(h, 2)) or abs(cubic) <= PITCHFORK_TOL * third:
+        return "pitchfork", cubic
+    return "transcritical", cubic
 
 
 def special_from(
@@ -46,9 +88,13 @@ def special_from(
     else:
         corr.spectrum(pt)
         eigval, vec = float(pt.eig[idx]), pt.vec[:, idx].copy()
+    orth, bifurcation, cubic = float("nan"), "", float("nan")
     if idx is not None:
         k = int(np.argmax(np.abs(vec)))
         vec = vec * np.sign(vec[k])  # a sign convention: the largest component positive
+        orth = orthogonality(corr, pt, vec)
+        if kind == "branch point":
+            bifurcation, cubic = classify_branch_point(corr.prob, pt.theta, pt.lam, vec)
     return SpecialPoint(
         kind=kind,
         lam=float(pt.lam),
@@ -61,6 +107,9 @@ def special_from(
         status=status,
         bracket=(float(a.lam), float(b.lam)),
         method=method,
+        orthogonality=orth,
+        bifurcation=bifurcation,
+        cubic=cubic,
     )
 
 

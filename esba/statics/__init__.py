@@ -1,6 +1,8 @@
 """Statics: equilibria of scenes, one at a time along its load history or many at once on the compiled batch.
 
-:mod:`.equilibrium` (:func:`~esba.statics.equilibrium.solve`, certified by IPOPT), :mod:`.batch`
+:mod:`.equilibrium` (:func:`~esba.statics.equilibrium.solve`, certified by IPOPT), :mod:`.history`
+(the load histories a solve can follow), :mod:`.equilibria` (every equilibrium of a scene by deflated
+Newton, and solve()'s multistability check), :mod:`.batch`
 (arrays of scenes), :mod:`.batch_options` and :mod:`.compiled` (the batch's settings and its C).
 May import :mod:`esba.paths` and everything below it.
 """

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -45,14 +45,17 @@ from esba.infra import checks
 from esba.infra.errors import EquilibriumError, InputError
 from esba.infra.threads import single_threaded
 from esba.model import resolution
-from esba.model.closed_form import load_parameter, pressure_for_angle
+from esba.model.closed_form import pressure_for_angle
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Scene, SceneError, check_pressure
 from esba.model.stability import STABILITY, stability_verdict, stability_verdicts
 from esba.model.validity import Finding, assess
-from esba.paths.continuation import Natural, PathOptions, PathProblem, SpecialPoint
-from esba.paths.loading import Jump, Ramp, follow
+from esba.paths.continuation import PathOptions, SpecialPoint
+from esba.paths.loading import Jump
 from esba.solvers.minimise import LINEAR_SOLVERS, minimise
+
+from .equilibria import AUTO_MAX_SEGMENTS, MULTISTABILITY, Multistability, check_multistability, not_looked
+from .history import DEFAULT_HISTORY, HistoryError, LoadHistory, _unloaded, history_name, history_steps, load_history
 
 __all__ = [
     "SolverOptions",
@@ -65,6 +68,10 @@ __all__ = [
     "stability_verdict",
     "stability_verdicts",
     "STABILITY",
+    "LoadHistory",
+    "load_history",
+    "HistoryError",
+    "Multistability",
 ]
 
 
@@ -121,6 +128,13 @@ class SolverOptions:
         absolute value) of zero is ``critical``; below that ``unstable``, above ``stable``.
     samples_per_segment : int
         Centre-line samples per segment in the result (>= 1).
+    history : str or sequence of (float, float)
+        The load history (:mod:`esba.statics.history`): ``inflate-then-load`` (the default),
+        ``load-then-inflate``, ``together``, or a list of (pressure, load) fraction steps ending
+        at (1, 1). Where the scene is multistable it decides the state reached.
+    multistability : str
+        Look for other stable states of the scene (:func:`esba.statics.equilibria.check_multistability`):
+        ``auto`` (when n <= 8, where the search costs about a solve), ``always`` or ``never``.
 
     Examples
     --------
@@ -142,6 +156,8 @@ class SolverOptions:
     stationarity_tol: float = 1e-7
     critical_tol: float = 1e-9
     samples_per_segment: int = 20
+    history: Any = DEFAULT_HISTORY
+    multistability: str = "auto"
 
     def __post_init__(self) -> None:
         _check_pos("tol", self.tol, 1.0)
@@ -156,6 +172,14 @@ class SolverOptions:
         _check_pos("stationarity_tol", self.stationarity_tol)
         _check_pos("critical_tol", self.critical_tol, 1.0)
         _check_int("samples_per_segment", self.samples_per_segment, 1, MAX_SAMPLES_LIMIT)
+        try:
+            steps = history_steps(self.history)
+        except HistoryError as exc:
+            raise SolverOptionsError(str(exc)) from None
+        if not isinstance(self.history, str):
+            object.__setattr__(self, "history", steps)  # hashable, as the frozen options are
+        if self.multistability not in MULTISTABILITY:
+            raise SolverOptionsError(f"multistability={self.multistability!r}: allowed are {', '.join(MULTISTABILITY)}")
 
 
 DEFAULT_OPTIONS = SolverOptions()
@@ -208,7 +232,8 @@ class Equilibrium:
     steps : int
         Points traced along the load history plus IPOPT solves (1 without continuation).
     solve_time_s : float
-        Wall time of the whole solve, s.
+        Wall time of the whole solve, s (the multistability check's own time is in
+        ``multistability.search_time_s``).
     message : str
         Why the result is not ok (empty when it is).
     notes : tuple of str
@@ -224,6 +249,11 @@ class Equilibrium:
         Where the result leaves the range the paper's model describes (strains past 1, a bend past
         360 deg, the tip behind the base, loads far outside the paper's): see :mod:`esba.model.validity`.
         Empty when it is inside; a result can be ``ok`` and still outside.
+    history : str
+        The load history followed (its name or steps), or how the state was found without one.
+    multistability : Multistability or None
+        The other stable states of the scene, which one the history reached and why, or why
+        ``solve`` did not look (:mod:`esba.statics.equilibria`); None for :func:`evaluate`.
     """
 
     scene: Scene
@@ -248,6 +278,18 @@ class Equilibrium:
     branch_points: tuple[SpecialPoint, ...] = ()
     certificate: str = ""
     validity: tuple[Finding, ...] = ()
+    history: str = ""
+    multistability: Multistability | None = None
+
+    @property
+    def multistable(self) -> bool | None:
+        """True when the scene has other stable states, False when the search found none, None when it did not look."""
+        return None if self.multistability is None else self.multistability.multistable
+
+    @property
+    def other_stable_states(self) -> tuple:
+        """The other stable states found (:class:`esba.statics.equilibria.State`), empty when none or not looked."""
+        return () if self.multistability is None else self.multistability.others
 
     @property
     def ok(self) -> bool:
@@ -308,6 +350,9 @@ class Equilibrium:
             ],
             "certificate": self.certificate,
             "validity": [f.to_dict() for f in self.validity],
+            "history": self.history,
+            "multistable": self.multistable,
+            "multistability": None if self.multistability is None else self.multistability.to_dict(),
             "iterations": self.iterations,
             "steps": self.steps,
             "gradient_norm": self.gradient_norm,
@@ -456,122 +501,6 @@ def evaluate(
     )
 
 
-def _load_value(model: Model, pv_full: np.ndarray, pressure: float, name: str, lam: float) -> str:
-    """Where on a ramp of the load history lambda lies, in the scene's terms (its payloads' forces and
-    weight, from the full load's parameter vector)."""
-    if name == "pressure":
-        return f"P = {lam:.6g} MPa (unloaded)"
-    names = model.parameters
-    forces = [pv_full[i] for i, k in enumerate(names) if k.startswith("F") and k[1:].isdigit()]
-    parts = [f"payload {k} = {f * lam:.6g} N" for k, f in enumerate(forces, start=1)]
-    if "g" in names:
-        parts.append(f"weight {100 * lam:.4g} %")
-    return f"{100 * lam:.6g} % of the loads ({', '.join(parts)}) at P = {pressure:.6g} MPa"
-
-
-@dataclass(frozen=True, eq=False)
-class LoadHistory:
-    """What the quasi-static load history did: inflate (unless the unloaded state is known), then load.
-
-    Attributes
-    ----------
-    theta : ndarray
-        The state reached, rad.
-    ramps : tuple of (str, Ramp)
-        Each ramp (``pressure``, ``load``) and what it did (:class:`esba.paths.loading.Ramp`).
-    message : str
-        Why the history did not reach the full load (empty when it did).
-    """
-
-    theta: np.ndarray
-    ramps: tuple[tuple[str, Ramp], ...]
-    message: str = ""
-
-    @property
-    def jumps(self) -> tuple[Jump, ...]:
-        return tuple(j for _, r in self.ramps for j in r.jumps)
-
-    @property
-    def branch_points(self) -> tuple[SpecialPoint, ...]:
-        return tuple(sp for _, r in self.ramps for sp in r.branch_points)
-
-    def notes(self, model: Model, pv_full: np.ndarray, pressure: float) -> list[str]:
-        """One sentence per buckling and per snap-through on the way, in the scene's terms."""
-        out = []
-        for name, r in self.ramps:
-            for sp in r.branch_points:
-                out.append(
-                    f"the straight-through branch loses stability at a branch point at {_load_value(model, pv_full, pressure, name, sp.lam)}: "
-                    f"the state goes on along the stable crossing branch (buckling)"
-                )
-            for j in r.jumps:
-                out.append(j.describe(_load_value(model, pv_full, pressure, name, j.lam)))
-        return out
-
-    @property
-    def iterations(self) -> int:
-        return sum(r.corrector_iterations + r.ipopt_iterations for _, r in self.ramps)
-
-    @property
-    def points(self) -> int:
-        return sum(r.points + len(r.jumps) for _, r in self.ramps)
-
-
-def _unloaded(model: Model, pv_full: np.ndarray) -> np.ndarray:
-    """The parameter vector with every load (payload forces, g) at 0."""
-    out = np.array(pv_full, dtype=float)
-    out[[i for i, k in enumerate(model.parameters) if load_parameter(k)]] = 0.0
-    return out
-
-
-def load_history(
-    model: Model,
-    pressure: float,
-    pv_full: np.ndarray,
-    unloaded: np.ndarray | None = None,
-    options: SolverOptions | None = None,
-) -> LoadHistory:
-    """The state an actuator reaches along its load history, on the continuation engine.
-
-    From the unloaded state at ``pressure`` (``unloaded`` when it is known, e.g. exact for a target
-    angle; else the pressure is raised from 0 at theta = 0), the payloads and weight are raised
-    together from 0 to ``pv_full``. Each ramp is :func:`esba.paths.loading.follow`: natural
-    continuation first when ``options.fast`` (compiled, O(n), accepted by the one rule), else and
-    otherwise pseudo-arclength continuation through its folds and branch points, snapping where the
-    stable branch ends. The batch (:mod:`esba.statics.batch`) hands its refused elements here.
-    """
-    options = DEFAULT_OPTIONS if options is None else options
-    n = model.n
-    natural = Natural() if options.fast else None
-    names = model.parameters
-    pv_unloaded = _unloaded(model, pv_full)
-    ramps: list[tuple[str, Ramp]] = []
-    if unloaded is not None:
-        theta = np.asarray(unloaded, dtype=float)
-    else:
-        i = names.index("P")
-        p_zero = pv_unloaded.copy()
-        p_zero[i] = 0.0
-        dp = np.zeros(len(names))
-        dp[i] = 1.0  # U is linear in P
-        problem = PathProblem(model, p_zero, dp, "pressure", "MPa", (0.0, math.inf), 0.1, what="pressure")
-        r = follow(problem, np.zeros(n), 0.0, pressure, options.path, ipopt_tol=options.tol, natural=natural)
-        ramps.append(("pressure", r))
-        theta = r.theta
-        if not r.reached:
-            where = _load_value(model, pv_full, pressure, "pressure", r.lam)
-            return LoadHistory(theta, tuple(ramps), f"the pressure ramp from P = 0 stopped at {where}: {r.message}")
-    if np.any(pv_full != pv_unloaded):  # payloads of 0 N and no weight leave nothing to ramp
-        problem = PathProblem.homotopy(model, pv_unloaded, pv_full, name="load", what="payloads and weight")
-        r = follow(problem, theta, 0.0, 1.0, options.path, ipopt_tol=options.tol, natural=natural)
-        ramps.append(("load", r))
-        theta = r.theta
-        if not r.reached:
-            where = _load_value(model, pv_full, pressure, "load", r.lam)
-            return LoadHistory(theta, tuple(ramps), f"the load ramp from the unloaded state stopped at {where}: {r.message}")
-    return LoadHistory(theta, tuple(ramps))
-
-
 @single_threaded
 def solve(
     scene: Scene,
@@ -671,7 +600,7 @@ def solve(
             message = f"IPOPT did not converge: {final.status}"
     iterations = final.iterations + (history.iterations if history is not None else 0)
     steps = 1 + (history.points if history is not None else 0)
-    return evaluate(
+    result = evaluate(
         scene,
         final.theta,
         pressure,
@@ -687,3 +616,34 @@ def solve(
         branch_points=history.branch_points if history is not None else (),
         certificate=certificate,
     )
+    if history is not None:
+        how = history_name(options.history)
+    elif theta0 is not None:
+        how = "none (one IPOPT solve from the given theta0)"
+    else:
+        how = "none (one IPOPT solve at the full load)"
+    multistability = _multistability(scene, model, result, how, history, options)
+    return replace(result, history=how, multistability=multistability)
+
+
+def _multistability(scene: Scene, model: Model, result: Equilibrium, how: str, history: LoadHistory | None, options: SolverOptions) -> Multistability:
+    """Look for the scene's other stable states when ``options.multistability`` says so."""
+    n = scene.segments
+    if options.multistability == "never":
+        return not_looked("SolverOptions(multistability='never')")
+    if options.multistability == "auto" and n > AUTO_MAX_SEGMENTS:
+        return not_looked(
+            f"n = {n} > {AUTO_MAX_SEGMENTS} segments, where the search costs several solves (docs/performance.md); "
+            "multistability='always' (esba solve --multistability always, or esba equilibria) looks"
+        )
+    if not result.ok:
+        return not_looked("the solve did not reach a stable equilibrium")
+    if history is None:
+        why = "IPOPT converged there from its start"
+    elif history.jumps:
+        why = "its stable branch ended at a fold on the way and it snapped to this state"
+    elif history.branch_points:
+        why = "it buckled at a branch point onto this branch and followed it"
+    else:
+        why = "it followed one stable branch from the straight, unloaded state"
+    return check_multistability(scene, model, result.pressure, result.theta, how, why)

@@ -192,3 +192,33 @@ def test_cli_sensitivities(capsys):
     assert main(["solve", "--no-plot", "--sensitivities"]) == EXIT_OK
     out = capsys.readouterr().out
     assert "sensitivity" in out and "target_angle" in out and "Omega1" in out
+
+
+def test_the_output_says_what_is_held_fixed(capsys):
+    """Issue 21: the default solve holds the 90 deg target angle (the pressure moves with E, dtheta/dE =
+    +101.8 deg/MPa); at the same pressure held fixed dtheta/dE = -66.7 deg/MPa. The text and the JSON
+    say which."""
+    held = sensitivities(solve(MAIN_JOB)).held
+    assert held["parameter"] == "target_angle" and held["value"] == 90.0 and "pressure moves" in held["meaning"]
+    assert sensitivities(solve(MAIN_JOB.replace(pressure=0.1238739))).held["parameter"] == "P"
+    for args, name, d_e in ((["solve"], "target_angle", 101.76), (["solve", "--pressure", "0.1238739"], "P", -66.74)):
+        assert main([*args, "--no-plot", "--sensitivities", "--json"]) == EXIT_OK
+        s = json.loads(capsys.readouterr().out)["sensitivities"]
+        assert s["held_fixed"]["parameter"] == name
+        assert s["parameters"]["E"]["dtotal_angle_deg_per_unit"] == pytest.approx(d_e, abs=0.01)
+        assert main([*args, "--no-plot", "--sensitivities"]) == EXIT_OK
+        out = capsys.readouterr().out
+        assert "held fixed: " + s["held_fixed"]["meaning"] in out
+
+
+def test_round_off_of_an_exact_zero_is_zero(capsys):
+    """d/d rho at a held target angle is exactly 0 in the model; the arithmetic leaves about 1e-16, which
+    the rule (ROUND_OFF) sets to 0, in the numbers and in the text."""
+    s = sensitivities(solve(MAIN_JOB))
+    j = s.index("rho")
+    assert s.total_angle("rho") == 0.0 and np.all(s.dtheta[:, j] == 0.0) and np.all(s.dtip[:, j] == 0.0)
+    assert np.all(s.dtheta[:, s.index("E")] != 0.0)  # the others are untouched
+    assert sensitivities(solve(MAIN_JOB), ["rho"]).total_angle("rho") == 0.0  # whatever subset is asked for
+    assert main(["solve", "--no-plot", "--sensitivities"]) == EXIT_OK
+    row = next(line for line in capsys.readouterr().out.splitlines() if line.strip().startswith(": rho"))
+    assert row.split()[4:7] == ["0", "0", "0"] and "e-1" not in row

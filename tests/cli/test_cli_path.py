@@ -58,7 +58,41 @@ def test_json_and_csv(capsys, tmp_path, monkeypatch):
     assert (tmp_path / DEFAULT_PATH_OUT).exists() and (tmp_path / DEFAULT_PATH_FIGURE).exists()
     rows = list(csv.DictReader((tmp_path / DEFAULT_PATH_OUT).open()))
     assert {"branch", "kind", "payload1 (N)", "total_angle_deg", "morse_index", "stable", "theta1_deg"} <= set(rows[0])
-    assert {r["branch"] for r in rows} == {"main", "BP1 +", "BP1 -"}
+    # the crossing branches named by the way they bend (theta > 0 bends away from the chamber), not by the
+    # sign of their tangent: the side that folds back does so at a positive total angle, away from it
+    assert {r["branch"] for r in rows} == {"main", "BP1 away from chamber", "BP1 towards chamber"}
+    by_label = {b["label"]: b for b in d["branches"]}
+    (fold,) = [sp for b in d["branches"] for sp in b["special_points"] if sp["kind"] == "fold"]
+    assert fold in by_label["BP1 away from chamber"]["special_points"] and fold["total_angle_deg"] > 0
+    (bp,) = by_label["main"]["special_points"]
+    assert bp["bifurcation"] == "transcritical" and bp["cubic"] != 0 and bp["orthogonality"] < 1e-6
+
+
+def test_the_table_says_what_kind_of_branch_point(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, "path", "--param", "payload", "--pressure", "0", "--payload", "1", "--payload-angle", "180", "--to", "5", "-n", "2", "--no-out", "--no-plot")
+    assert code == EXIT_OK, err
+    assert "converged; transcritical" in out
+    assert "BP1 away from chamber:" in out and "BP1 towards chamber:" in out
+    assert "away from the chamber (the total angle rises)" in out
+
+
+def test_the_snapping_window_at_122_19_deg(capsys, tmp_path, monkeypatch):
+    """Issue 21: with the default steps one step jumped to a neighbouring branch, a "converged" branch
+    point was reported at 1.834173 N and loading did not snap. The path folds at 1.794243 N."""
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, "path", "--param", "payload", "--target-angle", "90", "--payload-angle", "122.19", "--from", "0", "--to", "6", "--no-out", "--no-plot", "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    (main,) = [b for b in d["branches"] if b["label"] == "main"]
+    assert len(d["branches"]) == 1 and [sp["kind"] for sp in main["special_points"]] == ["fold", "fold"]
+    first, second = main["special_points"]
+    assert first["lambda"] == pytest.approx(1.794243, abs=1e-6) and first["status"] == "converged"
+    assert first["orthogonality"] > 1e-3  # dg/dlambda is not orthogonal to the null vector: a fold
+    up, down = d["loading"]
+    assert [(j["kind"], round(j["lambda"], 6)) for j in up["jumps"]] == [("fold", 1.794243)]  # it snaps on loading
+    assert [(j["kind"], round(j["lambda"], 6)) for j in down["jumps"]] == [("fold", round(second["lambda"], 6))]
+    assert not any(abs(sp["lambda"] - 1.834173) < 1e-4 for sp in main["special_points"])
 
 
 @pytest.mark.parametrize(

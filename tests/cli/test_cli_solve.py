@@ -219,3 +219,34 @@ def test_pressure_table_says_what_the_pressure_is_for(capsys):
     assert "{" not in out  # no raw dict
     code, out, _ = run(capsys, "pressure", "--tip-y", "50")
     assert code == EXIT_OK and "target: the pressure that puts the loaded actuator's tip at y = 50 mm" in out
+
+
+def test_monte_carlo_is_in_the_text_when_first_order_refuses_near_a_fold(capsys):
+    """Issue 21: at F = 1.78 N, Omega = 122.2 deg first order refuses (next to a fold); the Monte Carlo
+    still ran, and its result was only in --json. The text shows it, and says there is no agreement to judge."""
+    args = ["solve", "--payload", "1.78", "--payload-angle", "122.2", "--sigma", "E=0.01", "--monte-carlo", "50", "--no-plot"]
+    code, out, err = run(capsys, *args)
+    assert code == EXIT_OK, err
+    assert "uncertainty: near_fold:" in out
+    line = next(ln for ln in out.splitlines() if ln.strip().startswith("Monte Carlo:"))
+    code, d = run_json(capsys, *args)
+    std = d["monte_carlo"]["std"]
+    assert d["uncertainty"]["std_total_angle_deg"] is None and std["total_angle"] > 0
+    assert f"std total angle {std['total_angle']:.4g} deg" in line and "50 samples" in line
+    assert "agreement: none to judge: first order gives no answer (near_fold" in out
+
+
+def test_stiffness_says_where_its_tangent_is_taken_and_why_k_tip_differs(capsys):
+    """Issue 21: "tangent at F = 0: horizontal 55.76 N/m" beside K_tip's yy entry 677.5, without saying at
+    which state K_tip is or why the two differ. Both are the unloaded state's; the directional value is
+    1 / (u^T C u) with C = K_tip^-1 (the tip free across the force), K_tip's entry holds it still."""
+    code, d = run_json(capsys, "stiffness")
+    assert code == EXIT_OK
+    t = d["tangent"]
+    c = np.linalg.inv(np.array(t["matrix_n_per_m"]))
+    assert t["horizontal_n_per_m"] == pytest.approx(1.0 / c[1, 1], rel=1e-9) and t["matrix_n_per_m"][1][1] > 10 * t["horizontal_n_per_m"]
+    assert t["state"].startswith("the unloaded state (F = 0)")
+    code, out, _ = run(capsys, "stiffness")
+    assert f"tangent stiffness of the unloaded state (F = 0, {d['initial_angle_deg']:.2f} deg)" in out
+    assert f"the tip free to move across it, 1 / (u^T C u) (the limit of K as F -> 0): horizontal {t['horizontal_n_per_m']:.3f} N/m" in out
+    assert "K_tip = C^-1 (N/m, x down, y horizontal)" in out and "holds the tip still in the other direction" in out

@@ -228,3 +228,29 @@ def test_design_figures_registered_only_when_their_module_exists(tmp_path, monke
     assert drawn.points(drawn.labelled(reg["fig13a"]().axes[0], "fake")) == [[0.0, 1.0], [1.0, 2.0]]  # imported when drawn
     assert figures.write_all(tmp_path / "out", ["fig13a"]) == {"fig13a": tmp_path / "out" / "fig13a.png"}
     assert (tmp_path / "out" / "fig13a.png").read_bytes()[:8] == PNG_SIGNATURE
+
+
+def test_the_loading_band_goes_on_through_a_branch_point_it_passes():
+    """n = 4 column, 1 -> 6.4 N and back (docs/paths.md's figure): unloading comes back along the buckled
+    branch to the branch point and goes on straight; its band is drawn through the branch point, from
+    its last point on the buckled branch to the first on the straight one."""
+    from esba.analysis.path_analysis import analyse
+    from esba.figures.paths import path_figure
+    from esba.model.scene import Payload, Scene
+    from esba.paths.continuation import PathOptions
+
+    run = analyse(Scene(pressure=0.0, payloads=(Payload(1.0, 180.0),), segments=4), "payload", 6.4, options=PathOptions(ds_max=0.1))
+    down = run.loading[1]
+    (bp,) = down.branch_points
+    assert down.jumps == ()
+    ax = drawn.axes(path_figure(run))[0]
+    bands = [ln for ln in drawn.lines(ax) if ln.get_linewidth() == 6 and ln.get_color() == "C2"]
+    x = np.concatenate([drawn.xy(ln)[0] for ln in bands])
+    assert x.min() == 1.0 and x.max() == 6.4
+    # no stretch of the ramp left undrawn: every gap between drawn x values lies inside one band
+    spans = sorted((float(min(drawn.xy(ln)[0])), float(max(drawn.xy(ln)[0]))) for ln in bands)
+    reach = spans[0][1]
+    for lo, hi in spans[1:]:
+        assert lo <= reach + 1e-12, (lo, reach)
+        reach = max(reach, hi)
+    assert any(bp.lam in drawn.xy(ln)[0] for ln in bands)

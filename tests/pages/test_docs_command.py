@@ -72,7 +72,7 @@ def test_help_names_every_page_and_the_slow_ones(capsys):
 @pytest.mark.parametrize(
     "args, message",
     [
-        (["--check", "derivation"], "unknown page 'derivation': allowed are derivations, validation, design, paths, experiments, accuracy-vs-time, performance, scaling"),
+        (["--check", "derivation"], "unknown page 'derivation': allowed are derivations, validation, design, paths, experiments, sensing, accuracy-vs-time, performance, scaling"),
         (["--write", "paths", "nope"], "unknown page 'nope': allowed are"),
         (["--check", "--write"], "argument --write: not allowed with argument --check"),
         (["--check", "validation", "--dir", "/no/such/folder"], "--dir '/no/such/folder': not a folder"),

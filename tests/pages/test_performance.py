@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from esba.bench.maps import MapBenchRow
 from esba.bench.path import PathBenchRow
 from esba.bench.timing import GenerationRow
 from esba.pages.page import MASK, TIMES, matches
@@ -86,11 +87,13 @@ def test_the_whole_page_renders_its_sections_in_order():
     gen = GenerationRow(n=16, derive_s=0.5, emit_s=0.2, total_s=0.7, assignments=100, instructions={"energy": 2318, "gradient": 3987, "hessian": 6510},
                         ad_hessian_instructions=6585, naive_s=3.5, call_us={"energy": 43.0, "gradient": 46.2, "hessian": 49.4})
     row = PathBenchRow(n=3, points=34, folds=(0.17354, 0.16360), evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=None, newton_step_us=None)
-    data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row]}
+    maps = MapBenchRow("omega-payload", curves=1, points=55, special=2, trace_s=0.12, brute_k=20, brute_s=9.9, agree=400, near=3)
+    data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row], "maps": [maps]}
     text = PAGE.render(data, PAGE.settings(), ROOT / "docs" / "performance.md").text
     _, sections = read_sections(text)
     assert tuple(k for k, _ in sections) == SECTIONS
     assert "2318       3987       6510     6585" in text
+    assert "omega-payload" in text and "400/400" in text and "Every cell of each grid agrees" in text
 
 
 def test_the_committed_page_has_every_section_written_by_its_command():
@@ -100,3 +103,25 @@ def test_the_committed_page_has_every_section_written_by_its_command():
     settings = PAGE.settings()
     for key, block in sections:
         assert f"<!-- Written by `{settings[key].command}`; rerun it to refresh. -->" in block
+
+
+MULTISTABILITY_ROWS = [
+    {"scene": "Table 2 scene", "n": 3, "solve_s": 1.4e-3, "check_s": 1.2e-3, "equilibria_s": 0.08, "stable_found": 1, "states": 1, "complete": True, "by_default": True},
+    {"scene": "P = 0.17 MPa, 2 N", "n": 100, "solve_s": 0.07, "check_s": 0.25, "equilibria_s": 1.3, "stable_found": 2, "states": 3, "complete": True, "by_default": False},
+]
+
+
+def test_the_multistability_rows_are_checked_times_aside():
+    """The cost of solve()'s multistability check renders in the solve section; other times pass the
+    check, another count of stable states does not."""
+    settings = SolveSettings()
+    data = {"rows": SOLVE_ROWS, "growth_16_128": 0.73, "multistability": MULTISTABILITY_ROWS}
+    template = PAGE.section("solve", data, settings, MASK)
+    assert "### Looking for other stable states" in template
+    slower = [dict(r, solve_s=3 * r["solve_s"], check_s=7 * r["check_s"], equilibria_s=2 * r["equilibria_s"]) for r in MULTISTABILITY_ROWS]
+    assert matches(template, PAGE.section("solve", dict(data, multistability=slower), settings, TIMES))
+    fewer = [dict(r, stable_found=1) for r in MULTISTABILITY_ROWS]
+    assert not matches(template, PAGE.section("solve", dict(data, multistability=fewer), settings, TIMES))
+    lines = PAGE.section("solve", data, settings, TIMES).splitlines()
+    row = next(line for line in lines if line.startswith("P = 0.17 MPa, 2 N"))
+    assert row.split()[-8:] == ["100", "70.0", "250.0", "3.6x", "no", "1300.0", "2", "3"]

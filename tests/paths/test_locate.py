@@ -11,7 +11,7 @@ from esba.analysis.path_analysis import column_buckling_load
 from esba.model.scene import Payload, Scene
 from esba.paths.continuation import PathOptions, trace
 from esba.paths.corrector import Corrector
-from esba.paths.locate import locate_value
+from esba.paths.locate import classify_branch_point, locate_value
 from esba.paths.problem import PathProblem
 from esba.statics.equilibrium import solve
 from tests.tolerances import LOCATE_RTOL
@@ -68,3 +68,30 @@ def test_a_value_is_met_exactly_between_two_points(pressure_branch):
     pt = locate_value(corr, a, b, 0.2, lambda p: p.lam - target)
     assert pt is not None and pt.lam == pytest.approx(target, abs=1e-14)
     assert np.max(np.abs(problem.ghl(pt.theta, pt.lam)[0])) < 1e-9
+
+
+class _Quartic:
+    """U = th2^2 / 2 - lam th1^2 / 2 + a th1^3 / 3 + b th1^2 th2 + th1^4 / 4: a branch point at 0 with the
+    null vector (1, 0) and c = d3U[phi, phi, phi] = 2 a."""
+
+    def __init__(self, a: float, b: float):
+        self.a, self.b = a, b
+
+    def ghl(self, theta, lam):
+        t1, t2 = theta
+        a, b = self.a, self.b
+        g = np.array([-lam * t1 + a * t1**2 + 2 * b * t1 * t2 + t1**3, t2 + b * t1**2])
+        h = np.array([[-lam + 2 * a * t1 + 2 * b * t2 + 3 * t1**2, 2 * b * t1], [2 * b * t1, 1.0]])
+        return g, h, np.array([-t1, 0.0])
+
+    def fold_terms(self, theta, lam, v):
+        t1, _ = theta
+        a, b = self.a, self.b
+        hv_t = np.array([[(2 * a + 6 * t1) * v[0] + 2 * b * v[1], 2 * b * v[0]], [2 * b * v[0], 0.0]])
+        return self.ghl(theta, lam)[1] @ v, hv_t, np.array([-v[0], 0.0]), 0.0
+
+
+@pytest.mark.parametrize("a, b, kind", [(0.0, 0.0, "pitchfork"), (0.0, 1.0, "pitchfork"), (1.0, 0.0, "transcritical"), (0.5, 1.0, "transcritical")])
+def test_branch_points_are_classified_by_the_cubic_term(a, b, kind):
+    got, cubic = classify_branch_point(_Quartic(a, b), np.zeros(2), 0.0, np.array([1.0, 0.0]))
+    assert got == kind and cubic == pytest.approx(2 * a)

@@ -102,26 +102,46 @@ def test_column_buckles_at_the_closed_form_load(n):
             assert fold.status == "converged" and abs(fold.morse_after - fold.morse_before) == 1
             g, _, _ = problem.ghl(fold.theta, fold.lam)
             assert np.max(np.abs(g)) <= EQUILIBRIUM_GRAD_ATOL
-    assert any(side.folds for side in sides)  # the side bending towards the chamber folds back (transcritical)
+    assert any(side.folds for side in sides)  # the side bending away from the chamber (theta > 0) folds back (transcritical)
     assert signs[0] == -signs[1]  # one branch to each side of the straight state
     # the eccentric chamber makes U not even in theta: the two sides differ
     assert not np.allclose(sides[0].lam[:5], sides[1].lam[:5])
 
 
 def test_transcritical_buckling_one_side_folds():
-    """n = 2: bending towards the chamber side loses load (unstable) until a fold at about 2.72 N,
-    where it turns stable; the other side carries more load and is stable from the start."""
+    """n = 2: bending away from the chamber (theta > 0: the chamber on the convex side) loses load
+    (unstable) until a fold at about 2.72 N, where it turns stable; bending towards the chamber carries
+    more load and is stable from the start. The branch point is transcritical, and each side is
+    labelled by the way it bends."""
     f_cr = column_buckling_load(2)
     problem = PathProblem.from_scene(column(2, 1.0), "payload")
     b = trace(problem, np.zeros(2), 1.0, to=12.0)
     sides = bifurcating_branches(problem, b.branch_points[0], bounds=(1.0, 12.0))
     plus = next(side for side in sides if side.folds)
     minus = next(side for side in sides if side is not plus)
-    assert np.sum(plus.theta[1]) > 0 > np.sum(minus.theta[1])  # towards the chamber side, and away
+    assert np.sum(plus.theta[1]) > 0 > np.sum(minus.theta[1])  # away from the chamber, and towards it
+    assert (plus.label, minus.label) == ("bifurcating away from chamber", "bifurcating towards chamber")
+    assert b.branch_points[0].bifurcation == "transcritical"
     (fold,) = plus.folds
     assert 2.70 < fold.lam < 2.75 and (fold.morse_before, fold.morse_after) == (1, 0)
     assert plus.morse[1] == 1 and np.all(plus.lam[1:5] < f_cr)  # subcritical: unstable, less load
     assert np.all(minus.morse == 0) and np.all(minus.lam[1:] > f_cr)  # supercritical: stable
+
+
+def test_unloading_a_buckled_column_returns_straight_through_the_branch_point():
+    """n = 4, 1 -> 6.4 N and back: loading buckles smoothly towards the chamber at the branch point, and
+    unloading comes back along that branch to the branch point and goes on straight (stable below it).
+    It used to report a snap at the branch point to the far side (0 -> 110 deg) and one back at the
+    far side's fold: the step off the branch point onto the straight branch was refused, because that
+    branch does not move along the null vector."""
+    f_cr = column_buckling_load(4)
+    problem = PathProblem.from_scene(column(4, 1.0), "payload")
+    start = solve(column(4, 1.0)).theta  # straight to round-off (1e-14 rad), as esba path starts
+    up, down = history(problem, start, 1.0, [6.4, 1.0], PathOptions(ds_max=0.1))  # esba path's steps
+    assert up.reached and down.reached and up.jumps == () and down.jumps == ()
+    assert float(np.sum(up.theta)) < 0.0  # buckled towards the chamber (theta < 0)
+    assert [round(bp.lam / f_cr, 9) for bp in down.branch_points] == [1.0]
+    assert np.max(np.abs(down.theta)) < 1e-8  # straight again at 1 N
 
 
 def test_99_percent_stays_straight_101_percent_buckles():
@@ -135,7 +155,7 @@ def test_99_percent_stays_straight_101_percent_buckles():
     assert buckled.ok and np.max(np.abs(buckled.theta)) > 1e-3
     (bp,) = buckled.branch_points
     assert bp.kind == "branch point" and bp.lam == pytest.approx(1 / 1.01, rel=LOCATE_RTOL)
-    assert any("branch point" in note for note in buckled.notes)
+    assert any("transcritical branch point" in note for note in buckled.notes)  # its type, computed
     assert buckled.jumps == ()  # it goes on along the stable side, no snap
 
 

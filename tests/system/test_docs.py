@@ -74,6 +74,14 @@ WRITERS = {
     "path-pressure-2N": "esba path --write-doc",
     "path-omega-2N": "esba path --write-doc",
     "path-column-n4": "esba path --write-doc",
+    "equilibria-window": "esba docs --write equilibria",
+    "equilibria-omega121": "esba docs --write equilibria",
+    "sensing-blind": "esba docs --write sensing",
+    "sensing-ellipses": "esba docs --write sensing",
+    "map-pressure-payload": "esba map --write-doc",
+    "map-omega-payload": "esba map --write-doc",
+    "map-pressure-omega": "esba map --write-doc",
+    "map-design-plane": "esba map --write-doc",
 }
 
 

@@ -156,6 +156,12 @@ CLI = [
     (["bench", "embedded", "--segments", "65"], "segments=65: expected a whole number from 1 to 64"),
     (["bench", "embedded", "--no-write", "--out", "x.md"], "--out is not used with --no-write"),
     (["bench", "embedded", "--out", "x.txt"], "'.txt'; expected a file ending in .md"),
+    (["equilibria", "--starts", "100000"], "--starts=100000: expected a whole number from 2 to 1000"),
+    (["equilibria", "--max-bend", "nan", "--no-plot"], "--max-bend"),
+    (["equilibria", "--pressure", "-1", "--no-plot"], "pressure"),
+    (["equilibria", "--plot", "x.docx"], "docx"),
+    (["solve", "--history", "2:0,1:1", "--no-plot"], "from 0 to 1"),
+    (["solve", "--multistability", "maybe", "--no-plot"], "invalid choice: 'maybe'"),
     ([], "name a command"),
     (["bogus"], "invalid choice: 'bogus'"),
 ]

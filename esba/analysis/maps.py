@@ -1,0 +1,393 @@
+"""Stability maps: how many stable states the actuator has at each point of a plane of two parameters.
+
+:func:`stability_map` traces the fold curves of the plane (:mod:`esba.analysis.folds`), counts the
+stable states at one reference point by brute force (:func:`stable_states`, a multistart damped
+Newton minimisation of U), and carries the count over the plane: crossing a *stable* fold curve
+(a stable and an unstable state meet there) changes it by one, up on the side where the fold's pair
+exists (its normal form, :meth:`esba.analysis.folds.FoldCurve.side`), so that each region of the
+plane gets its number of stable states without a solve in it. It also follows the quasi-static
+history in x (up from the low end and back down) at a set of y and records where it jumps: the
+loading and unloading lines.
+
+:func:`check_grid` checks a map against brute force: at the centre of each cell of a K x K grid it
+counts the stable states by :func:`stable_states` and compares with the map's count there.
+
+Examples
+--------
+>>> from esba.model.scene import Scene, Payload
+>>> from esba.analysis.folds import Plane
+>>> plane = Plane.from_scene(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", "payload")
+>>> len(stable_states(plane, 0.168, 2.5)), len(stable_states(plane, 0.168, 1.0))
+(2, 1)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+import casadi as ca
+import numpy as np
+
+from esba.model.generated import Model
+from esba.model.stability import CRITICAL_TOL
+from esba.paths.loading import history
+from esba.paths.problem import PathError
+
+from .folds import FoldCurve, FoldOptions, Plane, fold_curves, fold_summary
+
+__all__ = ["StabilityMap", "stability_map", "stable_states", "check_grid", "GridCheck", "count_at", "jump_lines"]
+
+#: Starts per segment of the multistart search (their product, at most MAX_STARTS, is used).
+STARTS_PER_SEGMENT = 5
+#: The most starts of the multistart search (beyond, a fixed pseudo-random sample of the box).
+MAX_STARTS = 400
+#: The largest segment angle a start takes, rad (the actuator's states lie below it).
+START_HIGH = 2.2
+#: Largest max |dU/dtheta| of a stationary point, N mm/rad.
+STATES_TOL = 1e-9
+#: Point-segment pairs per block when counting crossings (memory: a few arrays of this many doubles).
+CROSSING_BLOCK = 1_000_000
+#: Two minima closer than this (max over the segments, rad) are one state.
+SAME_STATE = 1e-5
+
+
+# ---------------------------------------------------------------------------------------------
+# brute force: every stable state at one point
+
+
+def _batch(model: Model, m: int) -> ca.Function:
+    def build() -> ca.Function:
+        th = ca.SX.sym("theta", model.n)
+        p = ca.SX.sym("p", len(model.parameters))
+        args = ca.vertsplit(p)
+        one = ca.Function(
+            "esba_multistart", [th, p], [model["energy"](th, *args)[0], model["gradient"](th, *args), ca.vec(model["hessian"](th, *args))], {"cse": True}
+        )
+        return one.map(m, "serial")
+
+    return model.derived("multistart_map", build, settings=(m,), persist=False)
+
+
+def _starts(n: int, low: np.ndarray) -> np.ndarray:
+    per = [np.linspace(lo + 0.05 * (START_HIGH - lo), START_HIGH, STARTS_PER_SEGMENT) for lo in low]
+    if STARTS_PER_SEGMENT**n <= MAX_STARTS:
+        grid = np.meshgrid(*per, indexing="ij")
+        return np.column_stack([g.ravel() for g in grid])
+    rng = np.random.default_rng(20260101)
+    return low + 0.05 * (START_HIGH - low) + rng.random((MAX_STARTS, n)) * 0.95 * (START_HIGH - low)
+
+
+def _evaluate(model: Model, theta: np.ndarray, p: np.ndarray):
+    m, n = theta.shape
+    fun = _batch(model, m)
+    u, g, h = fun(theta.T, p)
+    return np.asarray(u).ravel(), np.asarray(g).T, np.asarray(h).T.reshape(m, n, n)
+
+
+def stable_states(plane: Plane, x: float, y: float, starts: np.ndarray | None = None, max_iterations: int = 200) -> list[np.ndarray]:
+    """Every stable equilibrium (local minimum of U) at (x, y) that a damped Newton descent from a grid
+    of starts finds, distinct, sorted by total angle.
+
+    The descent takes Newton steps on H with its eigenvalues replaced by their magnitudes (at least
+    1e-6 of the largest), at most 0.3 rad, kept inside Eq. 10's domain (at most 90 % of the way to
+    its edge) and halved until U decreases (Armijo); a start is done when max |dU/dtheta| <=
+    :data:`STATES_TOL` at a positive definite Hessian.
+    """
+    prob = plane.along_x(y)
+    model = prob.model
+    p = prob.params(x)
+    low = np.full(prob.n, prob.lower_bound(x))
+    theta = _starts(prob.n, low) if starts is None else np.array(starts, dtype=float)
+    m = len(theta)
+    done = np.zeros(m, dtype=bool)
+    alive = np.ones(m, dtype=bool)
+    u, g, h = _evaluate(model, theta, p)
+    for _ in range(max_iterations):
+        active = alive & ~done
+        if not active.any():
+            break
+        w, q = np.linalg.eigh(h)
+        scale = np.max(np.abs(w), axis=1, keepdims=True)
+        w_mod = np.maximum(np.abs(w), 1e-6 * scale)
+        d = -np.einsum("mij,mj->mi", q, np.einsum("mji,mj->mi", q, g) / w_mod)
+        big = np.max(np.abs(d), axis=1, keepdims=True)
+        d = d * np.minimum(1.0, 0.3 / np.maximum(big, 1e-300))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            room = np.where(d < 0, 0.9 * (theta - low) / -d, np.inf)
+        alpha = np.minimum(1.0, np.min(room, axis=1))
+        slope = np.einsum("mi,mi->m", g, d)
+        trying = active.copy()
+        new_theta, new_u, new_g, new_h = theta.copy(), u.copy(), g.copy(), h.copy()
+        for _ in range(40):
+            if not trying.any():
+                break
+            cand = theta[trying] + alpha[trying, None] * d[trying]
+            cu, cg, ch = _evaluate(model, cand, p)
+            good = np.isfinite(cu) & (cu <= u[trying] + 1e-4 * alpha[trying] * slope[trying] + 1e-13 * np.abs(u[trying]))
+            idx = np.flatnonzero(trying)
+            ok = idx[good]
+            new_theta[ok], new_u[ok], new_g[ok], new_h[ok] = cand[good], cu[good], cg[good], ch[good]
+            trying[ok] = False
+            alpha[idx[~good]] *= 0.5
+        alive &= ~trying  # no decrease after 40 halvings: round-off at a minimum, or stuck
+        theta, u, g, h = new_theta, new_u, new_g, new_h
+        gmax = np.max(np.abs(g), axis=1)
+        done |= gmax <= STATES_TOL
+    found: list[np.ndarray] = []
+    gmax = np.max(np.abs(g), axis=1)
+    for k in np.flatnonzero(gmax <= STATES_TOL):
+        eig = np.linalg.eigvalsh(0.5 * (h[k] + h[k].T))
+        if eig[0] <= CRITICAL_TOL * np.max(np.abs(eig)):
+            continue
+        if any(np.max(np.abs(theta[k] - f)) <= SAME_STATE for f in found):
+            continue
+        found.append(theta[k].copy())
+    found.sort(key=lambda t: float(np.sum(t)))
+    return found
+
+
+# ---------------------------------------------------------------------------------------------
+# counting across fold curves
+
+
+def _segments(curves: Sequence[FoldCurve], spans) -> tuple[np.ndarray, np.ndarray]:
+    """The stable fold curves' segments in scaled coordinates, (k, 2, 2), and each one's side normal (k, 2)."""
+    segs, sides = [], []
+    for c in curves:
+        if len(c) < 2:
+            continue
+        pts = np.column_stack([c.xs / spans[0], c.ys / spans[1]])
+        side = c.side(spans)
+        keep = c.stable[:-1] & c.stable[1:] & np.all(np.isfinite(side[:-1]), axis=1) & np.all(np.isfinite(side[1:]), axis=1)
+        mid = side[:-1] + side[1:]
+        segs.append(np.stack([pts[:-1], pts[1:]], axis=1)[keep])
+        sides.append(mid[keep])
+    if not segs:
+        return np.zeros((0, 2, 2)), np.zeros((0, 2))
+    return np.concatenate(segs), np.concatenate(sides)
+
+
+def _crossings(p0: np.ndarray, p1: np.ndarray, segs: np.ndarray, sides: np.ndarray) -> np.ndarray:
+    """Signed count of stable-fold crossings of each path segment p0[i] -> p1[i] (+1 into the side with the pair)."""
+    if len(segs) == 0:
+        return np.zeros(len(p0), dtype=int)
+    a, b = segs[:, 0], segs[:, 1]  # (k, 2)
+    r = (p1 - p0)[:, None, :]  # (m, 1, 2)
+    s = (b - a)[None, :, :]  # (1, k, 2)
+    qp = a[None, :, :] - p0[:, None, :]  # (m, k, 2)
+    cross = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / cross
+        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / cross
+    hit = (cross != 0) & (t >= 0) & (t < 1) & (u >= 0) & (u < 1)
+    sign = np.sign(r[..., 0] * sides[None, :, 0] + r[..., 1] * sides[None, :, 1])
+    return np.sum(np.where(hit, sign, 0), axis=1).astype(int)
+
+
+def count_at(curves: Sequence[FoldCurve], spans, reference: tuple[float, float, int], x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The number of stable states at the points (x, y): the reference count plus the signed crossings
+    of stable fold curves on the way from the reference (first along y, then along x)."""
+    segs, sides = _segments(curves, spans)
+    x = np.asarray(x, dtype=float).ravel()
+    y = np.asarray(y, dtype=float).ravel()
+    xr, yr, nr = reference
+    out = np.empty(len(x), dtype=int)
+    chunk = max(1, CROSSING_BLOCK // max(1, len(segs)))  # points per block: bounded memory
+    for start in range(0, len(x), chunk):
+        xs, ys = x[start : start + chunk], y[start : start + chunk]
+        p0 = np.column_stack([np.full_like(xs, xr / spans[0]), np.full_like(ys, yr / spans[1])])
+        corner = np.column_stack([np.full_like(xs, xr / spans[0]), ys / spans[1]])
+        end = np.column_stack([xs / spans[0], ys / spans[1]])
+        out[start : start + chunk] = nr + _crossings(p0, corner, segs, sides) + _crossings(corner, end, segs, sides)
+    return out
+
+
+def _distance_to_curves(curves: Sequence[FoldCurve], spans, x: float, y: float) -> float:
+    best = math.inf
+    for c in curves:
+        if len(c):
+            best = min(best, float(np.min(np.hypot((c.xs - x) / spans[0], (c.ys - y) / spans[1]))))
+    return best
+
+
+# ---------------------------------------------------------------------------------------------
+# loading and unloading
+
+
+def jump_lines(plane: Plane, xrange, yrange, lines: int = 21) -> dict[str, list[list[float]]]:
+    """Where the quasi-static history in x jumps, at ``lines`` values of y: ``loading`` (x rising from
+    its low end) and ``unloading`` (x falling back), each a list of [x, y]."""
+    from esba.statics.equilibrium import EquilibriumError, solve
+
+    out: dict[str, list[list[float]]] = {"loading": [], "unloading": []}
+    for y in np.linspace(yrange[0], yrange[1], lines):
+        try:
+            theta = solve(plane.scene_at(xrange[0], float(y))).theta
+            ramps = history(plane.along_x(float(y)), theta, xrange[0], [xrange[1], xrange[0]])
+        except (EquilibriumError, PathError):
+            continue
+        for name, ramp in zip(("loading", "unloading"), ramps):
+            out[name] += [[float(j.lam), float(y)] for j in ramp.jumps]
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# the map
+
+
+@dataclass(frozen=True, eq=False)
+class StabilityMap:
+    """A stability map: the fold curves of the plane, the number of stable states on a raster, the jump lines.
+
+    ``reference`` (x, y, count): where the count was anchored by brute force; ``grid_x``, ``grid_y``
+    the raster's coordinates and ``counts`` (len(grid_y), len(grid_x)) the number of stable states;
+    ``jumps`` the loading and unloading lines; ``seconds`` the time of each part.
+    """
+
+    plane: Plane
+    xrange: tuple[float, float]
+    yrange: tuple[float, float]
+    curves: tuple[FoldCurve, ...]
+    reference: tuple[float, float, int]
+    grid_x: np.ndarray
+    grid_y: np.ndarray
+    counts: np.ndarray
+    jumps: dict[str, list[list[float]]]
+    seconds: dict[str, float]
+
+    @property
+    def spans(self) -> tuple[float, float]:
+        return (self.xrange[1] - self.xrange[0], self.yrange[1] - self.yrange[0])
+
+    @property
+    def names(self) -> tuple[str, str]:
+        return self.plane.names
+
+    @property
+    def special(self):
+        return [p for c in self.curves for p in c.special]
+
+    def count(self, x, y) -> np.ndarray:
+        """The number of stable states the map gives at the points (x, y)."""
+        return count_at(self.curves, self.spans, self.reference, x, y)
+
+    def distance(self, x: float, y: float) -> float:
+        """Distance from (x, y) to the nearest fold curve point, in spans."""
+        return _distance_to_curves(self.curves, self.spans, x, y)
+
+    def to_dict(self, points: bool = False) -> dict[str, Any]:
+        nx, ny = self.names
+        return {
+            "x": {"parameter": nx, "unit": self.plane.units[0], "from": self.xrange[0], "to": self.xrange[1]},
+            "y": {"parameter": ny, "unit": self.plane.units[1], "from": self.yrange[0], "to": self.yrange[1]},
+            "summary": fold_summary(self.curves),
+            "special_points": [p.to_dict(self.names) for p in self.special],
+            "fold_curves": [c.to_dict(points) for c in self.curves],
+            "reference": {nx: self.reference[0], ny: self.reference[1], "stable_states": self.reference[2]},
+            "stable_states": {
+                "max": int(np.max(self.counts)) if self.counts.size else 0,
+                "min": int(np.min(self.counts)) if self.counts.size else 0,
+                "fraction_multistable": float(np.mean(self.counts > 1)) if self.counts.size else 0.0,
+            },
+            "jumps": self.jumps,
+            "seconds": self.seconds,
+        }
+
+
+def stability_map(
+    plane: Plane,
+    xrange: tuple[float, float],
+    yrange: tuple[float, float],
+    *,
+    resolution: int = 101,
+    history_lines: int = 21,
+    options: FoldOptions | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> StabilityMap:
+    """The stability map of ``plane`` over xrange x yrange (see the module)."""
+    say = progress or (lambda msg: None)
+    xrange = (float(xrange[0]), float(xrange[1]))
+    yrange = (float(yrange[0]), float(yrange[1]))
+    seconds = {}
+    t = time.perf_counter()
+    say("fold curves")
+    curves = tuple(fold_curves(plane, xrange, yrange, options))
+    seconds["fold_curves"] = time.perf_counter() - t
+    spans = (xrange[1] - xrange[0], yrange[1] - yrange[0])
+    t = time.perf_counter()
+    say("stable states at the reference point")
+    # the reference: the corner, or the first of a few points clear of every fold curve
+    candidates = [(xrange[0], yrange[0]), (xrange[1], yrange[0]), (xrange[0], yrange[1]), (xrange[1], yrange[1])]
+    ref = max(candidates, key=lambda c: _distance_to_curves(curves, spans, *c))
+    reference = (ref[0], ref[1], len(stable_states(plane, *ref)))
+    seconds["reference"] = time.perf_counter() - t
+    t = time.perf_counter()
+    gx = np.linspace(xrange[0], xrange[1], resolution)
+    gy = np.linspace(yrange[0], yrange[1], resolution)
+    mx, my = np.meshgrid(gx, gy)
+    counts = count_at(curves, spans, reference, mx, my).reshape(mx.shape)
+    seconds["regions"] = time.perf_counter() - t
+    t = time.perf_counter()
+    say("loading and unloading")
+    jumps = jump_lines(plane, xrange, yrange, history_lines) if history_lines else {"loading": [], "unloading": []}
+    seconds["jumps"] = time.perf_counter() - t
+    return StabilityMap(plane, xrange, yrange, curves, reference, gx, gy, counts, jumps, seconds)
+
+
+# ---------------------------------------------------------------------------------------------
+# the check against brute force
+
+
+@dataclass(frozen=True)
+class GridCheck:
+    """The map against brute force on a K x K grid of cell centres.
+
+    ``cells``: per cell [x, y, map count, brute-force count, distance to the nearest fold curve
+    (spans)]; a cell within ``near`` of a fold curve is compared too but reported apart
+    (``near_mismatches``), since the count there changes within the cell.
+    """
+
+    k: int
+    cells: list[list[float]]
+    mismatches: int
+    near_mismatches: int
+    near: float
+    seconds: float
+
+    @property
+    def agrees(self) -> bool:
+        return self.mismatches == 0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "k": self.k,
+            "cells": [{"x": c[0], "y": c[1], "map": int(c[2]), "brute_force": int(c[3]), "distance_to_fold": c[4]} for c in self.cells],
+            "mismatches": self.mismatches,
+            "near_mismatches": self.near_mismatches,
+            "near": self.near,
+            "agrees": self.agrees,
+            "seconds": self.seconds,
+        }
+
+
+def check_grid(smap: StabilityMap, k: int, near: float = 0.01) -> GridCheck:
+    """Count the stable states by :func:`stable_states` at the centres of a k x k grid and compare with the map."""
+    t = time.perf_counter()
+    xs = smap.xrange[0] + (np.arange(k) + 0.5) * smap.spans[0] / k
+    ys = smap.yrange[0] + (np.arange(k) + 0.5) * smap.spans[1] / k
+    cells, bad, bad_near = [], 0, 0
+    for y in ys:
+        for x in xs:
+            mapped = int(smap.count([x], [y])[0])
+            brute = len(stable_states(smap.plane, float(x), float(y)))
+            dist = smap.distance(float(x), float(y))
+            if mapped != brute:
+                if dist < near:
+                    bad_near += 1
+                else:
+                    bad += 1
+            cells.append([float(x), float(y), mapped, brute, dist])
+    return GridCheck(k, cells, bad, bad_near, near, time.perf_counter() - t)

@@ -1,0 +1,98 @@
+"""``esba equilibria``: every equilibrium of a scene (deflated Newton), its stability, the barriers."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from esba.infra import outputs
+
+from .arguments import UsageError, add_scene_flags, count_arg, float_arg, scene_from_args
+from .results import EXIT_FAILED, EXIT_OK, print_result
+
+#: Where ``esba equilibria`` writes its figure unless told otherwise.
+DEFAULT_EQUILIBRIA_FIGURE = "esba-equilibria.png"
+
+
+def _equilibria_table(d: dict) -> str:
+    lines = [
+        f"scene: {d['scene']}",
+        f"pressure: {d['pressure_mpa']:.7f} MPa",
+        f"domain searched: {d['domain']['text']}",
+        f"  {'#':>2}  {'stability':<9} {'Morse':>5} {'total deg':>10} {'tip x, y mm':>17} {'energy N mm':>12} {'min eigenvalue':>15}  theta deg",
+    ]
+    for k, s in enumerate(d["states"], start=1):
+        tip = f"{s['tip_mm'][0]:7.2f}, {s['tip_mm'][1]:7.2f}"
+        theta = ", ".join(f"{t:.2f}" for t in s["theta_deg"][:8]) + (", ..." if len(s["theta_deg"]) > 8 else "")
+        lines.append(f"  {k:>2}  {s['stability']:<9} {s['morse_index']:>5} {s['total_angle_deg']:>10.3f} {tip:>17} {s['energy_nmm']:>12.4f} {s['min_eigenvalue']:>15.4g}  ({theta})")
+    stable = d["stable"]
+    if d["least_energy_stable"] is not None:
+        least = d["least_energy_stable"] + 1
+        lines.append(f"stable: {len(stable)} ({'multistable' if d['multistable'] else 'one stable state'}); least energy: #{least}")
+    else:
+        lines.append("stable: none in the domain")
+    if d["history_state"] is not None:
+        lines.append(f"the load history (inflate, then load) reaches #{d['history_state'] + 1}")
+    for b in d["barriers"]:
+        lines.append(
+            f"barrier: #{b['a'] + 1} <-> #{b['b'] + 1} through the saddle #{b['saddle'] + 1}: "
+            f"{b['barrier_from_a_nmm']:.4f} N mm from #{b['a'] + 1}, {b['barrier_from_b_nmm']:.4f} N mm from #{b['b'] + 1}"
+        )
+    if d["complete"] is None:
+        lines.append("completeness: not checked (--no-check)")
+    else:
+        lines.append("completeness: " + ("a second search from fresh starts found nothing new" if d["complete"] else f"the second search from fresh starts found {d['check_found']} more (listed above): the search may be incomplete"))
+    if d["outside_domain"]:
+        lines.append(f"outside the domain: {d['outside_domain']} equilibria beyond it, not listed")
+    lines.append(f"search: {d['starts']} starts, {d['rounds']} deflation rounds, {d['newton_runs']} Newton runs, {d['newton_iterations']} iterations, {d['time_s']:.3f} s")
+    if d.get("figure"):
+        lines.append(f"figure: wrote {d['figure']}")
+    return "\n".join(lines)
+
+
+def _cmd_equilibria(args: argparse.Namespace) -> int:
+    from esba.statics.equilibria import EquilibriaOptions, EquilibriaOptionsError, equilibria
+
+    if args.no_plot and args.plot is not None:
+        raise UsageError("--plot and --no-plot: give one of the two")
+    plot = args.plot
+    if plot is None and args.scene is None and not args.no_plot:
+        plot = DEFAULT_EQUILIBRIA_FIGURE
+    figure = outputs.figure_file(plot, "--plot", DEFAULT_EQUILIBRIA_FIGURE) if plot and not args.no_plot else None
+    scene = scene_from_args(args)
+    try:
+        extra = {} if args.starts is None else {"starts": args.starts}
+        if args.max_bend is not None:
+            extra["max_bend_deg"] = args.max_bend
+        options = EquilibriaOptions(check=not args.no_check, **extra)
+    except EquilibriaOptionsError as exc:
+        raise UsageError(str(exc).replace("max_bend_deg=", "--max-bend ").replace("starts=", "--starts ")) from None
+    res = equilibria(scene, options)
+    data = res.to_dict()
+    data["scene"] = scene.describe()
+    if figure is not None:
+        from esba.figures.equilibria import equilibria_figure, save_figure
+
+        data["figure"] = str(save_figure(equilibria_figure(res), figure).resolve())
+    print_result(args, data, _equilibria_table)
+    if res.complete is False:
+        print(f"esba: warning: the completeness check found {res.check_found} equilibria the first search had not: raise --starts", file=sys.stderr)
+    if not res.states:
+        beyond = f" ({res.outside} beyond it: --max-bend widens it, up to 720 deg)" if res.outside else ""
+        print(f"esba: no equilibrium found in the domain searched, {res.describe_domain()}{beyond}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def add_equilibria(sub) -> None:
+    p = sub.add_parser(
+        "equilibria",
+        help="every equilibrium of a scene (deflated Newton): stability, Morse index, energy, barriers (table, JSON, figure)",
+    )
+    add_scene_flags(p)
+    p.add_argument("--starts", type=count_arg("--starts", 2, 1000, "each start is a Newton run per round"), metavar="K", help="constant-curvature starts over the domain (default 25)")
+    p.add_argument("--max-bend", type=float_arg, metavar="DEG", help="largest total bend searched (default 360: a full turn)")
+    p.add_argument("--no-check", action="store_true", help="skip the completeness check (a second search from fresh starts)")
+    p.add_argument("--plot", metavar="FILE", help=f"the figure of every equilibrium (default {DEFAULT_EQUILIBRIA_FIGURE} when no scene file is given)")
+    p.add_argument("--no-plot", action="store_true", help="write no figure")
+    p.set_defaults(func=_cmd_equilibria)

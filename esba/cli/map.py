@@ -1,0 +1,162 @@
+"""``esba map``: the stability map of two parameters (fold curves, cusps, regions by stable states)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from esba.infra import outputs
+
+from .arguments import UsageError, add_scene_flags, count_arg, scene_from_args
+from .results import EXIT_FAILED, EXIT_OK, print_result
+
+#: Where ``esba map`` writes its fold curves and figure unless told otherwise (the current folder).
+DEFAULT_MAP_OUT = "esba-map.csv"
+DEFAULT_MAP_FIGURE = "esba-map.png"
+
+#: The parameters of a map (``esba.paths.problem.PARAMETERS``, written out so that building the
+#: parser does not import CasADi; a test checks they agree). A payload's take its number (payload2).
+_MAP_PARAMETERS = ("pressure", "payload", "omega", "at", "load", "r2", "d", "rho", "E", "L", "r1", "M")
+
+
+def axis_arg(flag: str):
+    """An argparse type: ``PARAM:FROM:TO`` with FROM < TO, finite."""
+
+    def parse(text: str) -> tuple[str, float, float]:
+        parts = text.split(":")
+        allowed = f"PARAM:FROM:TO with PARAM one of {', '.join(_MAP_PARAMETERS)} (a payload's with its number, e.g. omega2) and FROM < TO"
+        if len(parts) != 3:
+            raise argparse.ArgumentTypeError(f"{flag}={text!r}: expected {allowed}")
+        name = parts[0].strip()
+        base = name.rstrip("0123456789")
+        if name not in _MAP_PARAMETERS and not (base in ("payload", "omega", "at") and base != name):
+            raise argparse.ArgumentTypeError(f"{flag}={text!r}: unknown parameter {name!r}; expected {allowed}")
+        try:
+            lo, hi = float(parts[1]), float(parts[2])
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{flag}={text!r}: FROM and TO must be numbers; expected {allowed}") from None
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise argparse.ArgumentTypeError(f"{flag}={text!r}: expected finite FROM < TO")
+        return name, lo, hi
+
+    return parse
+
+
+def _map_table(d: dict) -> str:
+    x, y = d["x"], d["y"]
+    ux = f" {x['unit']}" if x["unit"] and x["unit"] != "1" else ""
+    uy = f" {y['unit']}" if y["unit"] and y["unit"] != "1" else ""
+    s = d["summary"]
+    lines = [
+        f"scene: {d['scene']}",
+        f"map of {x['parameter']} {x['from']:g}..{x['to']:g}{ux} by {y['parameter']} {y['from']:g}..{y['to']:g}{uy}",
+        f"fold curves: {s['curves']} ({s['points']} points); cusps: {s['cusp']}; "
+        f"fold/branch-point meetings: {s['branch point of the x-path'] + s['branch point of the y-path']}",
+    ]
+    for c in d["fold_curves"]:
+        lines.append(f"  curve {c['index']}: {c['points']} points, {x['parameter']} {c['x_range'][0]:.6g}..{c['x_range'][1]:.6g}{ux}, "
+                     f"{y['parameter']} {c['y_range'][0]:.6g}..{c['y_range'][1]:.6g}{uy}; {c['stop_reason']}")
+    for p in d["special_points"]:
+        lines.append(f"  {p['label']:3} {p['kind']:<27} {x['parameter']} = {p[x['parameter']]:.10g}{ux}, {y['parameter']} = {p[y['parameter']]:.10g}{uy}, "
+                     f"total angle {p['total_angle_deg']:.3f} deg  {p['status']}")
+    st = d["stable_states"]
+    lines.append(f"stable states: {st['min']} to {st['max']}; more than one on {100 * st['fraction_multistable']:.1f}% of the map "
+                 f"(anchored by brute force at {x['parameter']} = {d['reference'][x['parameter']]:g}, {y['parameter']} = {d['reference'][y['parameter']]:g}: "
+                 f"{d['reference']['stable_states']})")
+    for name in ("loading", "unloading"):
+        pts = d["jumps"][name]
+        if pts:
+            lines.append(f"{x['parameter']} {'rising' if name == 'loading' else 'falling'}: jumps at " + ", ".join(f"{p[0]:.6g}{ux} ({y['parameter']} {p[1]:.4g})" for p in pts))
+    if d.get("check_grid"):
+        g = d["check_grid"]
+        lines.append(f"check against brute force on a {g['k']} x {g['k']} grid: {g['k'] ** 2 - g['mismatches'] - g['near_mismatches']} cells agree, "
+                     f"{g['mismatches']} disagree, {g['near_mismatches']} disagree within {g['near']:g} of a fold curve")
+    for k in ("out", "figure"):
+        if d.get(k):
+            lines.append(f"wrote {d[k]}")
+    return "\n".join(lines)
+
+
+def _map_write_doc(args: argparse.Namespace) -> int:
+    """``esba map --write-doc FILE``: the maps of docs/maps.md (no other map flags)."""
+    given = [flag for flag, v in (("--x", args.x), ("--y", args.y), ("--out", args.out), ("--plot", args.plot), ("--check-grid", args.check_grid), ("SCENE.toml", args.scene)) if v is not None]
+    if given:
+        raise UsageError(f"--write-doc runs its own maps of the Table 1 actuator: give no {', '.join(given)} with it")
+    outputs.check_file(args.write_doc, "--write-doc", (".md",))
+    from esba.pages.maps import PAGE, MapsSettings
+
+    def say(msg):
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    page = PAGE.write(args.write_doc, MapsSettings(f"esba map --write-doc {args.write_doc}"), progress=say).path
+    print_result(args, {"page": str(page.resolve())}, lambda d: f"wrote {d['page']}")
+    return EXIT_OK
+
+
+def _cmd_map(args: argparse.Namespace) -> int:
+    if args.write_doc:
+        return _map_write_doc(args)
+    for flag, v in (("--x", args.x), ("--y", args.y)):
+        if v is None:
+            raise UsageError(f"the following arguments are required: {flag} PARAM:FROM:TO")
+    out = None if args.no_out else outputs.check_file(args.out or DEFAULT_MAP_OUT, "--out", (".csv", ".json"))
+    plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_MAP_FIGURE, "--plot", DEFAULT_MAP_FIGURE)
+    (xname, x0, x1), (yname, y0, y1) = args.x, args.y
+    scene = scene_from_args(args)
+    from esba.analysis.folds import Plane, check_box, write_fold_curves
+    from esba.analysis.maps import check_grid, stability_map
+    from esba.paths.problem import PathError
+    from esba.statics.equilibrium import EquilibriumError
+
+    try:
+        plane = Plane.from_scene(scene, xname, yname)
+        for name, lo, hi, prob in ((xname, x0, x1, plane.px), (yname, y0, y1, plane.py)):
+            if not (prob.in_range(lo) and prob.in_range(hi)):
+                raise UsageError(f"--{'x' if prob is plane.px else 'y'} {name}:{lo:g}:{hi:g}: outside the parameter's range {prob.domain[0]:.7g}..{prob.domain[1]:.7g}{prob.unit_short}")
+        check_box(plane, ((x0, x1), (y0, y1)))
+        say = (lambda msg: None) if args.json else (lambda msg: print(f"  {msg}", file=sys.stderr))
+        smap = stability_map(plane, (x0, x1), (y0, y1), resolution=args.resolution, history_lines=args.history_lines, progress=say)
+        checked = check_grid(smap, args.check_grid) if args.check_grid else None
+    except PathError as exc:
+        raise UsageError(str(exc)) from None
+    except EquilibriumError as exc:
+        print(f"esba: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    data = smap.to_dict(points=bool(args.json and args.points))
+    data["scene"] = scene.describe()
+    if checked is not None:
+        data["check_grid"] = checked.to_dict()
+    if out:
+        extra = {k: v for k, v in smap.to_dict(points=False).items() if k != "fold_curves"}
+        data["out"] = str(write_fold_curves(smap.curves, out, extra).resolve())
+    if plot:
+        from esba.figures.maps import map_figure, save_figure
+
+        data["figure"] = str(save_figure(map_figure(smap), plot).resolve())
+    print_result(args, data, _map_table)
+    if checked is not None and not checked.agrees:
+        print(f"esba: the map disagrees with brute force in {checked.mismatches} cells away from a fold curve", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def add_map(sub) -> None:
+    p = sub.add_parser(
+        "map",
+        help="stability map of two parameters: fold curves, cusps, regions by number of stable states, jump lines (CSV/JSON, figure)",
+    )
+    add_scene_flags(p)
+    p.add_argument("--x", type=axis_arg("--x"), metavar="PARAM:FROM:TO", help="the horizontal parameter and its range (e.g. omega:110:135; units as esba path)")
+    p.add_argument("--y", type=axis_arg("--y"), metavar="PARAM:FROM:TO", help="the vertical parameter and its range (e.g. payload:0:4)")
+    p.add_argument("--check-grid", type=count_arg("--check-grid", 1, 40, "K x K brute-force counts"), metavar="K", help="also count the stable states by brute force at the centres of a K x K grid and compare (exit 1 on a disagreement away from a fold curve)")
+    p.add_argument("--resolution", type=count_arg("--resolution", 11, 1001, "raster of the regions"), default=201, metavar="N", help="the regions' raster, N x N (default 201)")
+    p.add_argument("--history-lines", type=count_arg("--history-lines", 0, 201, "quasi-static histories"), default=21, metavar="N", help="values of y at which the history in x is followed up and down for the jump lines (default 21; 0: none)")
+    p.add_argument("--out", metavar="FILE", help=f"the fold curves as CSV or JSON (default {DEFAULT_MAP_OUT})")
+    p.add_argument("--no-out", action="store_true", help="write no fold-curve file")
+    p.add_argument("--plot", metavar="FILE", help=f"the figure (default {DEFAULT_MAP_FIGURE})")
+    p.add_argument("--no-plot", action="store_true", help="write no figure")
+    p.add_argument("--points", action="store_true", help="with --json: print every point of the fold curves")
+    p.add_argument("--write-doc", metavar="FILE", help="compute the maps of docs/maps.md (Table 1: three stability maps, the design plane; about two minutes) and write the page and its figures")
+    p.set_defaults(func=_cmd_map)

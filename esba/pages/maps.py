@@ -1,0 +1,287 @@
+"""The page ``docs/maps.md`` and its figures: the stability maps of the Table 1 actuator and the design
+plane at an operating envelope (``esba map --write-doc docs/maps.md`` writes them; ``esba docs
+--check maps`` says whether the committed page is stale).
+
+Presentation only: the maps come from :func:`esba.analysis.map_cases.map_cases`, the design plane
+from :func:`esba.design.envelope.design_plane`; nothing here traces a curve.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from esba.analysis.map_cases import MapCaseResult, map_cases
+from esba.analysis.maps import MAX_STARTS, STARTS_PER_SEGMENT
+from esba.design.envelope import DesignPlane, Envelope, design_plane
+from esba.figures.maps import design_plane_figure, map_figure
+
+from .page import TIMES, Page, Progress, Rendered, Times
+
+__all__ = ["PAGE", "MapsPage", "MapsSettings", "ENVELOPE", "FIGURES", "render_page"]
+
+#: The operating envelope of the design plane: the paper's optimum (r2 = 1.5305 mm, d = 0) snaps inside it.
+ENVELOPE = Envelope(0.3, 2.5, (90.0,), 1.0, 0.05)
+#: The design plane's grid.
+R2_GRID = tuple(float(v) for v in np.linspace(0.25, 7.75, 16))
+D_GRID = tuple(float(v) for v in np.linspace(0.0, 7.5, 16))
+#: The page's figures, in ``figures/`` beside it.
+FIGURES = {"pressure-payload": "map-pressure-payload.png", "omega-payload": "map-omega-payload.png",
+           "pressure-omega": "map-pressure-omega.png", "design": "map-design-plane.png"}
+
+
+@dataclass(frozen=True, eq=False)
+class MapsData:
+    maps: list[MapCaseResult]
+    design: DesignPlane
+
+
+def _unit(u: str) -> str:
+    return f" {u}" if u and u != "1" else ""
+
+
+def _special_rows(r: MapCaseResult) -> list[str]:
+    nx, ny = r.map.names
+    ux, uy = r.map.plane.units
+    rows = [f"| point | {nx} ({ux}) | {ny} ({uy}) | total angle (deg) | critical vector | status |", "|---|---|---|---|---|---|"]
+    for p in r.map.special:
+        vec = ", ".join(f"{v:.4f}" for v in p.vector)
+        rows.append(f"| {p.kind} | {p.x:.10g} | {p.y:.10g} | {np.degrees(np.sum(p.theta)):.3f} | ({vec}) | {p.status} |")
+    return rows
+
+
+def _check_line(r: MapCaseResult) -> str:
+    c = r.check
+    agree = c.k * c.k - c.mismatches - c.near_mismatches
+    counts = sorted({int(cell[3]) for cell in c.cells})
+    return (
+        f"Brute force (a damped Newton descent from {min(STARTS_PER_SEGMENT ** r.map.plane.n, MAX_STARTS)} starts at each cell centre, `esba.analysis.maps.stable_states`) on a "
+        f"{c.k} x {c.k} grid finds {' or '.join(str(k) for k in counts)} stable state{'s' if counts[-1] != 1 else ''} per cell; the map agrees in **{agree} of {c.k * c.k}** cells"
+        + (f" ({c.mismatches + c.near_mismatches} disagree)." if c.mismatches + c.near_mismatches else ".")
+    )
+
+
+def _jumps(r: MapCaseResult, which: str) -> list[list[float]]:
+    return r.map.jumps.get(which, [])
+
+
+def render_page(data: MapsData, command: str, times: Times = TIMES) -> str:
+    fig = Path("figures")
+    pp, op, po = data.maps
+    cusp_pp = next(p for p in pp.map.special if p.kind == "cusp")
+    cusp_op = next(p for p in op.map.special if p.kind == "cusp")
+    bp_op = [p for p in op.map.special if p.kind == "branch point of the y-path"]
+    cusps_po = [p for p in po.map.special if p.kind == "cusp"]
+    lines = [
+        "# Stability maps: where the actuator has one stable state, and where it snaps",
+        "",
+        f"<!-- Written by `{command}`; rerun it to refresh. -->",
+        "",
+        "`docs/paths.md` follows the equilibria of the Table 1 actuator (n = 3, variant `paper`) along one",
+        "parameter at a time. A designer's question has two: over which pressures and payloads does the",
+        "actuator have one stable state, and where does it snap? This page answers it by continuing the",
+        "folds themselves in two parameters (`esba map`, `esba/analysis/folds.py`): the extended system",
+        "g = 0, H v = 0, v0 . v = 1 (2n + 1 equations in theta, v and the two parameters) is followed by",
+        "pseudo-arclength continuation, seeded at the folds that the path engine finds on one-parameter",
+        "paths across the plane. Along each fold curve three test functions locate the codimension-two points",
+        "to round-off (Brent's method on the curve's arclength, each point a converged solution of the",
+        "extended system): a **cusp** (c = v . (d(Hv)/dtheta) v = 0: the two folds of a path are born",
+        "together) and the points where the fold curve **meets a branch point** of a path in x or in y",
+        "(v . dg/dy = 0: the curve is tangent to the path there, which folds twice on one side and not at",
+        "all on the other).",
+        "",
+        "Each region is shaded by its number of stable states: counted once by brute force at a corner of",
+        "the map and carried across the plane, +1 or -1 at each crossing of a *stable* fold curve (one that",
+        "joins a stable and an unstable state) according to the side on which the fold's pair exists (its",
+        "normal form). Solid black lines are the fold curves, stars the cusps, diamonds the fold/branch-point",
+        "meetings; the triangles mark where the quasi-static history in x jumps, rising (right) and",
+        "falling (left), at a set of values of y (`esba.paths.loading.history`).",
+        "",
+    ]
+    # --- pressure-payload
+    lines += [
+        "## Pressure and horizontal tip payload",
+        "",
+        f"![{pp.case.title}]({fig / FIGURES['pressure-payload']})",
+        "",
+        f"`{pp.case.command}` draws this map.",
+        "",
+        "The bistable window opens at a cusp: below its payload every pressure has one stable state; above",
+        "it a band of pressures has two, between the loading fold (where inflating snaps) and the unloading",
+        "fold (where deflating snaps back).",
+        "",
+    ]
+    lines += _special_rows(pp)
+    lines += [
+        "",
+        f"The cusp lies at **F = {cusp_pp.y:.6f} N, P = {cusp_pp.x:.6f} MPa** (docs/paths.md found 1.645 N by",
+        "bisection to 1e-3 N over repeated path traces). Its fold/branch-point neighbour is where the fold",
+        "curve is tangent to a payload path (the pressure is extremal on the curve): the curve's axis is",
+        "nearly parallel to the payload axis, so the two points almost coincide.",
+        "",
+        "The folds of the pressure paths in `docs/paths.md`, read off the fold curve (the extended system at",
+        "the payload):",
+        "",
+        "| payload (N) | folds on the curve (MPa) |",
+        "|---|---|",
+    ]
+    lines += [f"| {f:g} | {', '.join(f'{v:.8f}' for v in vals)} |" for f, vals in pp.lines.items()]
+    lines += ["", _check_line(pp), ""]
+    # --- omega-payload
+    lines += [
+        "## Payload direction and magnitude at the 90 degree pressure",
+        "",
+        f"![{op.case.title}]({fig / FIGURES['omega-payload']})",
+        "",
+        f"`{op.case.command}` draws this map.",
+        "",
+    ]
+    lines += _special_rows(op)
+    window = f"{bp_op[0].x:.4f} to {cusp_op.x:.4f} deg" if bp_op else "-"
+    lines += [
+        "",
+        f"The bistable region opens at the cusp (**Omega = {cusp_op.x:.6f} deg, F = {cusp_op.y:.6f} N**).",
+        ("Just above it the fold curve turns back in Omega at a branch point of the payload path "
+         f"(**Omega = {bp_op[0].x:.6f} deg, F = {bp_op[0].y:.6f} N**): for directions in the window {window} a payload "
+         "path from F = 0 folds twice, outside it not at all (the puzzle of `docs/paths.md` near 122.2 deg).") if bp_op else "",
+        "",
+        "Under 2 N the fold curve gives the folds of the direction path of `docs/paths.md`:",
+        f"{', '.join(f'{v:.6f}' for v in op.lines.get(2.0, []))} deg.",
+        "",
+        _check_line(op),
+        "",
+    ]
+    # --- pressure-omega
+    lines += [
+        "## Pressure and payload direction under 2 N",
+        "",
+        f"![{po.case.title}]({fig / FIGURES['pressure-omega']})",
+        "",
+        f"`{po.case.command}` draws this map.",
+        "",
+    ]
+    lines += _special_rows(po)
+    lines += [
+        "",
+        ("The bistable band closes at a cusp at **Omega = "
+         f"{cusps_po[0].y:.4f} deg, P = {cusps_po[0].x:.6f} MPa**: with the payload turned further towards the "
+         "base there is no snap at any pressure.") if cusps_po else "",
+        "At Omega = 90 deg the curve crosses at "
+        f"{', '.join(f'{v:.8f}' for v in po.lines.get(90.0, []))} MPa, the folds of the first map at 2 N.",
+        "",
+        _check_line(po),
+        "",
+    ]
+    # --- design plane
+    dp = data.design
+    env = dp.envelope
+    best = dp.optimum or ()
+    m = best[0] if best else None
+    p = best[1] if len(best) > 1 else None
+    u = m.unconstrained if m else {}
+    uc = u.get("clearance") or {}
+    near = (uc.get("nearest_fold") or {})
+    lines += [
+        "## The design plane (r2, d) at an operating envelope",
+        "",
+        f"The envelope: {env.describe()}. A design is *clear* when no stable fold lies at pressures up to",
+        f"{env.pressure_bound:g} MPa and payloads up to {env.payload_bound:g} N (the envelope and its margin); "
+        "`esba.design.envelope.fold_clearance`",
+        "finds the lowest fold payload on the design's fold curves in the (pressure, payload) plane.",
+        "",
+        f"![design plane]({fig / FIGURES['design']})",
+        "",
+        f"Of the {len(dp.state)} designs of the grid, {dp.count('clear')} are clear of folds, {dp.count('margin')} have a fold within",
+        f"the margin, {dp.count('snaps')} snap inside the envelope and {dp.count('over budget')} need more than {env.max_pressure:g} MPa to bend to 90 deg.",
+        "",
+    ]
+    if m is not None:
+        lines += [
+            f"Without the fold constraint the stiffest design (IPOPT, the paper's problem) is r2 = {u.get('r2_mm', float('nan')):.4f} mm,",
+            f"d = {u.get('d_mm', float('nan')):.4f} mm (K = {u.get('stiffness_n_per_m', float('nan')):.4f} N/m): the paper's optimum. It "
+            + ("**snaps inside the envelope**" if uc.get("snaps_inside") else "is clear")
+            + (f": its {near.get('kind')} lies at P = {near.get('pressure_mpa', float('nan')):.5f} MPa, F = {near.get('payload_n', float('nan')):.5f} N." if near else "."),
+            "",
+            "| method | r2 (mm) | d (mm) | K (N/m) | 90 deg pressure (MPa) | nearest fold | active constraints | designs | time (s) |",
+            "|---|---|---|---|---|---|---|---|---|",
+        ]
+        for r in best:
+            nf = r.clearance.nearest if r.clearance else None
+            nf_text = f"{nf['kind']}: P = {nf['pressure_mpa']:.5f} MPa, F = {nf['payload_n']:.5f} N" if nf else "none"
+            lines.append(
+                f"| {r.method} | {r.r2_mm:.5f} | {r.d_mm:.5f} | {r.stiffness_n_per_m:.4f} | {r.pressure_mpa:.5f} | {nf_text} | "
+                f"{', '.join(r.active) or 'none'} | {r.evaluations} | {times(r.solve_time_s, '.1f')} |"
+            )
+        if p is not None:
+            lines += [
+                "",
+                f"The swarm (12 particles, 15 iterations, Deb's rules on the same constraint) lands {abs(p.r2_mm - m.r2_mm):.4f} mm from the",
+                f"map-based design in r2 and {abs(p.d_mm - m.d_mm):.4f} mm in d, with a stiffness {100 * (m.stiffness_n_per_m - p.stiffness_n_per_m) / m.stiffness_n_per_m:.3f} % lower.",
+            ]
+        lines += [
+            "",
+            f"`esba design --envelope-pressure {env.max_pressure:g} --envelope-payload {env.max_payload:g} --fold-margin {env.margin:g} --method both` runs both.",
+            "",
+        ]
+    # --- designer
+    lines += [
+        "## What a designer should take from each map",
+        "",
+        f"- **Pressure and side load**: below {cusp_pp.y:.3f} N of horizontal tip payload the Table 1 actuator has one",
+        "  stable state at every pressure and no pressure command snaps it. Above it, a band of pressures",
+        "  widening with the payload is bistable: keep operating pressures outside the band, or expect the",
+        "  history (inflate first or load first) to decide the shape.",
+        f"- **Direction and magnitude**: at the 90 degree pressure, payloads below {cusp_op.y:.3f} N never snap",
+        f"  whatever their direction in {op.case.xrange[0]:g} to {op.case.xrange[1]:g} deg; heavier ones snap when turned across the",
+        "  fold curve, and the history lines show the snap-up and snap-back directions differ (hysteresis in",
+        "  the direction). Near the cusp the window of directions in which a growing load snaps is a tenth",
+        "  of a degree wide: a task there is on a knife edge.",
+        "- **Pressure and direction under 2 N**: the bistable band moves to lower pressures as the load",
+        "  turns towards the base"
+        + (f" and closes at {cusps_po[0].y:.1f} deg" if cusps_po else "")
+        + ": a controller that knows the load's direction knows which pressures to avoid.",
+        f"- **Design plane**: the stiffest chamber of the paper snaps inside a {env.max_payload:g} N, {env.max_pressure:g} MPa envelope; the",
+        "  fold constraint moves the optimum to a smaller chamber"
+        + (f" (r2 = {m.r2_mm:.3f} mm), giving up {100 * (1 - m.stiffness_n_per_m / u['stiffness_n_per_m']):.1f} % of the stiffness" if m is not None and u.get("stiffness_n_per_m") else "")
+        + " for an actuator that",
+        "  cannot snap in its envelope.",
+        "",
+        "The fold curves' cost against the brute-force grid they replace is benchmarked on",
+        "[performance.md](performance.md) (`esba bench maps`).",
+        "",
+    ]
+    return "\n".join(line for line in lines)
+
+
+@dataclass(frozen=True)
+class MapsSettings:
+    """The page's one setting: the command it names as its writer."""
+
+    command: str
+
+
+class MapsPage(Page):
+    """``docs/maps.md`` and its four figures in ``figures/`` beside it."""
+
+    name = "maps"
+
+    def settings(self) -> MapsSettings:
+        return MapsSettings(self.command)
+
+    def compute(self, settings: MapsSettings | None = None, progress: Progress | None = None) -> MapsData:
+        maps = map_cases(progress)
+        if progress:
+            progress("design plane")
+        design = design_plane(None, ENVELOPE, R2_GRID, D_GRID, optimum="both", progress=progress)
+        return MapsData(maps, design)
+
+    def render(self, data: MapsData, settings: MapsSettings, path: Path, times: Times = TIMES) -> Rendered:
+        figures: dict[Path, Any] = {path.parent / "figures" / FIGURES[r.case.name]: (lambda r=r: map_figure(r.map, r.case.title)) for r in data.maps}
+        figures[path.parent / "figures" / FIGURES["design"]] = lambda: design_plane_figure(data.design)
+        return Rendered(render_page(data, settings.command, times), figures)
+
+
+PAGE = MapsPage()
