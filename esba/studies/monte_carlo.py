@@ -120,10 +120,15 @@ def sample_row_problem(n: int, row: dict[str, Any]) -> str:
     >>> sample_row_problem(1, {"outcome": "ok", "theta1_rad": "0.5", "total_angle_rad": "0.7", "tip_x_mm": "1", "tip_y_mm": "2"})
     'is ok but its total_angle_rad=0.7 is not the sum of its angles (0.5)'
     """
+    if row.get("outcome") not in OUTCOMES.values():
+        return f"has outcome={checks.quote(row.get('outcome'), 30)}; a Monte Carlo writes {', '.join(OUTCOMES.values())}"
+    cells = [f"theta{k + 1}_rad" for k in range(n)] + ["total_angle_rad", "tip_x_mm", "tip_y_mm"]
+    try:
+        values = {c: _number(row.get(c, "")) for c in cells}
+    except ValueError:
+        return "has a cell that is not a finite number (as written, an empty cell is no value)"
     if row.get("outcome") != OUTCOMES[SAMPLE_OK]:
         return ""
-    cells = [f"theta{k + 1}_rad" for k in range(n)] + ["total_angle_rad", "tip_x_mm", "tip_y_mm"]
-    values = {c: _number(row.get(c, "")) for c in cells}
     empty = [c for c in cells if math.isnan(values[c])]
     if empty:
         return f"is ok but has no {empty[0]}"
@@ -172,6 +177,10 @@ def monte_carlo_study(
     if resume and file.path.exists() and file.path.stat().st_size > 0:
         rows: list[dict[str, str]] = []
         count = file.resume(rows.append)
+        bad = next(((i, p) for i, p in ((i, sample_row_problem(n, r)) for i, r in enumerate(rows)) if p), None)
+        if bad is not None:  # checked before the rows are read into arrays
+            file.close()
+            raise StudyError(f"--resume {file.path}: sample row {bad[0] + 1} {bad[1]}; it is not kept: remove the file to start anew")
         try:
             drawn = np.array([[float(r[name]) for name in names] for r in rows]).reshape(count, len(names)).T
             same = all(int(r["sample"]) == i for i, r in enumerate(rows)) and np.array_equal(drawn, values[:, :count])
@@ -182,11 +191,6 @@ def monte_carlo_study(
                 "tip": np.array([[_number(r["tip_x_mm"]), _number(r["tip_y_mm"])] for r in rows]).reshape(count, 2),
                 "total_angle": np.array([_number(r["total_angle_rad"]) for r in rows]),
             }
-            problems = [(i, sample_row_problem(n, r)) for i, r in enumerate(rows)]
-            bad = next(((i, p) for i, p in problems if p), None)
-            if bad is not None:
-                file.close()
-                raise StudyError(f"--resume {file.path}: sample row {bad[0] + 1} {bad[1]}; it is not kept: remove the file to start anew")
         except (KeyError, ValueError):
             file.close()
             raise StudyError(f"--resume {file.path}: a row's sample number, parameter values or outcome cannot be read; remove the file to start anew") from None

@@ -1008,3 +1008,31 @@ def test_a_path_of_a_million_steps_is_bounded_or_said_up_front(capsys, places):
     assert main(["path", "--to", "0.13", "--max-steps", "200000", "--no-plot", "--no-out"]) == EXIT_OK
     err = capsys.readouterr().err
     assert err.startswith("esba: note: --max-steps 200000 at n = 3: up to 0.3 GiB of points and minutes of work")
+
+
+def _cells(line: str, k: int, value: str) -> str:
+    cells = line.split(",")
+    cells[k] = value
+    return ",".join(cells)
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        (lambda line: _cells(line, -2, "nan"), "sample row 1 has a cell that is not a finite number (as written, an empty cell is no value)"),
+        (lambda line: _cells(line, -3, "0.1"), "sample row 1 is ok but its total_angle_rad=0.1 is not the sum of its angles"),
+        (lambda line: _cells(line, 1, "0.6"), "its samples are not the ones drawn again from seed 0"),
+    ],
+    ids=["nan-tip", "total-not-the-sum", "edited-sample"],
+)
+def test_a_resumed_monte_carlo_never_keeps_a_damaged_sample_row(capsys, places, edit, needle):
+    argv = ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", "mc.csv"]
+    assert main(argv) == EXIT_OK
+    capsys.readouterr()
+    path = Path(places["tmp"]) / "mc.csv"
+    lines = path.read_text().split("\n")
+    assert lines[2].split(",")[2] == "ok"
+    lines[2] = edit(lines[2])
+    path.write_text("\n".join(lines))
+    line = one_line_error(capsys, [*argv, "--resume"], places)
+    assert "mc.csv" in line and needle in line
