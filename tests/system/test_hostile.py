@@ -904,6 +904,7 @@ def _api_round2():
         ("compare(None, None)", lambda: __import__("esba.calibration.uncertainty", fromlist=["x"]).compare(None, None), UncertaintyError, "compare(NoneType, NoneType): expected a Propagation"),
         ("solve_scenes(None)", lambda: __import__("esba.statics.batch", fromlist=["x"]).solve_scenes(None), BatchOptionsError, "scenes=None: expected a list of Scene"),
         ("horizontal_payload_sweep(segments=2.5)", lambda: __import__("esba.figures.paper", fromlist=["x"]).horizontal_payload_sweep([1.0], segments=2.5), SceneError, "segments=2.5: expected a whole number"),
+        ("sensitivities(r, ['E', 'E'])", lambda: __import__("esba.analysis.sensitivity", fromlist=["x"]).sensitivities(result(), ["E", "E"]), InputError, "parameters: E given twice"),
         ("solve(theta0=[1e308]*3)", lambda: solve(MAIN_JOB, theta0=[1e308] * 3), SolverOptionsError, "theta0=[1e+308, 1e+308, 1e+308]: expected 3 angles (rad) with |angle| <= 1000"),
     ]
 
