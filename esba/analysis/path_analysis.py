@@ -27,7 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from esba.model.scene import Actuator, Scene
+from esba.infra import checks
+from esba.model.scene import Actuator, Scene, SceneError
 from esba.model.validity import assess
 from esba.paths.branch import Branch
 from esba.paths.continuation import PathOptions, bifurcating_branches, trace
@@ -52,7 +53,9 @@ def column_buckling_load(actuator: Actuator | None = None, segments: int = 3) ->
     3.2054
     """
     a = Actuator() if actuator is None else actuator
-    n = int(segments)
+    if not isinstance(a, Actuator):
+        raise SceneError(f"actuator={checks.quote(a)}: expected an esba.model.scene.Actuator (or None for Table 1)")
+    n = checks.segments(segments, SceneError)  # 2.5 is refused, not taken as 2; at most MAX_SEGMENTS (an n x n eigenproblem)
     L, r1, r2, d, E = a.L, a.r1, a.r2, a.d, a.E
     k_axial = n * E * math.pi * (5 * r1**4 - 4 * r2**2 * (r1 + d) ** 2 - r2**4) / (4 * L)
     slope = n * (r1**3 - r2**2 * (d + r1)) / (2 * r2 * L)  # d Delta r2 / d theta_i at 0, Eq. (10)

@@ -252,6 +252,8 @@ def with_parameters(scene: Scene, values: Mapping[str, float]) -> Scene:
     >>> s.actuator.E, s.payloads[0].angle_deg
     (0.6, 0.0)
     """
+    if not isinstance(values, Mapping):
+        raise SensitivityError(f"values={checks.quote(values)}: expected a mapping of parameter name to value, such as {{'E': 0.6}}")
     check_names(scene, list(values))
     act, top = {}, {}
     payloads = list(scene.payloads)
@@ -503,7 +505,14 @@ def sensitivities(result: Equilibrium, parameters: Sequence[str] | None = None, 
         raise SensitivityError(f"result={result!r}: expected an Equilibrium (from esba.statics.equilibrium.solve)")
     scene, model = result.scene, result.model
     names = parameter_names(scene)
+    if isinstance(parameters, str):  # one name, as the CLI's single NAME
+        parameters = [parameters]
+    if parameters is not None and not isinstance(parameters, (list, tuple)):
+        raise SensitivityError(f"parameters={checks.quote(parameters)}: expected a list of parameter names, such as ['E', 'rho']")
     chosen = names if parameters is None else check_names(scene, list(parameters))
+    twice = sorted({p for p in chosen if chosen.count(p) > 1})
+    if twice:
+        raise SensitivityError(f"parameters: {', '.join(twice)} given twice")
     params = scene_parameters(scene)
     p = np.array([q.value for q in params])
     fixed_names = tuple(k for k in model.parameters if k == "g" and "g" not in names)

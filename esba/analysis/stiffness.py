@@ -118,7 +118,8 @@ class TangentStiffness:
         This is what the secant stiffness tends to as the force tends to 0.
         """
         u = _unit(angle_deg)
-        return float(1.0 / (u @ self.compliance @ u))
+        c = float(u @ self.compliance @ u)
+        return 1.0 / c if c > 0 else math.inf  # the tip does not move along u to first order (straight, along its axis)
 
     def to_dict(self) -> dict:
         """JSON-ready form (N/m and m/N)."""

@@ -154,7 +154,14 @@ class FitOptions:
 
 
 def check_free(data: MeasurementSet, free: Sequence[str]) -> tuple[str, ...]:
-    """``free`` if it names fittable parameters the rows depend on; else a :class:`FitError`."""
+    """``free`` if it names fittable parameters the rows depend on; else a :class:`FitError`.
+
+    A text is read as the command line reads ``--free``: names separated by commas (``"E,rho"``).
+    """
+    if isinstance(free, str):
+        free = [s.strip() for s in free.split(",") if s.strip()]
+    if not isinstance(free, (list, tuple)) or not all(isinstance(n, str) for n in free):
+        raise FitError(f"free={checks.quote(free)}: expected names of parameters to fit, such as ['E', 'rho'] or 'E,rho'")
     free = tuple(free)
     if not free:
         raise FitError(f"free parameters: none given; choose from {', '.join(FITTABLE)}")
@@ -748,12 +755,18 @@ def predict(data: MeasurementSet, params: dict[str, float] | None = None, covari
         Covariance of ``params`` (in the order given): propagated to first order through the
         implicit-function-theorem Jacobian of each prediction.
     """
+    if not isinstance(data, MeasurementSet):
+        raise FitError(f"data={checks.quote(data)}: expected a MeasurementSet (esba.calibration.measurements.load_measurements)")
+    if params is not None and not isinstance(params, dict):
+        raise FitError(f"params={checks.quote(params)}: expected a dict of parameter values, such as {{'E': 0.54}}")
     params = {} if params is None else dict(params)
     free = check_free(data, list(params)) if params else ()
+    for name in free:
+        checks.finite(name, params[name], FitError)
     if covariance is not None:
-        covariance = np.asarray(covariance, dtype=float)
-        if covariance.shape != (len(free), len(free)):
-            raise FitError(f"covariance has shape {covariance.shape}: expected ({len(free)}, {len(free)}) for {', '.join(free)}")
+        if not free:
+            raise FitError("covariance given without params: it is the covariance of the params given")
+        covariance = checks.covariance("covariance", covariance, len(free), FitError)  # a negative variance is refused
     usable = covariance is not None and bool(np.all(np.isfinite(covariance)))
     out = []
     for m, quantities, y, dy, why in _rows_at(data, free, np.array([params[n] for n in free], dtype=float), solver_options):

@@ -71,6 +71,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+from esba.infra import checks, inputs
 from esba.infra.errors import InputError
 from esba.model.scene import Payload, Scene, SceneError, scene_from_dict
 
@@ -83,6 +84,15 @@ __all__ = ["MeasurementError", "Measurement", "MeasurementSet", "load_measuremen
 
 #: What can be measured, in the unit esba works in.
 QUANTITIES: dict[str, str] = {"total_angle": "deg", "tip_x": "mm", "tip_y": "mm", "stiffness": "N/m"}
+
+#: The smallest standard deviation of a measured value, in esba's unit of it (deg, mm, N/m).
+MIN_SD = 1e-6
+
+#: The largest angle a row may state (a target, or a measured total angle), degrees: ten turns.
+#: A bend past one turn is fitted with a warning (the actuator would pass through itself);
+#: one past ten is no measurement of a bending actuator (1e6 deg is a typo).
+MAX_ANGLE_DEG = 3600.0
+_TURN = "ten turns; past one the model already warns that the actuator passes through itself"
 
 #: The most rows a file may have (each row adds its equilibria to the fit's NLP).
 MAX_ROWS = 500
@@ -103,6 +113,7 @@ _UNITS: dict[str, dict[str, float]] = {
     "E": {"mpa": 1.0},
     "M": {"kg": 1.0},
 }
+_ESBA_UNIT = {"pressure": "MPa", "target_angle": "deg", **QUANTITIES}
 _ACTUATOR = {"L": "L", "r1": "r1", "r2": "r2", "d": "d", "rho": "rho_deg", "E": "E", "M": "M"}
 _PAYLOAD_FIELDS = {"n": "force", "angle_deg": "angle_deg", "at": "at"}
 
@@ -185,30 +196,36 @@ def _column(where: str, name: str) -> tuple[str, str | None, str | None]:
     if m:
         k = int(m.group(1)) if m.group(1) else 1
         if k < 1:
-            raise MeasurementError(f"{where}: column {name!r}: payloads are numbered from 1 (payload_n, payload2_n, ...)")
+            raise MeasurementError(f"{where}: column {checks.quote(name)}: payloads are numbered from 1 (payload_n, payload2_n, ...)")
         return "payload", f"{k}:{m.group(2)}", None
     if re.fullmatch(r"payload\d*(_.*)?", name):
-        raise MeasurementError(f"{where}: column {name!r}: a payload's columns are payload_n (N), payload_angle_deg and payload_at")
+        raise MeasurementError(f"{where}: column {checks.quote(name)}: a payload's columns are payload_n (N), payload_angle_deg and payload_at")
     for quantity in sorted(_UNITS, key=len, reverse=True):
         for sd in ("_sd", ""):
             prefix = quantity + sd
             if name == prefix:
-                raise MeasurementError(f"{where}: column {name!r} states no unit: write {_either([f'{prefix}_{u}' for u in _UNITS[quantity]])}")
+                raise MeasurementError(f"{where}: column {checks.quote(name)} states no unit: write {_either([f'{prefix}_{u}' for u in _UNITS[quantity]])}")
             if name.startswith(prefix + "_"):
                 unit = name[len(prefix) + 1:]
                 if unit not in _UNITS[quantity]:
                     allowed = ", ".join(f"{prefix}_{u}" for u in _UNITS[quantity])
-                    raise MeasurementError(f"{where}: column {name!r}: unit {unit!r} is not accepted for {quantity}; write {allowed}")
+                    raise MeasurementError(f"{where}: column {checks.quote(name)}: unit {checks.quote(unit)} is not accepted for {quantity}; write {allowed}")
                 if sd:
                     if quantity not in QUANTITIES:
-                        raise MeasurementError(f"{where}: column {name!r}: only measured quantities ({', '.join(QUANTITIES)}) take a standard deviation")
+                        raise MeasurementError(f"{where}: column {checks.quote(name)}: only measured quantities ({', '.join(QUANTITIES)}) take a standard deviation")
                     return "sd", quantity, unit
                 kind = "actuator" if quantity in _ACTUATOR else "value"
                 return kind, quantity, unit
     allowed = "label, pressure_mpa, target_angle_deg, payload_n, payload_angle_deg, payload_at, " + ", ".join(
         f"{q}_{next(iter(u))}" for q, u in _UNITS.items() if q not in ("pressure", "target_angle")
     ) + ", and <quantity>_sd_<unit>"
-    raise MeasurementError(f"{where}: unknown column {name!r}; allowed are {allowed}")
+    raise MeasurementError(f"{where}: unknown column {checks.quote(name)}; allowed are {allowed}")
+
+
+def _raw(raw: Any) -> str:
+    """A cell as the file gives it, for a message (cut when long)."""
+    text = raw.strip() if isinstance(raw, str) else repr(raw)
+    return text if len(text) <= 30 else text[:30] + "..."
 
 
 def _number(where: str, name: str, raw: Any) -> float | None:
@@ -216,21 +233,21 @@ def _number(where: str, name: str, raw: Any) -> float | None:
     if raw is None:
         return None
     if isinstance(raw, bool):
-        raise MeasurementError(f"{where}, {name}={raw!r}: expected a number")
+        raise MeasurementError(f"{where}, {name}={checks.quote(raw)}: expected a number")
     if isinstance(raw, str):
         text = raw.strip()
         if text == "":
             return None
         try:
-            value = float(text)
+            value = checks.number(name, text)  # decimal ASCII digits: float() also takes 1_0 and other scripts' digits
         except ValueError:
-            raise MeasurementError(f"{where}, {name}={text!r}: expected a number") from None
+            raise MeasurementError(f"{where}, {name}={checks.quote(text)}: expected a number") from None
     elif isinstance(raw, (int, float)):
         value = float(raw)
     else:
-        raise MeasurementError(f"{where}, {name}={raw!r}: expected a number")
+        raise MeasurementError(f"{where}, {name}={checks.quote(raw)}: expected a number")
     if not math.isfinite(value):
-        raise MeasurementError(f"{where}, {name}={value!r}: expected a finite number (leave the cell empty when it was not measured)")
+        raise MeasurementError(f"{where}, {name}={checks.quote(value)}: expected a finite number (leave the cell empty when it was not measured)")
     return value
 
 
@@ -241,6 +258,7 @@ def _row(where: str, row: Mapping[str, Any], base: Scene, columns: Mapping[str, 
     actuator: dict[str, float] = {}
     values: dict[str, float] = {}
     sds: dict[str, float] = {}
+    given: dict[tuple[str, str], tuple[str, float]] = {}  # (kind, quantity) -> (column, value in esba's unit)
     for name, raw in row.items():
         kind, detail, unit = columns[name]
         if kind == "label":
@@ -248,20 +266,38 @@ def _row(where: str, row: Mapping[str, Any], base: Scene, columns: Mapping[str, 
         value = _number(where, name, raw)
         if value is None:
             continue
+        if kind != "payload":  # one quantity in two units (pressure_mpa and pressure_kpa): they must agree
+            key, converted = (kind, detail), value * _UNITS[detail][unit]
+            if key in given:
+                other, before = given[key]
+                if not math.isclose(before, converted, rel_tol=1e-9, abs_tol=0.0):
+                    raise MeasurementError(
+                        f"{where}: {other}={_raw(row[other])} and {name}={_raw(raw)} disagree "
+                        f"({before:.6g} vs {converted:.6g} {_ESBA_UNIT.get(detail, '')}); give the {detail.replace('_', ' ')} once"
+                    )
+            given[key] = (name, converted)
         if kind == "payload":
             k, what = detail.split(":")
             payloads.setdefault(int(k), {})[_PAYLOAD_FIELDS[what]] = value
             continue
         value *= _UNITS[detail][unit]
         if detail in ("pressure", "target_angle"):
+            if detail == "target_angle" and not 0.0 < value <= MAX_ANGLE_DEG:
+                raise MeasurementError(f"{where}, {name}={value:g}: expected a target angle > 0 and <= {MAX_ANGLE_DEG:g} deg ({_TURN})")
             drive[detail] = value
         elif kind == "actuator":
             actuator[_ACTUATOR[detail]] = value
         elif kind == "sd":
             if value <= 0:
                 raise MeasurementError(f"{where}, {name}={value:g}: a standard deviation must be > 0")
+            if value < MIN_SD:  # its weight 1/sd^2 would swamp the fit (and overflow near 1e-154)
+                raise MeasurementError(
+                    f"{where}, {name}={value:g}: expected a standard deviation >= {MIN_SD:g} {QUANTITIES[detail]} (finer than any measurement)"
+                )
             sds[detail] = value
         else:
+            if detail == "total_angle" and abs(value) > MAX_ANGLE_DEG:
+                raise MeasurementError(f"{where}, {name}={value:g}: expected a measured angle from -{MAX_ANGLE_DEG:g} to {MAX_ANGLE_DEG:g} deg ({_TURN})")
             values[detail] = value
     if len(drive) != 1:
         given = ", ".join(drive) or "neither"
@@ -302,7 +338,7 @@ def measurements_from_rows(source: str, rows: list[tuple[str, Mapping[str, Any]]
     """
     base = Scene() if base is None else base
     if not isinstance(base, Scene):
-        raise MeasurementError(f"{source}: base={base!r}: expected a Scene")
+        raise MeasurementError(f"{source}: base={checks.quote(base)}: expected a Scene")
     if not rows:
         raise MeasurementError(f"{source}: no measurements (no data rows)")
     if len(rows) > MAX_ROWS:
@@ -316,21 +352,15 @@ def measurements_from_rows(source: str, rows: list[tuple[str, Mapping[str, Any]]
                 columns[name] = _column(f"{source}", str(name))
         m = _row(f"{source} {where}", row, base, columns, where)
         if m.label in labels:
-            raise MeasurementError(f"{source} {where}: label {m.label!r} is used twice (labels name rows in the report)")
+            raise MeasurementError(f"{source} {where}: label {checks.quote(m.label)} is used twice (labels name rows in the report)")
         labels.add(m.label)
         out.append(m)
     return MeasurementSet(source, base, tuple(out))
 
 
 def _read(path: Path) -> str:
-    try:
-        return path.read_bytes().decode("utf-8-sig")
-    except FileNotFoundError:
-        raise MeasurementError(f"measurement file {str(path)!r} does not exist") from None
-    except IsADirectoryError:
-        raise MeasurementError(f"measurement file {str(path)!r} is a folder, not a file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MeasurementError(f"measurement file {str(path)!r} cannot be read: {exc}") from None
+    """The file's text: a regular file of bounded size, BOM or not (:func:`esba.infra.inputs.read_text`)."""
+    return inputs.read_text(path, "measurement file", MeasurementError)
 
 
 def _csv_rows(source: str, text: str) -> list[tuple[str, dict]]:
@@ -371,6 +401,8 @@ def load_measurements(path: str | Path, base: Scene | None = None) -> Measuremen
     MeasurementError
         naming the file, the row and the field.
     """
+    if isinstance(path, bytes) or not isinstance(path, (str, Path)) or not str(path).strip():
+        raise MeasurementError(f"measurement file {checks.quote(path)}: expected the path of a .csv or .toml file")
     path = Path(path)
     source = str(path)
     suffix = path.suffix.lower()
@@ -382,10 +414,12 @@ def load_measurements(path: str | Path, base: Scene | None = None) -> Measuremen
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise MeasurementError(f"{source}: not valid TOML: {exc}") from None
+        raise MeasurementError(f"{source}: not valid TOML: {str(exc).splitlines()[0]}") from None
+    except RecursionError:
+        raise MeasurementError(f"{source}: not valid TOML: nested too deeply (arrays or tables inside each other)") from None
     unknown = sorted(set(data) - {"scene", "measurement"})
     if unknown:
-        raise MeasurementError(f"{source}: unknown table(s) {', '.join(unknown)}; allowed are [scene] and [[measurement]]")
+        raise MeasurementError(f"{source}: unknown table(s) {checks.some(unknown)}; allowed are [scene] and [[measurement]]")
     if base is None:
         try:
             base = scene_from_dict(data.get("scene", {}))

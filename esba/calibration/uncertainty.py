@@ -107,11 +107,12 @@ def ellipse(cov: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, float]:
     >>> [round(float(a), 4) for a in axes], round(angle, 6)
     ([4.8955, 2.4477], 0.0)
     """
-    if not 0.0 < level < 1.0:
-        raise UncertaintyError(f"level={level!r}: expected 0 < level < 1")
+    if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0.0 < level < 1.0:
+        raise UncertaintyError(f"level={checks.quote(level)}: expected 0 < level < 1")
+    cov = checks.covariance("cov", cov, 2, UncertaintyError)
     k = math.sqrt(-2.0 * math.log(1.0 - level))
-    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
-    w = np.maximum(w, 0.0)[::-1]
+    w, v = np.linalg.eigh(cov)
+    w = np.maximum(w, 0.0)[::-1]  # round-off below 0 (check_covariance refused more)
     v = v[:, ::-1]
     return k * np.sqrt(w), float(math.atan2(v[1, 0], v[0, 0]) % math.pi)
 
@@ -126,7 +127,8 @@ class Propagation:
     status : str
         ``ok``; ``near_fold`` (no sensitivities: no numbers); ``beyond_linear_range`` (numbers
         given, but 3 sigma of some parameter reaches the fold's estimated distance: do not trust
-        them); ``not_stable`` (no stable equilibrium: no numbers).
+        them); ``not_stable`` (no stable equilibrium: no numbers); ``overflow`` (the sigmas are so
+        large that the covariance is not a finite number: no numbers).
     message : str
     cov_theta : ndarray, shape (n, n)
         rad^2.
@@ -214,8 +216,14 @@ def propagate(result: Equilibrium, sigmas: Sequence[Sigma], options: Sensitivity
     if sens.status in ("near_fold", "not_stable"):
         return Propagation(sigmas, sens.status, sens.message, np.full((n, n), np.nan), nan2, math.nan, {}, result.tip[:2].copy(), result.total_angle_deg)
     sd = np.array([s.sigma for s in sigmas])
-    S = np.vstack([sens.dtheta, sens.dtip, sens.dtotal[None, :]]) * sd[None, :]  # each column: one parameter's 1-sigma effect
-    cov = S @ S.T
+    with np.errstate(over="ignore", invalid="ignore"):
+        S = np.vstack([sens.dtheta, sens.dtip, sens.dtotal[None, :]]) * sd[None, :]  # each column: one parameter's 1-sigma effect
+    with np.errstate(over="ignore", invalid="ignore"):
+        cov = S @ S.T
+    if not np.all(np.isfinite(cov)):  # a sigma so large that its square overflows: no numbers, said so
+        given = ", ".join(s.given for s in sigmas)
+        message = f"the first-order covariance of {given} overflows (not a finite number): the sigmas are far beyond the model's range"
+        return Propagation(sigmas, "overflow", message, np.full((n, n), np.nan), nan2, math.nan, {}, result.tip[:2].copy(), result.total_angle_deg)
     shares = {}
     for k, (out, _) in enumerate(OUTPUTS):
         row = S[n + k] ** 2
@@ -290,6 +298,10 @@ def draw_samples(sigmas: Sequence[Sigma], samples: int, seed: int) -> np.ndarray
     One generator (``numpy.random.default_rng(seed)``) draws every column in order, so a sample
     does not depend on how the samples are later split.
     """
+    sigmas = _checked_sigmas(None, sigmas)
+    samples = checks.whole("samples", samples, 1, UncertaintyError, high=MAX_SAMPLES, why="the Monte Carlo's bound")
+    seed = checks.whole("seed", seed, 0, UncertaintyError)
+    check_samples(samples, 1, len(sigmas))
     rng = np.random.default_rng(seed)
     out = np.empty((len(sigmas), samples))
     for i, s in enumerate(sigmas):
@@ -584,6 +596,8 @@ class Agreement:
 
 def compare(first: Propagation, mc: MonteCarlo) -> Agreement:
     """Set first-order propagation and Monte Carlo side by side; say whether they agree."""
+    if not isinstance(first, Propagation) or not isinstance(mc, MonteCarlo):
+        raise UncertaintyError(f"compare({type(first).__name__}, {type(mc).__name__}): expected a Propagation (propagate) and a MonteCarlo (monte_carlo)")
     tol = mc.options.agree_rel
     counts = mc.counts
     rows = []

@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from typing import Callable, Sequence
 
 from derive.effects import EffectError
@@ -61,9 +62,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: The longest error line printed: the messages cap what they quote (esba.infra.checks.quote);
+#: this is the last guard, for a message that quotes something unforeseen.
+MAX_LINE = 500
+
+
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
+    line = text[0] if text else type(exc).__name__
+    return line if len(line) <= MAX_LINE else line[:MAX_LINE] + f"... ({len(line)} characters)"
 
 
 def _run(argv: Sequence[str] | None) -> int:
@@ -106,7 +113,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     console.show_library_messages()
     try:
-        code = console.run(lambda: _run(argv))
+        with warnings.catch_warnings():
+            # NumPy's floating-point RuntimeWarnings are no message for the user: a result that is
+            # not finite is reported by the command itself (jsonsafe, validity, status); ESBA_DEBUG=1 shows them
+            if not os.environ.get("ESBA_DEBUG"):
+                warnings.simplefilter("ignore", RuntimeWarning)
+            code = console.run(lambda: _run(argv))
     except KeyboardInterrupt:
         print("esba: interrupted", file=sys.stderr)
         code = EXIT_INTERRUPTED

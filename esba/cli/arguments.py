@@ -26,7 +26,7 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-_WHOLE = re.compile(r"\s*\d+\s*")
+_WHOLE = re.compile(r"\s*\d+\s*", re.ASCII)  # ASCII digits only: int() also reads other scripts' digits
 
 
 def segments_arg(text: str) -> int:
@@ -67,8 +67,10 @@ def float_arg(text: str) -> float:
     """A number as people write it; Python's ``float()`` would also read ``0_1`` as 1."""
     try:
         return checks.number("value", text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number (expected decimal digits such as 0.1 or 2e-3)") from None
+    except ValueError as exc:
+        if "smallest normal" in str(exc):  # a subnormal number: said as such
+            raise argparse.ArgumentTypeError(str(exc).removeprefix("value ")) from None
+        raise argparse.ArgumentTypeError(f"{checks.quote(text)} is not a number (expected decimal digits such as 0.1 or 2e-3)") from None
 
 
 def add_scene_flags(p: argparse.ArgumentParser, payloads: bool = True) -> None:

@@ -24,7 +24,7 @@ def _cmd_bench_generation(args: argparse.Namespace) -> int:
     from esba.bench import timing as bench
     from esba.pages.performance import PAGE, GenerationSettings, generation_table
 
-    page = outputs.check_file(args.markdown, "--markdown") if args.markdown else None
+    page = outputs.check_file(args.markdown, "--markdown", (".md",)) if args.markdown else None
     command = f"esba bench generation --max-n {args.max_n} --repeat {args.repeat}{' --no-naive' if args.no_naive else ''} --markdown {args.markdown}"
     settings = GenerationSettings(args.max_n, args.repeat, not args.no_naive, command)
 
@@ -60,7 +60,7 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
         raise UsageError(f"--reference-n {ref_n}: expected a multiple of 4 (the reference extrapolates from n/4, n/2, n)")
     doc = fig = None
     if not args.no_write:
-        doc = outputs.check_file(outputs.default_page("accuracy-vs-time.md") if args.out is None else args.out, "--out")
+        doc = outputs.check_file(outputs.default_page("accuracy-vs-time.md") if args.out is None else args.out, "--out", (".md",))
         fig = outputs.figures_dir() / "accuracy-vs-time.png" if args.figure is None else args.figure
         if args.figure is None and outputs.checkout_root() is None:
             outputs.check_folder(fig.parent, "--figure")

@@ -104,12 +104,12 @@ def _cmd_audit(args: argparse.Namespace) -> int:
     if args.check:
         check = PAGE.check(page)
         stale = not check.ok
-        print_result(args, {"page": str(page), "stale": stale}, lambda d: f"{d['page']} is {'STALE' if d['stale'] else 'up to date'}")
+        print_result(args, {"page": str(page), "stale": stale, "status": check.status}, lambda d: f"{d['page']} is {'up to date' if not d['stale'] else d['status'].upper()}")
         if stale:
             print(f"esba: {page} is {check.status}: run `esba audit` and commit it", file=sys.stderr)
             return EXIT_FAILED
         return EXIT_OK
-    page = outputs.check_file(page, "--out")
+    page = outputs.check_file(page, "--out", (".md",))
     written = PAGE.write(page)
     data = {"page": str(written.path), "verdicts": written.data.verdicts()}
     print_result(args, data, lambda d: "\n".join([f"wrote {d['page']}"] + [f"  {k:<26} {v}" for k, v in d["verdicts"].items()]))

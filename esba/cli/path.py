@@ -87,6 +87,31 @@ def _path_write_doc(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+#: Above this much memory for the branches' points, a path says so before it starts.
+NOTE_BYTES = 256 * 1024**2
+
+
+def _check_path_size(max_steps: int, n: int) -> None:
+    """Bound a path up front as a sweep is bounded: refuse ``--max-steps`` whose branches could not
+    fit in the batch path's memory limit; say what a large one may take."""
+    from esba.paths.continuation import path_bytes
+    from esba.statics.batch_options import MAX_BATCH_BYTES
+
+    need = path_bytes(max_steps, n)
+    if need > MAX_BATCH_BYTES:
+        most = MAX_BATCH_BYTES // path_bytes(1, n)
+        raise UsageError(
+            f"--max-steps {max_steps} at n = {n}: the branches could hold about {need / 1024**3:.1f} GiB of points "
+            f"(limit {MAX_BATCH_BYTES / 1024**3:g} GiB): at most {most} steps at this n"
+        )
+    if need > NOTE_BYTES:
+        print(
+            f"esba: note: --max-steps {max_steps} at n = {n}: up to {need / 1024**3:.1f} GiB of points and minutes of work "
+            "if every branch takes them all (a smaller --max-steps bounds it; Ctrl-C stops it)",
+            file=sys.stderr,
+        )
+
+
 def _cmd_path(args: argparse.Namespace) -> int:
 
     if args.write_doc:
@@ -95,8 +120,12 @@ def _cmd_path(args: argparse.Namespace) -> int:
         raise UsageError("the following arguments are required: --to")
     if not math.isfinite(args.to):
         raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
-    out = None if args.no_out else outputs.check_file(args.out or DEFAULT_PATH_OUT, "--out", (".csv", ".json"))
-    plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_PATH_FIGURE, "--plot", DEFAULT_PATH_FIGURE)
+    if args.no_out and args.out is not None:
+        raise UsageError("--out and --no-out: give one of the two")
+    if args.no_plot and args.plot is not None:
+        raise UsageError("--plot and --no-plot: give one of the two")
+    out = None if args.no_out else outputs.check_file(DEFAULT_PATH_OUT if args.out is None else args.out, "--out", (".csv", ".json"))
+    plot = None if args.no_plot else outputs.figure_file(DEFAULT_PATH_FIGURE if args.plot is None else args.plot, "--plot", DEFAULT_PATH_FIGURE)
     from esba.analysis.path_analysis import analyse
     from esba.paths.continuation import PathOptions, write_branches
     from esba.paths.problem import PathError
@@ -108,6 +137,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
         if param not in ("payload", "omega", "at"):
             raise UsageError(f"--payload-index {args.payload_index}: only means something with --param payload, omega or at")
         param = f"{param}{args.payload_index}"
+    _check_path_size(args.max_steps, scene.segments)
     try:
         options = PathOptions(locate=args.locate, max_steps=args.max_steps, ds_max=args.ds_max, ds=min(0.05, args.ds_max))
         result = analyse(scene, param, args.to, start=args.start, options=options, switch=not args.no_switch, loading=not args.no_loading)

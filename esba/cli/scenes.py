@@ -4,6 +4,7 @@ sensitivities and uncertainty, and its Monte Carlo (in this process or on Dask).
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 import time
@@ -177,10 +178,12 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
         data["sensitivities"] = sensitivities(result).to_dict()
     if sigmas:
+        from esba.calibration.sigmas import outside_domain
         from esba.calibration.uncertainty import compare, monte_carlo, propagate
 
         propagation = propagate(result, sigmas)
         data["uncertainty"] = propagation.to_dict()
+        data["uncertainty"]["outside_domain"] = outside_domain(scene, sigmas)
         if mc_options is not None:
             if chunked:
                 from esba.studies.chunks import StudyStopped
@@ -210,6 +213,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     warn_findings(result.validity)
     if result.multistable:
         print(f"esba: warning: {result.multistability.message}", file=sys.stderr)
+    for line in data.get("uncertainty", {}).get("outside_domain", ()):
+        print(f"esba: warning: {line}", file=sys.stderr)
     if mc is not None and mc.counts["ok"] < 2:
         print(f"esba: warning: {data['agreement']['verdict']}", file=sys.stderr)
     if not result.ok:
@@ -327,10 +332,13 @@ def _stiffness_table(d: dict) -> str:
     for f, dl, k, tip in zip(d["payloads_n"], d["displacement_mm"], d["stiffness_n_per_m"], d["tip_mm"]):
         lines.append(f"{f:8.3f} {dl:11.3f} {k:9.3f} {tip[0]:8.2f}, {tip[1]:7.2f}")
     t = d["tangent"]
+    def k(v):
+        return "unbounded (the tip does not move that way to first order)" if v is None or not math.isfinite(v) else f"{v:.3f} N/m"
+
     lines.append(f"tangent stiffness of the unloaded state (F = 0, {d['initial_angle_deg']:.2f} deg), where every secant K starts "
                  "(C = J H^-1 J^T the tip's compliance there):")
     lines.append(f"  along the force, the tip free to move across it, 1 / (u^T C u) (the limit of K as F -> 0): "
-                 f"horizontal {t['horizontal_n_per_m']:.3f} N/m, vertical {t['vertical_n_per_m']:.3f} N/m")
+                 f"horizontal {k(t['horizontal_n_per_m'])}, vertical {k(t['vertical_n_per_m'])}")
     if t["matrix_n_per_m"] is not None:
         m = t["matrix_n_per_m"]
         lines.append(f"  K_tip = C^-1 (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]: "
@@ -464,7 +472,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         raise UsageError("give the page to check once: --check FILE or --out FILE")
     page = args.check if args.check not in (None, True) else outputs.default_page("validation.md") if args.out is None else args.out
     if not args.check:
-        page = outputs.check_file(page, "--out")
+        page = outputs.check_file(page, "--out", (".md",))
     cases = PAGE.compute()
     rows = list(cases.paper)
     if args.check:

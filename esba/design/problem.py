@@ -19,7 +19,9 @@ from typing import Any
 from derive.effects import DEFAULT_VARIANT, VARIANTS
 from esba.infra import checks
 from esba.infra.errors import InputError
+from esba.model import resolution
 from esba.model.scene import Actuator, Payload, Scene
+from esba.statics.equilibrium import DEFAULT_OPTIONS
 
 __all__ = ["OBJECTIVES", "METHODS", "GEOMETRY_EPS", "DesignError", "DesignProblem", "DesignOptions", "DEFAULT_DESIGN_OPTIONS"]
 
@@ -129,6 +131,13 @@ class DesignProblem:
         if wall >= self.actuator.r1:
             raise DesignError(f"min_wall={wall:g}: expected 0 <= min_wall < r1 = {self.actuator.r1:g} mm")
         object.__setattr__(self, "min_wall", wall)
+        if self.max_pressure is not None:  # the bound of every solve (esba.model.resolution), up front
+            top = resolution.max_pressure(self.actuator.r1, DEFAULT_OPTIONS.stationarity_tol)
+            if self.max_pressure > top:
+                raise DesignError(
+                    f"max_pressure={self.max_pressure:g} MPa: its moment on a segment is more than double precision can "
+                    f"balance; expected at most {top:.3g} MPa for r1 = {self.actuator.r1:g} mm"
+                )
         if self.objective == "angle" and self.max_pressure is None:
             raise DesignError("objective='angle' needs max_pressure (the pressure of the free bending angle, MPa)")
         if self.objective != "stiffness" and self.min_stiffness is None:

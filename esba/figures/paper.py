@@ -332,7 +332,8 @@ def horizontal_payload_sweep(forces: Sequence[float] = FINE_FORCES, segments: in
     >>> [round(k, 1) for k in s.stiffness_n_per_m]
     [41.0, 31.3, 26.4]
     """
-    result = secant_stiffness(MAIN_JOB.replace(segments=int(segments)), tuple(forces), angle_deg=90.0)
+    forces = tuple(forces) if isinstance(forces, (list, tuple, np.ndarray)) else forces  # anything else: secant_stiffness says what it expected
+    result = secant_stiffness(MAIN_JOB.replace(segments=segments), forces, angle_deg=90.0)  # the scene checks n (2.5 is refused, not 2)
     for f, r in zip((0.0, *result.forces), (result.initial, *result.loaded)):
         _checked(r, f"payload sweep, {f:g} N")
     return result
@@ -352,7 +353,7 @@ def payload_branch(segments: int = 3, to: float = 2.0, angle_deg: float = 90.0):
     """
     from esba.paths.continuation import PathOptions, PathProblem, trace
 
-    scene = MAIN_JOB.replace(segments=int(segments), payloads=(Payload(0.0, angle_deg, 1.0),))
+    scene = MAIN_JOB.replace(segments=segments, payloads=(Payload(0.0, angle_deg, 1.0),))
     start = _checked(solve(scene), "unloaded 90 deg state")
     problem = PathProblem.from_scene(scene, "payload", pressure=start.pressure)
     return trace(problem, start.theta, 0.0, to=to, milestones=PAPER_FORCES, options=PathOptions(ds_max=0.05))

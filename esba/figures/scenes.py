@@ -25,6 +25,7 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from esba.infra import outputs
 from esba.statics.equilibrium import Equilibrium
 
 __all__ = ["new_figure", "save_figure", "draw_shape", "draw_payloads", "draw_tip_ellipse", "setup_frame_axes", "solve_figure"]
@@ -38,11 +39,25 @@ def new_figure(width: float = 5.5, height: float = 5.0) -> Figure:
 
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = 150) -> Path:
-    """Write ``fig`` to ``path`` (format from the suffix); return the path."""
+    """Write ``fig`` to ``path`` (format from the suffix); return the path.
+
+    Raises
+    ------
+    esba.infra.outputs.WriteFailed
+        naming the file when it cannot be written (a full disk): no half-written file is left.
+    """
     path = Path(path)
-    if path.parent and not path.parent.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
+    try:
+        if path.parent and not path.parent.exists():
+            path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=dpi)
+    except OSError as exc:
+        try:
+            if path.is_file() and not path.is_symlink():
+                path.unlink()
+        except OSError:  # pragma: no cover - the folder went away meanwhile
+            pass
+        raise outputs.WriteFailed(f"{path}: cannot write ({exc.strerror or exc})") from None
     return path
 
 

@@ -34,6 +34,9 @@ import hashlib
 import json
 import os
 import shutil
+import signal
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -153,6 +156,47 @@ def read_verified(path: str | Path) -> tuple[bytes | None, str | None]:
 def damage(path: str | Path) -> str | None:
     """Why the cached file ``path`` may not be used, or None when it is exactly what was written."""
     return read_verified(path)[1]
+
+
+#: Shared libraries this process has seen a child process load (path, inode, size, mtime).
+_LOADED: set[tuple[str, int, int, int]] = set()
+
+
+def library_damage(path: str | Path, timeout: float = 120.0) -> str | None:
+    """Why the cached shared library ``path`` may not be loaded, or None.
+
+    Its checksum (:func:`damage`) first; then a child process loads it (``ctypes.CDLL``): a
+    library damaged while its checksum record was made to match (truncated, its pages past the
+    end of the file) would kill the loading process with a bus error, and this way it kills only
+    the child. Once per process for each file.
+    """
+    why = damage(path)
+    if why is not None:
+        return why
+    path = Path(path)
+    try:
+        st = path.stat()
+    except OSError as exc:
+        return f"unreadable ({exc.__class__.__name__})"
+    key = (str(path.resolve()), st.st_ino, st.st_size, st.st_mtime_ns)
+    if key in _LOADED:
+        return None
+    probe = "import ctypes, sys; ctypes.CDLL(sys.argv[1])"
+    try:
+        p = subprocess.run([sys.executable, "-c", probe, str(path)], capture_output=True, text=True, timeout=timeout)
+    except (OSError, subprocess.SubprocessError) as exc:
+        return f"it could not be test-loaded ({exc.__class__.__name__})"
+    if p.returncode < 0:
+        try:
+            name = signal.Signals(-p.returncode).name
+        except ValueError:
+            name = f"signal {-p.returncode}"
+        return f"loading it killed a test process ({name})"
+    if p.returncode != 0:
+        last = (p.stderr.strip().splitlines() or ["exit " + str(p.returncode)])[-1]
+        return f"it does not load ({last[:200]})"
+    _LOADED.add(key)
+    return None
 
 
 def discard(path: str | Path) -> None:

@@ -41,15 +41,36 @@ def _silence_stdout() -> None:
         pass
 
 
+def _closed_stdout() -> bool:
+    """When the command was started with stdout closed (``esba solve >&-``; Python then sets
+    ``sys.stdout`` to None): put /dev/null on file descriptor 1, before any file the command opens
+    could take that number (and receive what C libraries print), and let the prints go there."""
+    if sys.stdout is not None:
+        return False
+    try:
+        fd = os.open(os.devnull, os.O_WRONLY)
+        if fd != 1:
+            os.dup2(fd, 1)
+            os.close(fd)
+    except OSError:  # pragma: no cover - no /dev/null
+        pass
+    sys.stdout = open(os.devnull, "w", encoding="utf-8")  # noqa: SIM115 - the process's stdout from here on
+    return True
+
+
 def run(command: Callable[[], int]) -> int:
-    """Run ``command`` and flush stdout; a closed pipe ends it quietly with :data:`EXIT_PIPE`."""
+    """Run ``command`` and flush stdout; a closed pipe ends it quietly with :data:`EXIT_PIPE`; a
+    closed stdout is said on stderr in one line (the files the command writes are written)."""
+    closed = _closed_stdout()
     try:
         code = command()
         sys.stdout.flush()
-        return code
     except BrokenPipeError:
         _silence_stdout()
         return EXIT_PIPE
+    if closed and sys.stderr is not None:
+        print("esba: warning: standard output was closed: what the command printed is lost", file=sys.stderr)
+    return code
 
 
 class _Handler(logging.StreamHandler):

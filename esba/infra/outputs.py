@@ -42,6 +42,7 @@ esba.infra.outputs.OutputError: --out '...page.md': the folder '...missing' does
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from functools import lru_cache
 from pathlib import Path
@@ -158,6 +159,14 @@ def _probe(folder: Path) -> str:
     return ""
 
 
+def _no_trailing_separator(path: str | Path, flag: str) -> None:
+    """A name ending in ``/`` means a folder: refused when no such folder exists (``Path`` would
+    drop the slash and write a file of that name)."""
+    text = str(path) if not isinstance(path, Path) else ""
+    if text.endswith(("/", os.sep)) and not Path(text).is_dir():
+        raise OutputError(f"{flag} {_show(text)}: ends in '/' but is not an existing folder; expected a file name (or an existing folder)")
+
+
 def check_folder(path: str | Path, flag: str, create: bool = True) -> Path:
     """An output folder that exists (or, with ``create``, whose parent does) and can be written.
 
@@ -205,12 +214,19 @@ def check_file(path: str | Path, flag: str, suffixes: tuple[str, ...] | None = N
     """
     if str(path) == "":
         raise OutputError(f"{flag} '': expected a file name")
+    _no_trailing_separator(path, flag)
     file = Path(path)
     if suffixes is not None and file.suffix.lower() not in suffixes:
         got = f"'{file.suffix}'" if file.suffix else "no suffix"
         raise OutputError(f"{flag} {_show(file)}: {got}; expected a file ending in {', '.join(suffixes)}")
     if file.is_dir():
         raise OutputError(f"{flag} {_show(file)}: is a folder, expected a file")
+    try:
+        mode = os.stat(file).st_mode
+    except (OSError, ValueError):
+        mode = 0
+    if stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode):  # a write would wait for a reader
+        raise OutputError(f"{flag} {_show(file)}: is a FIFO or socket, expected a file (a write would wait for a reader)")
     folder = file.resolve().parent if not file.is_symlink() else file.parent
     if not folder.exists():
         raise OutputError(f"{flag} {_show(file)}: the folder {_show(file.parent)} does not exist (create it first)")
@@ -240,6 +256,7 @@ def figure_file(path: str | Path, flag: str, default_name: str) -> Path:
     """
     if str(path) == "":
         raise OutputError(f"{flag} '': expected a figure file (e.g. shape.png) or a folder")
+    _no_trailing_separator(path, flag)
     file = Path(path)
     if file.is_dir():
         file = file / default_name

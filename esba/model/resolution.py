@@ -34,7 +34,7 @@ import numpy as np
 
 from .scene import Scene, SceneError
 
-__all__ = ["ANGLE_RESOLUTION", "ROUNDOFF_FACTOR", "MIN_DOMAIN_WIDTH", "segment_stiffness", "min_modulus", "min_chamber_radius", "check_domain", "check_resolvable"]
+__all__ = ["ANGLE_RESOLUTION", "ROUNDOFF_FACTOR", "MIN_DOMAIN_WIDTH", "segment_stiffness", "min_modulus", "max_pressure", "check_stiffness", "min_chamber_radius", "check_domain", "check_resolvable"]
 
 #: The largest angle (rad) the stationarity tolerance may leave undetermined: tol / k.
 ANGLE_RESOLUTION = 1e-3
@@ -57,6 +57,45 @@ def segment_stiffness(scene: Scene) -> float:
 def min_modulus(scene: Scene, tol: float) -> float:
     """The smallest Young's modulus (MPa) for which ``tol`` pins the angles of the scene's geometry."""
     return tol / (ANGLE_RESOLUTION * segment_stiffness(scene) / scene.actuator.E)
+
+
+def max_pressure(r1: float, stationarity_tol: float) -> float:
+    """The largest pressure (MPa) whose moment on a segment of external radius ``r1`` (mm)
+    double precision balances to ``stationarity_tol`` (the bound :func:`check_resolvable` applies).
+
+    >>> round(max_pressure(8.0, 1e-7))
+    2800
+    """
+    return stationarity_tol / (ROUNDOFF_FACTOR * np.finfo(float).eps) / (math.pi * r1**3)
+
+
+def check_stiffness(scene: Scene, stationarity_tol: float) -> None:
+    """Refuse a segment so stiff that the round-off of its bending moment, about machine epsilon
+    times its stiffness per radian, is more than double precision can balance to
+    ``stationarity_tol`` (the bound on a pressure's moment in :func:`check_resolvable`). The
+    message names the one of E and L that is further from Table 1 (E = 0.54 MPa, L = 135 mm).
+
+    >>> from esba.model.scene import MAIN_JOB
+    >>> check_stiffness(MAIN_JOB.replace(L=1e-300), 1e-7)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    esba.model.scene.SceneError: actuator.L=1e-300 mm: the bending stiffness of a segment, 1.94e+304 N mm/rad, ...
+    """
+    a = scene.actuator
+    k = segment_stiffness(scene)
+    limit = stationarity_tol / (ROUNDOFF_FACTOR * np.finfo(float).eps)
+    if math.isfinite(k) and k <= limit:
+        return
+    scale = limit / k if math.isfinite(k) and k > 0 else 0.0
+    by_e = abs(math.log(a.E / 0.54)) >= abs(math.log(a.L / 135.0))
+    if by_e:
+        name, value, unit, bound = "E", a.E, "MPa", f"expected E <= {a.E * scale:.3g} MPa for this actuator (rubbers: 0.1 to 10 MPa)"
+    else:
+        name, value, unit, bound = "L", a.L, "mm", f"expected L >= {a.L / scale if scale else math.inf:.3g} mm for this actuator"
+    raise SceneError(
+        f"actuator.{name}={value:g} {unit}: the bending stiffness of a segment, {k:.3g} N mm/rad, is more than double precision "
+        f"can balance to stationarity_tol = {stationarity_tol:g} N mm/rad; {bound}"
+    )
 
 
 def min_chamber_radius(scene: Scene) -> float:
@@ -100,6 +139,7 @@ def check_resolvable(scene: Scene, pressure: float, stationarity_tol: float, ref
         tolerance loosened on purpose (to study IPOPT alone) never admits a scene the default
         tolerance refuses.
     """
+    check_stiffness(scene, stationarity_tol)
     check_domain(scene)
     a = scene.actuator
     k = segment_stiffness(scene)

@@ -58,21 +58,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
 from derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
-from esba.infra import checks
+from esba.infra import checks, inputs
 from esba.infra.errors import InputError
 
 from .generated import Model, load_model
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure"]
 
@@ -111,7 +105,7 @@ def check_pressure(value: Any, where: str = "pressure") -> float:
 
 def _flag(where: str, value: Any) -> bool:
     if not isinstance(value, bool):
-        raise SceneError(f"{where}={value!r}: expected true or false")
+        raise SceneError(f"{where}={checks.quote(value)}: expected true or false")
     return value
 
 
@@ -268,10 +262,10 @@ class Scene:
 
     def __post_init__(self) -> None:
         if not isinstance(self.actuator, Actuator):
-            raise SceneError(f"actuator={self.actuator!r}: expected an Actuator")
+            raise SceneError(f"actuator={checks.quote(self.actuator)}: expected an Actuator")
         if self.pressure is not None and self.target_angle_deg is not None:
             raise SceneError(
-                f"pressure={self.pressure!r} and target_angle_deg={self.target_angle_deg!r}: give one of the two, not both"
+                f"pressure={checks.quote(self.pressure)} and target_angle_deg={checks.quote(self.target_angle_deg)}: give one of the two, not both"
             )
         if self.pressure is not None:
             object.__setattr__(self, "pressure", check_pressure(self.pressure))
@@ -285,14 +279,14 @@ class Scene:
         if isinstance(payloads, Payload):
             payloads = (payloads,)
         if not isinstance(payloads, (tuple, list)) or not all(isinstance(p, Payload) for p in payloads):
-            raise SceneError(f"payloads={self.payloads!r}: expected a list of Payload")
+            raise SceneError(f"payloads={checks.quote(self.payloads)}: expected a list of Payload")
         object.__setattr__(self, "payloads", tuple(payloads))
         object.__setattr__(self, "gravity", _flag("gravity", self.gravity))
         object.__setattr__(self, "fibres", _flag("fibres", self.fibres))
         object.__setattr__(self, "g", _positive("g", self.g))
         object.__setattr__(self, "segments", checks.segments(self.segments, SceneError))
         if self.variant not in VARIANTS:
-            raise SceneError(f"variant={self.variant!r}: allowed are {', '.join(VARIANTS)}")
+            raise SceneError(f"variant={checks.quote(self.variant)}: allowed are {', '.join(VARIANTS)}")
         try:
             self.effects  # noqa: B018 - the payload count limit lives in EffectSet
         except ValueError as exc:
@@ -376,10 +370,10 @@ _PAYLOAD_KEYS = {"force", "angle_deg", "at"}
 
 def _check_keys(where: str, table: Any, allowed: set[str]) -> Mapping[str, Any]:
     if not isinstance(table, Mapping):
-        raise SceneError(f"{where}: expected a table, got {table!r}")
+        raise SceneError(f"{where}: expected a table, got {checks.quote(table)}")
     unknown = sorted(set(table) - allowed)
     if unknown:
-        raise SceneError(f"{where}: unknown key(s) {', '.join(unknown)}; allowed are {', '.join(sorted(allowed))}")
+        raise SceneError(f"{where}: unknown key(s) {checks.some(unknown)}; allowed are {', '.join(sorted(allowed))}")
     return table
 
 
@@ -402,7 +396,7 @@ def scene_from_dict(data: Mapping[str, Any]) -> Scene:
     loads = _check_keys("[loads]", data.get("loads", {}), _LOAD_KEYS)
     raw_payloads = data.get("payloads", [])
     if not isinstance(raw_payloads, list):
-        raise SceneError(f"payloads={raw_payloads!r}: expected an array of tables [[payloads]]")
+        raise SceneError(f"payloads={checks.quote(raw_payloads)}: expected an array of tables [[payloads]]")
     payloads = []
     for k, item in enumerate(raw_payloads, start=1):
         item = _check_keys(f"[[payloads]] #{k}", item, _PAYLOAD_KEYS)
@@ -422,17 +416,10 @@ def load_scene(path: str | Path) -> Scene:
     SceneError
         when the file is missing, is not valid TOML (with the line), or holds a bad value.
     """
+    if isinstance(path, bytes) or not isinstance(path, (str, Path)) or not str(path).strip():
+        raise SceneError(f"scene file {checks.quote(path)}: expected the path of a TOML scene file")
     path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except FileNotFoundError:
-        raise SceneError(f"scene file {str(path)!r} does not exist") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(f"scene file {str(path)!r} cannot be read: {exc}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"scene file {str(path)!r} is not valid TOML: {exc}") from None
+    data = inputs.load_toml(path, "scene file", SceneError)  # a regular file of bounded size, BOM or not
     try:
         return scene_from_dict(data)
     except SceneError as exc:

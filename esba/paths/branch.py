@@ -20,6 +20,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from esba.infra import outputs
 from esba.model.stability import CRITICAL_TOL
 
 from .problem import PathError
@@ -308,11 +309,11 @@ def write_branches(branches: Sequence[Branch], path: str | Path, extra: Mapping[
     """Write branches to ``path``: CSV for ``.csv``, JSON for ``.json`` (with ``extra`` keys)."""
     path = Path(path)
     if path.suffix.lower() == ".csv":
-        path.write_text(branches_csv(branches), encoding="utf-8")
+        outputs.write_text(path, branches_csv(branches))  # WriteFailed naming the file on a full disk
     elif path.suffix.lower() == ".json":
         data = dict(extra or {})
         data["branches"] = [b.to_dict() for b in branches]
-        path.write_text(json.dumps(data, indent=1, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8")
+        outputs.write_text(path, json.dumps(data, indent=1, sort_keys=True, allow_nan=False) + "\n")
     else:
         raise PathError(f"{str(path)!r}: expected a file name ending in .csv or .json")
     return path

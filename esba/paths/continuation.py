@@ -62,7 +62,9 @@ A straight actuator (P = 0) pushed along its axis: the straight state buckles at
 
 from __future__ import annotations
 
+import logging
 import math
+import time
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any, Callable, Sequence
@@ -79,6 +81,8 @@ from .branch import Branch, SpecialPoint, branches_csv, write_branches
 from .corrector import Corrector, Point
 from .locate import BRANCH_ORTHOGONALITY, locate_crossing, locate_value, special_from
 from .problem import PARAMETERS, PathError, PathProblem
+
+_log = logging.getLogger("esba.paths.continuation")
 
 __all__ = [
     "Natural",
@@ -263,6 +267,54 @@ def _check_vector(name: str, value, size: int) -> np.ndarray:
     return v
 
 
+#: Memory a traced point holds, bytes, about POINT_BYTES[0] + POINT_BYTES[1] * n (measured: a
+#: million steps at n = 3 took 1.25 GB for the main branch and one loading ramp; 20 000 at n = 16, 45 MB).
+POINT_BYTES = (500, 40)
+#: Traces of one ``esba path`` run that may each take max_steps: the main branch, the loading ramps up and down.
+PATH_TRACES = 3
+
+
+def path_bytes(max_steps: int, n: int, traces: int = PATH_TRACES) -> int:
+    """About the most memory (bytes) ``traces`` traces of ``max_steps`` steps at n segments hold.
+
+    >>> round(path_bytes(1_000_000, 3) / 2**30, 2)
+    1.73
+    """
+    return int(max_steps) * int(traces) * (POINT_BYTES[0] + POINT_BYTES[1] * int(n))
+
+
+#: After this many seconds a trace says how long its max_steps could take, when that is more than
+#: :data:`FORECAST_AT_LEAST` seconds (as a sweep's size is checked up front; a path's step count
+#: is not known until it runs).
+FORECAST_AFTER = 2.0
+FORECAST_AT_LEAST = 60.0
+
+
+class _Forecast:
+    """Says once, on the ``esba`` logger, how long the rest of a trace's ``max_steps`` could take
+    at the pace of its first :data:`FORECAST_AFTER` seconds (a million steps of 1e-6 is minutes)."""
+
+    def __init__(self, max_steps: int, label: str) -> None:
+        self.max_steps, self.label = max_steps, label
+        self.t0 = time.perf_counter()
+        self.done = False
+
+    def tick(self, steps: int) -> None:
+        if self.done or steps == 0:
+            return
+        elapsed = time.perf_counter() - self.t0
+        if elapsed < FORECAST_AFTER:
+            return
+        self.done = True
+        rest = (self.max_steps - steps) * elapsed / steps
+        if rest >= FORECAST_AT_LEAST:
+            minutes = f"{rest / 60:.0f} min" if rest < 3600 else f"{rest / 3600:.1f} h"
+            _log.warning(
+                "%s: %d steps in %.0f s; up to max_steps = %d it may take another %s (a smaller --max-steps or a larger --ds-max bounds it; Ctrl-C stops it)",
+                self.label or "the branch", steps, elapsed, self.max_steps, minutes,
+            )
+
+
 @single_threaded
 def trace(
     problem: PathProblem,
@@ -361,7 +413,9 @@ def trace(
         events.append((lambda lam, th: float(np.sum(th)) - total_event, f"the total angle of {float(opts.stop_total_angle_deg):g} deg"))
     beyond = None
     steps = 0
+    clock = _Forecast(opts.max_steps, label)
     while steps < opts.max_steps:
+        clock.tick(steps)
         a = points[-1]
         # a trace that starts on an end of its interval and heads out of it stops there
         outward = (a.lam <= lo and a.tangent[-1] < 0) or (a.lam >= hi and a.tangent[-1] > 0)

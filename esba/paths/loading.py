@@ -273,8 +273,8 @@ def follow(
     """
     opts = DEFAULT_PATH_OPTIONS if options is None else options
     if not isinstance(opts, PathOptions):
-        raise PathError(f"options={options!r}: expected a PathOptions")
-    theta = np.asarray(theta0, dtype=float).ravel()
+        raise PathError(f"options={checks.quote(options)}: expected a PathOptions")
+    theta = _start(problem, theta0)
     lam = checks.finite("lam0", lam0, PathError)
     to = checks.finite("to", to, PathError)
     if natural is not None:
@@ -371,14 +371,36 @@ def follow(
     )
 
 
+#: The most ramps of a load history (:func:`history`).
+MAX_RAMPS = 1000
+
+
+def _start(problem: Any, theta0: Any) -> np.ndarray:
+    """The start angles as an array of the problem's n finite angles, else a :class:`PathError`."""
+    if not isinstance(problem, PathProblem):
+        raise PathError(f"problem={checks.quote(problem)}: expected a PathProblem")
+    try:
+        theta = np.asarray(theta0, dtype=float).ravel()
+    except (TypeError, ValueError, OverflowError):
+        raise PathError(f"theta0={checks.quote(theta0)}: expected {problem.n} finite angles (rad)") from None
+    if theta.shape != (problem.n,) or not np.all(np.isfinite(theta)):
+        raise PathError(f"theta0 has shape {theta.shape}: expected {problem.n} finite angles (rad)")
+    return theta
+
+
 def history(problem: PathProblem, theta0: Sequence[float], lam0: float, values: Sequence[float], options: PathOptions | None = None) -> list[Ramp]:
     """Ramps from ``lam0`` to each value in turn (e.g. up to ``to`` and back down): a load history.
 
     Each ramp starts from the state the previous one reached; the list stops at the first ramp
     that does not reach its value.
     """
+    theta, lam = _start(problem, theta0), checks.finite("lam0", lam0, PathError)
+    if isinstance(values, (str, bytes)) or not isinstance(values, (list, tuple, np.ndarray)):
+        raise PathError(f"values={checks.quote(values)}: expected a list of parameter values to ramp to in turn")
+    if not 1 <= len(values) <= MAX_RAMPS:
+        raise PathError(f"values: {len(values)} given; expected 1 to {MAX_RAMPS} values (each is a ramp of up to max_steps steps)")
+    values = [checks.finite("values", v, PathError) for v in values]
     ramps: list[Ramp] = []
-    theta, lam = np.asarray(theta0, dtype=float), float(lam0)
     for value in values:
         r = follow(problem, theta, lam, float(value), options)
         ramps.append(r)

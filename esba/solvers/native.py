@@ -89,7 +89,7 @@ def _usable(lib: Path) -> bool:
     """The library is there and exactly what was built (a damaged one is reported and removed)."""
     if not lib.exists():
         return False
-    why = cache.damage(lib)
+    why = cache.library_damage(lib)  # the checksum, then a child process loads it (no bus error here)
     if why is None:
         return True
     _log.warning("compiled kernel %s is damaged (%s): building it again", lib, why)

@@ -50,6 +50,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from esba.infra import checks
 from esba.infra.interrupts import interrupts_raised
 from esba.infra.threads import single_threaded
 from esba.model.generated import Model, domain_lower_bound, near_domain_bound
@@ -379,13 +380,27 @@ def solve_arrays(
     if not isinstance(options, BatchOptions):
         raise BatchOptionsError(f"options={options!r}: expected a BatchOptions")
     t_start = time.perf_counter()
+    if not isinstance(model, Model):
+        raise BatchOptionsError(f"model={checks.quote(model)}: expected a Model (esba.model.generated.load_model)")
+    if not isinstance(values, Mapping):
+        raise BatchOptionsError(f"values={checks.quote(values)}: expected a mapping of parameter name to value or array")
     missing = [k for k in model.parameters if k not in values]
     if missing:
-        raise KeyError(f"model {model.path.name} needs parameters {missing}")
-    arrays = [np.atleast_1d(np.asarray(values[k], dtype=float)) for k in model.parameters]
+        raise BatchOptionsError(f"values: missing parameter(s) {checks.some(missing)}; the model {model.path.name} needs {', '.join(model.parameters)}")
     angle_mode = target_angle is not None
+    given = {k: values[k] for k in model.parameters}
     if angle_mode:
-        arrays.append(np.atleast_1d(np.asarray(target_angle, dtype=float)))
+        given["target_angle"] = target_angle
+    arrays = []
+    for k, v in given.items():
+        try:
+            a = np.atleast_1d(np.asarray(v, dtype=float))
+        except (TypeError, ValueError, OverflowError):
+            raise BatchOptionsError(f"{k}={checks.quote(v)}: expected a number or an array of numbers") from None
+        if not np.all(np.isfinite(a)):
+            where = int(np.flatnonzero(~np.isfinite(a.ravel()))[0])
+            raise BatchOptionsError(f"{k}[{where}] is not a finite number: expected finite values")
+        arrays.append(a)
     try:
         arrays = list(np.broadcast_arrays(*arrays))
     except ValueError:
@@ -492,6 +507,8 @@ def solve_scenes(scenes: Sequence[Scene], options: BatchOptions | None = None) -
     BatchOptionsError
         for an empty batch or mixed segment counts.
     """
+    if isinstance(scenes, Scene) or not isinstance(scenes, (list, tuple)):
+        raise BatchOptionsError(f"scenes={checks.quote(scenes)}: expected a list of Scene")
     scenes = list(scenes)
     if not scenes:
         raise BatchOptionsError("scenes: the batch is empty")

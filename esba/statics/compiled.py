@@ -124,11 +124,12 @@ def _usable_library(lib: Path) -> bool:
     """True when the compiled library is there and intact; a damaged one is reported and removed.
 
     Loading a truncated shared library can kill the process (a bus error), so it is checked
-    against the checksum recorded when it was built, before ``casadi.external`` loads it.
+    against the checksum recorded when it was built, and loaded by a child process first
+    (:func:`esba.infra.cache.library_damage`), before ``casadi.external`` loads it.
     """
     if not lib.exists():
         return False
-    why = cache.damage(lib)
+    why = cache.library_damage(lib)
     if why is None:
         return True
     _log.warning("compiled batch solver %s is damaged (%s): building it again", lib, why)

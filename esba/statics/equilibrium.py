@@ -383,17 +383,26 @@ def _check_inputs(scene: Any, pressure: Any, options: Any) -> SolverOptions:
     options = DEFAULT_OPTIONS if options is None else options
     if not isinstance(options, SolverOptions):
         raise SolverOptionsError(f"options={options!r}: expected a SolverOptions")
+    resolution.check_stiffness(scene, DEFAULT_OPTIONS.stationarity_tol)  # before a target angle's pressure is sought
     return options
 
 
-def _angles(name: str, values: Any, n: int) -> np.ndarray:
+#: The largest |segment angle| (rad) accepted as a solve's start (:func:`evaluate` takes any finite
+#: angles, and says where the model overflows): far beyond any
+#: equilibrium (a segment turned 160 times), small enough that sin and cos keep their digits.
+MAX_ANGLE = 1e3
+
+
+def _angles(name: str, values: Any, n: int, bounded: bool = False) -> np.ndarray:
     """``values`` as n finite angles (rad), else :class:`SolverOptionsError` naming ``name``."""
     try:
         theta = np.asarray(values, dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise SolverOptionsError(f"{name}={values!r}: expected {n} finite angles (rad)") from None
+    except (TypeError, ValueError, OverflowError):
+        raise SolverOptionsError(f"{name}={checks.quote(values)}: expected {n} finite angles (rad)") from None
     if theta.shape != (n,) or not np.all(np.isfinite(theta)):
         raise SolverOptionsError(f"{name} has shape {theta.shape}: expected {n} finite angles (rad)")
+    if bounded and np.any(np.abs(theta) > MAX_ANGLE):
+        raise SolverOptionsError(f"{name}={checks.quote(theta.tolist())}: expected {n} angles (rad) with |angle| <= {MAX_ANGLE:g} (a segment bent {MAX_ANGLE / (2 * np.pi):.0f} turns)")
     return theta
 
 
@@ -539,7 +548,7 @@ def solve(
     """
     options = _check_inputs(scene, pressure, options)
     if theta0 is not None:
-        theta0 = _angles("theta0", theta0, scene.segments)
+        theta0 = _angles("theta0", theta0, scene.segments, bounded=True)
     if unloaded is not None:
         unloaded = _angles("unloaded", unloaded, scene.segments)
     model = scene.model()  # loaded (or generated) before the clock starts

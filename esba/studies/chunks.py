@@ -59,6 +59,7 @@ import stat
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
+from esba.infra import inputs
 from esba.infra.errors import InputError
 
 from .distributed import StudyStopped, run_task
@@ -161,7 +162,14 @@ class StudyFile:
     # -- the lock ------------------------------------------------------------------------------
 
     def _acquire(self, flags: int, what: str) -> int:
-        """Open the file with ``flags`` and lock it for this run (exclusive, not waiting)."""
+        """Open the file with ``flags`` and lock it for this run (exclusive, not waiting).
+
+        Only a regular file (or none yet) is a study file: a FIFO would wait for a reader or a
+        writer, ``/dev/zero`` would be read without end, ``/dev/full`` has no rows to resume.
+        """
+        kind = inputs.special_kind(self.path)
+        if kind:
+            raise StudyError(f"{self.path}: {kind}, not a regular file; a study is written to (and resumed from) a regular .csv file")
         try:
             fd = os.open(self.path, flags | getattr(os, "O_CLOEXEC", 0), 0o666)
         except OSError as exc:
@@ -328,6 +336,9 @@ class StudyFile:
         if not isinstance(header, dict) or header.get("kind") != self.kind:
             kind = header.get("kind") if isinstance(header, dict) else None
             raise self._bad(f"it holds a {kind!r} study, not a {self.kind!r} one")
+        if header.get("hash") == self.hash and (header.get("identity") != self.identity or header.get("rows") != self.rows):
+            diff = _differences({"rows": header.get("rows"), **(header.get("identity") or {})}, {"rows": self.rows, **self.identity})
+            raise self._bad(f"its header was edited: its hash is this study's but its {', '.join(diff[:3]) or 'identity'} is not")
         if header.get("hash") != self.hash:
             diff = _differences({"rows": header.get("rows"), **(header.get("identity") or {})}, {"rows": self.rows, **self.identity})
             what = ", ".join(diff[:6]) + (", ..." if len(diff) > 6 else "")

@@ -50,6 +50,7 @@ from esba.calibration.uncertainty import (
     _batch_options,
     draw_samples,
 )
+from esba.infra import checks
 from esba.model.scene import Scene
 from esba.statics.batch import BatchOptions
 
@@ -102,7 +103,39 @@ def _rows(start: int, names: Sequence[str], values: np.ndarray, part: dict[str, 
 
 
 def _number(text: str) -> float:
-    return float(text) if text != "" else math.nan
+    """A result cell: '' (no value: NaN in the arrays) or a finite decimal number (a cell that
+    reads 'nan' or 'inf' was not written by the study: ValueError)."""
+    if text == "":
+        return math.nan
+    value = checks.number("cell", text, subnormal=True)  # as written: any double
+    if not math.isfinite(value):
+        raise ValueError(text)
+    return value
+
+
+def sample_row_problem(n: int, row: dict[str, Any]) -> str:
+    """Why a resumed sample row cannot be a solved sample, or ``""``: an ``ok`` sample has finite
+    angles, tip and total angle, and the total is the sum of the angles.
+
+    >>> sample_row_problem(1, {"outcome": "ok", "theta1_rad": "0.5", "total_angle_rad": "0.7", "tip_x_mm": "1", "tip_y_mm": "2"})
+    'is ok but its total_angle_rad=0.7 is not the sum of its angles (0.5)'
+    """
+    if row.get("outcome") not in OUTCOMES.values():
+        return f"has outcome={checks.quote(row.get('outcome'), 30)}; a Monte Carlo writes {', '.join(OUTCOMES.values())}"
+    cells = [f"theta{k + 1}_rad" for k in range(n)] + ["total_angle_rad", "tip_x_mm", "tip_y_mm"]
+    try:
+        values = {c: _number(row.get(c, "")) for c in cells}
+    except ValueError:
+        return "has a cell that is not a finite number (as written, an empty cell is no value)"
+    if row.get("outcome") != OUTCOMES[SAMPLE_OK]:
+        return ""
+    empty = [c for c in cells if math.isnan(values[c])]
+    if empty:
+        return f"is ok but has no {empty[0]}"
+    total = sum(values[f"theta{k + 1}_rad"] for k in range(n))
+    if abs(total - values["total_angle_rad"]) > 1e-9 * max(1.0, abs(total)):
+        return f"is ok but its total_angle_rad={row['total_angle_rad']} is not the sum of its angles ({total:.12g})"
+    return ""
 
 
 def monte_carlo_study(
@@ -144,6 +177,10 @@ def monte_carlo_study(
     if resume and file.path.exists() and file.path.stat().st_size > 0:
         rows: list[dict[str, str]] = []
         count = file.resume(rows.append)
+        bad = next(((i, p) for i, p in ((i, sample_row_problem(n, r)) for i, r in enumerate(rows)) if p), None)
+        if bad is not None:  # checked before the rows are read into arrays
+            file.close()
+            raise StudyError(f"--resume {file.path}: sample row {bad[0] + 1} {bad[1]}; it is not kept: remove the file to start anew")
         try:
             drawn = np.array([[float(r[name]) for name in names] for r in rows]).reshape(count, len(names)).T
             same = all(int(r["sample"]) == i for i, r in enumerate(rows)) and np.array_equal(drawn, values[:, :count])

@@ -35,6 +35,7 @@ import dataclasses
 import io
 import math
 from dataclasses import dataclass
+from numbers import Real
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -45,7 +46,7 @@ from esba.infra.errors import InputError
 from esba.model import resolution
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import Finding, assess_arrays
-from esba.statics.batch import BatchOptions, check_size, decide_backend, solve_arrays
+from esba.statics.batch import METHODS, BatchOptions, check_size, decide_backend, solve_arrays
 from esba.statics.batch_options import DEFAULT_BATCH_OPTIONS
 from esba.statics.equilibrium import (
     DEFAULT_OPTIONS,
@@ -106,7 +107,9 @@ def parse_values(text: str) -> list[float]:
     ...
     esba.studies.sweep.SweepError: '1:2': expected start:stop:count (count from 1 to 200000) or a comma-separated list of numbers
     """
-    msg = f"{text!r}: expected start:stop:count (count from 1 to {MAX_POINTS}) or a comma-separated list of numbers"
+    if not isinstance(text, str):
+        raise SweepError(f"values={checks.quote(text)}: expected a text start:stop:count or v1,v2,...")
+    msg = f"{checks.quote(text)}: expected start:stop:count (count from 1 to {MAX_POINTS}) or a comma-separated list of numbers"
     try:
         if ":" in text:
             parts = text.split(":")
@@ -119,7 +122,7 @@ def parse_values(text: str) -> list[float]:
             # 12 significant digits drop linspace's round-off (0.15000000000000002) and keep small values
             values = [a] if k == 1 else [float(f"{v:.12g}") for v in np.linspace(a, b, k)]
         else:
-            values = [checks.number("value", v) for v in text.split(",") if v.strip()]
+            values = [checks.number("value", v) for v in text.split(",")]  # an empty item (1,,2) is not a number
     except ValueError:
         raise SweepError(msg) from None
     if not values or not all(math.isfinite(v) for v in values) or len(values) > MAX_POINTS:
@@ -203,9 +206,21 @@ class SweepPlan:
 def _axis(name: str, values) -> list[float] | None:
     if values is None:
         return None
-    vals = [float(v) for v in (values if isinstance(values, (list, tuple, np.ndarray)) else [values])]
+    if isinstance(values, str):  # as the command line takes it: start:stop:count or v1,v2,...
+        try:
+            vals = parse_values(values)
+        except SweepError as exc:
+            raise SweepError(f"{name}: {exc}") from None
+    else:
+        items = values.tolist() if isinstance(values, np.ndarray) else values
+        items = items if isinstance(items, (list, tuple)) else [items]
+        if not all(isinstance(v, Real) and not isinstance(v, bool) for v in items):
+            raise SweepError(f"{name}={checks.quote(values)}: expected one or more finite numbers, or a text start:stop:count")
+        vals = [float(v) for v in items]
+    if len(vals) > MAX_POINTS:
+        raise SweepError(f"{name}: {len(vals)} values; expected at most {MAX_POINTS}")
     if not vals or not all(math.isfinite(v) for v in vals):
-        raise SweepError(f"{name}={values!r}: expected one or more finite numbers")
+        raise SweepError(f"{name}={checks.quote(values)}: expected one or more finite numbers")
     if name in ("pressure", "payload", "d") and min(vals) < 0:
         raise SweepError(f"{name}: {min(vals):g} {AXES[name]} given; expected values >= 0")
     if name == "r2" and min(vals) <= 0:
@@ -217,7 +232,7 @@ def plan_sweep(base: Scene | None = None, *, pressure=None, payload=None, payloa
     """The validated grid of :func:`sweep` (same arguments but the options), not solved."""
     base = Scene() if base is None else base
     if not isinstance(base, Scene):
-        raise SweepError(f"base={base!r}: expected a Scene")
+        raise SweepError(f"base={checks.quote(base)}: expected a Scene")
     given = {"pressure": pressure, "payload": payload, "payload_angle": payload_angle, "r2": r2, "d": d}
     axes = {k: v for k, v in ((k, _axis(k, given[k])) for k in AXES) if v is not None}
     if not axes:
@@ -285,6 +300,7 @@ def check_resolvable(plan: SweepPlan) -> None:
             extreme = plan.base.replace(r2=r2_, d=d_)
         except SceneError:  # infeasible: reported as such, not solved
             continue
+        resolution.check_stiffness(extreme, DEFAULT_OPTIONS.stationarity_tol)
         resolution.check_domain(extreme)
         if plan.payload_swept:
             extreme = extreme.replace(payloads=(Payload(strongest, plan.fixed["payload_angle"], plan.at),))
@@ -453,6 +469,106 @@ def parse_row(cells: Mapping[str, str]) -> dict[str, Any]:
     {'pressure_mpa': 0.1, 'tip_x_mm': None, 'status': 'ok'}
     """
     return {k: (v if k in TEXT_FIELDS else (float(v) if v != "" else None)) for k, v in cells.items()}
+
+
+_AXIS_COLUMNS = {"pressure": "pressure_mpa", "payload": "payload_n", "payload_angle": "payload_angle_deg", "r2": "r2_mm", "d": "d_mm"}
+_STATUSES = ("ok", "not ok", "infeasible")
+
+
+def _cell_number(text: Any) -> float | None:
+    """A numeric cell as the writer writes it: '' (None) or a finite decimal number; else ValueError."""
+    if text is None or text == "":
+        return None
+    value = checks.number("cell", text, subnormal=True) if isinstance(text, str) else float(text)  # as written: any double
+    if not math.isfinite(value):
+        raise ValueError(text)
+    return value
+
+
+def resumed_row_problem(plan: SweepPlan, index: int, cells: Mapping[str, Any], points: Mapping[str, np.ndarray] | None = None) -> str:
+    """Why row ``index`` (0-based) of a study file cannot be point ``index`` of ``plan`` solved,
+    or ``""`` when it can.
+
+    The row's axis values must be the plan's point ``index`` (the pressure too, unless the grid
+    finds each point's pressure from a target angle), exactly: numbers are written in their
+    shortest round-trip form. Its result cells must be what a solved row holds: a status the
+    sweep writes; for ``ok`` a stable equilibrium with finite angles, tip and pressure, a total
+    angle that is the sum of the angles and a tip within the actuator's length of the base; for
+    ``infeasible`` no result; never NaN or infinity. ``cells`` are text (as read from the file)
+    or numbers; ``points`` are the plan's axis columns of the rows around ``index``
+    (:meth:`SweepPlan.columns`; computed when not given).
+
+    This takes the plan and a row, not a file: any reader of a study's rows can call it.
+
+    >>> from esba.model.scene import Scene
+    >>> plan = plan_sweep(Scene(pressure=0.1), pressure=[0.0, 0.1])
+    >>> resumed_row_problem(plan, 1, {"pressure_mpa": "0.123456", "status": "infeasible"})
+    'has pressure_mpa=0.123456 where the plan has 0.1 (an edited or misplaced row)'
+    """
+    if points is None:
+        points = plan.columns(index, index + 1)
+        at = 0
+    else:
+        at = index
+    for axis, column in _AXIS_COLUMNS.items():
+        if axis == "pressure" and plan.angle_mode:
+            continue
+        raw = cells.get(column)
+        try:
+            value = _cell_number(raw)
+        except ValueError:
+            return f"has a {column} cell that is not a finite number"
+        want = float(points[axis][at])
+        if value != want:
+            shown = raw if isinstance(raw, str) else repr(value)
+            return f"has {column}={shown} where the plan has {want!r} (an edited or misplaced row)"
+    status = cells.get("status")
+    if status not in _STATUSES:
+        return f"has status={checks.quote(status, 30)}; a sweep writes {', '.join(_STATUSES)}"
+    numbers = ["pressure_mpa", "total_angle_deg", "tip_x_mm", "tip_y_mm"] + [f"theta{k + 1}_deg" for k in range(plan.base.segments)]
+    got: dict[str, float | None] = {}
+    for column in numbers:
+        try:
+            got[column] = _cell_number(cells.get(column))
+        except ValueError:
+            return f"has a {column} cell that is neither a finite number nor empty"
+    results = numbers[1:]
+    if status == "infeasible":
+        filled = [c for c in results if got[c] is not None]
+        return f"is infeasible but has {filled[0]}={cells.get(filled[0])}" if filled else ""
+    if status == "not ok":
+        return ""
+    missing = [c for c in numbers if got[c] is None]
+    if missing:
+        return f"is ok but has no {missing[0]}"
+    if cells.get("stability") != "stable" or cells.get("method") not in METHODS[:-1]:
+        return f"is ok but its stability is {checks.quote(cells.get('stability'), 30)} and method {checks.quote(cells.get('method'), 30)}"
+    if got["pressure_mpa"] < 0:
+        return f"is ok at pressure_mpa={cells.get('pressure_mpa')} < 0"
+    total = sum(got[f"theta{k + 1}_deg"] for k in range(plan.base.segments))
+    if abs(total - got["total_angle_deg"]) > 1e-9 * max(1.0, abs(total)):
+        return f"has total_angle_deg={cells.get('total_angle_deg')}, not the sum of its angles ({total:.12g})"
+    if math.hypot(got["tip_x_mm"], got["tip_y_mm"]) > plan.base.actuator.L * (1 + 1e-9):
+        return f"has its tip ({cells.get('tip_x_mm')}, {cells.get('tip_y_mm')}) mm further from the base than the length L"
+    return ""
+
+
+def check_resumed_rows(plan: SweepPlan, rows: Sequence[Mapping[str, Any]], where: str = "study file") -> int:
+    """:func:`resumed_row_problem` for every row, in order; the number of rows.
+
+    Raises
+    ------
+    SweepError
+        naming the first bad row (1-based) and what is wrong with it.
+    """
+    if len(rows) > plan.size:
+        raise SweepError(f"{where}: {len(rows)} rows; the plan has {plan.size} points")
+    points = plan.columns(0, len(rows))
+    for i, row in enumerate(rows):
+        problem = resumed_row_problem(plan, i, row, points)
+        if problem:
+            raise SweepError(f"{where}: row {i + 1} {problem}")
+    return len(rows)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -53,6 +53,7 @@ from .sweep import (
     check_resolvable,
     parse_row,
     point_rows,
+    resumed_row_problem,
     row_fields,
     solve_points,
     study_identity,
@@ -230,8 +231,14 @@ def sweep_study(
     if out is not None:
         file = StudyFile(out, "sweep", _identity(plan, options), row_fields(plan.base.segments), plan.size)
 
-        def count(row: dict[str, str]) -> None:
-            nonlocal outside
+        kept = 0
+
+        def count(row: dict[str, str]) -> None:  # each row the file holds, checked before it is kept
+            nonlocal outside, kept
+            problem = resumed_row_problem(plan, kept, row)
+            if problem:
+                raise StudyError(f"--resume {out}: row {kept + 1} {problem}; it is not kept: remove the file or give another output to start anew")
+            kept += 1
             counts[row["status"]] = counts.get(row["status"], 0) + 1
             outside += bool(row.get("validity"))
 

@@ -149,7 +149,7 @@ def test_bad_batches_are_refused():
     with pytest.raises(BatchOptionsError, match="critical_tol"):
         BatchOptions(critical_tol=-1.0)
     m = load_model(3)
-    with pytest.raises(KeyError, match="needs parameters"):
+    with pytest.raises(BatchOptionsError, match="missing parameter"):  # esba's own error, not a KeyError
         solve_arrays(m, {"L": 135.0})
 
 

@@ -646,3 +646,395 @@ def test_small_benchmark_batches_run(capsys, places):
     assert main(["bench", "batch", "--size", "10", "--json"]) == EXIT_OK
     data = strict_json(capsys.readouterr().out)
     assert data["size"] == 9 and data["ipopt_samples"] == 9  # a 3 x 3 grid of pressures and payloads
+
+
+# ---------------------------------------------------------------------------------------------
+# second round: flags that must agree, sigmas outside the model, the API's own errors, special
+# files, short messages, resumed studies that lie
+
+ROUND2_FLAGS = [
+    (["path", "--to", "0.2", "--out", "", "--no-plot"], "--out '': expected a file name"),
+    (["path", "--to", "0.2", "--out", "x.csv", "--no-out", "--no-plot"], "--out and --no-out: give one of the two"),
+    (["path", "--to", "0.2", "--plot", "x.png", "--no-plot", "--no-out"], "--plot and --no-plot: give one of the two"),
+    (["sweep", "--pressure", "1,,2", "--no-progress"], "'1,,2': expected start:stop:count"),
+    (["sweep", "--pressure", "0.1,", "--no-progress"], "'0.1,': expected start:stop:count"),
+    (["solve", "--no-plot", "--sigma", "E=1_0%"], "--sigma 'E=1_0%': expected NAME=SIGMA"),
+    (["solve", "--no-plot", "--sigma", "E=\u0661\u0660%"], "--sigma 'E=\u0661\u0660%': expected NAME=SIGMA"),
+    (["solve", "--no-plot", "--pressure", "\u0661"], "'\u0661' is not a number"),
+    (["solve", "--no-plot", "--segments", "\u0663"], "segments='\u0663'"),
+    (["solve", "--no-plot", "--sigma", "E=1e308"], "--sigma 'E=1e308': 3 sigma is not a finite number"),
+    (["design", "--write-doc", "d.txt"], "--write-doc 'd.txt': '.txt'; expected a file ending in .md"),
+    (["validate", "--out", "v.txt"], "--out 'v.txt': '.txt'; expected a file ending in .md"),
+    (["audit", "--out", "v.txt"], "--out 'v.txt': '.txt'; expected a file ending in .md"),
+    (["solve", "--plot", "x.png/"], "--plot 'x.png/': ends in '/' but is not an existing folder"),
+    (["sweep", "--pressure", "0.1", "--out", "g.csv/", "--no-progress"], "--out 'g.csv/': ends in '/'"),
+    (["design", "--max-pressure", "1e9"], "max_pressure=1e+09 MPa: its moment on a segment"),
+]
+
+
+@pytest.mark.parametrize("argv, needle", ROUND2_FLAGS, ids=[" ".join(a) for a, _ in ROUND2_FLAGS])
+def test_flags_agree_with_each_other(capsys, places, argv, needle):
+    line = one_line_error(capsys, argv, places)
+    assert needle in line
+    assert sorted(p.name for p in Path(places["tmp"]).iterdir()) in (["afile"], ["afile", "readonly"])  # nothing written
+
+
+@pytest.mark.parametrize("field, value, needle", [("L", "1e-300", "actuator.L=1e-300 mm: the bending stiffness"), ("E", "1e300", "actuator.E=1e+300 MPa: the bending stiffness")])
+def test_extreme_length_or_modulus_is_bad_input_naming_it(capsys, places, field, value, needle):
+    path = Path(places["tmp"]) / "extreme.toml"
+    path.write_text(f"[actuator]\n{field} = {value}\n")
+    line = one_line_error(capsys, ["solve", str(path), "--no-plot"], places)
+    assert needle in line
+
+
+def test_sigma_leaving_its_domain_is_warned_of_with_the_domain(capsys, places):
+    assert main(["solve", "--no-plot", "--json", "--sigma", "E=1000%", "--sigma", "rho=±100", "--sigma", "s1=±1", "--monte-carlo", "50"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    data = strict_json(out)
+    warned = data["uncertainty"]["outside_domain"]
+    assert len(warned) == 3
+    text = " | ".join(warned)  # in the scene's parameter order
+    assert "beyond the domain E > 0 MPa" in text and "beyond the domain 0 <= rho < 90 deg" in text and "0 < s1 <= 1" in text
+    for line in warned:
+        assert f"esba: warning: {line}" in err
+    c = data["monte_carlo"]["counts"]
+    assert c["invalid"] > 0 and c["ok"] + c["invalid"] + c["not_ok"] == 50  # counted, and said in the table
+    assert "Traceback" not in err and "RuntimeWarning" not in err
+
+
+def test_sigma_whose_covariance_overflows_is_not_ok(capsys, places):
+    assert main(["solve", "--no-plot", "--json", "--sigma", "E=1e200"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    u = strict_json(out)["uncertainty"]
+    assert u["status"] == "overflow" and u["std_tip_mm"] is None and "overflows" in u["message"]
+    assert "RuntimeWarning" not in err
+
+
+def _special(tmp: Path, kind: str, name: str) -> Path:
+    path = tmp / name
+    if kind == "fifo":
+        os.mkfifo(path)  # a read would wait for a writer forever
+    elif kind == "dev-zero":
+        path.symlink_to("/dev/zero")  # a read would never end
+    elif kind == "link-to-fifo":
+        os.mkfifo(tmp / ("real-" + name))
+        path.symlink_to(tmp / ("real-" + name))
+    return path
+
+
+SPECIAL = {"fifo": "a FIFO (named pipe)", "dev-zero": "a character device (through a symlink)", "link-to-fifo": "a FIFO (named pipe) (through a symlink)"}
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not os.path.exists("/dev/zero"), reason="needs FIFOs and /dev/zero")
+@pytest.mark.parametrize("kind", list(SPECIAL))
+@pytest.mark.parametrize("argv, name, what", [(["solve", "{path}", "--no-plot"], "s.toml", "scene file"), (["fit", "{path}"], "m.csv", "measurement file"), (["fit", "{path}"], "m.toml", "measurement file")])
+def test_special_input_files_are_one_line_without_a_hang(capsys, places, kind, argv, name, what):
+    path = _special(Path(places["tmp"]), kind, name)
+    line = one_line_error(capsys, [a.replace("{path}", str(path)) for a in argv], places)
+    assert line == f"esba: error: {what} {str(path)!r} cannot be read: {SPECIAL[kind]}, not a regular file"
+
+
+@pytest.mark.parametrize("argv, name", [(["solve", "{path}", "--no-plot"], "deep.toml"), (["fit", "{path}"], "deep-m.toml")])
+def test_toml_nested_5000_deep_is_one_line(capsys, places, argv, name):
+    path = Path(places["tmp"]) / name
+    path.write_text("a = " + "[" * 5000 + "]" * 5000 + "\n")
+    line = one_line_error(capsys, [a.replace("{path}", str(path)) for a in argv], places)
+    assert "not valid TOML: nested too deeply" in line and name in line
+
+
+def test_a_byte_order_mark_is_read_alike_in_scene_and_measurement_files(capsys, places):
+    tmp = Path(places["tmp"])
+    (tmp / "bom.toml").write_bytes(b"\xef\xbb\xbfsegments = 2\n[loads]\npressure = 0.1\n")
+    (tmp / "bom.csv").write_bytes(b"\xef\xbb\xbfpressure_mpa,total_angle_deg\n0.1,50\n0.12,70\n")
+    assert main(["solve", str(tmp / "bom.toml"), "--no-plot", "--json"]) == EXIT_OK
+    assert strict_json(capsys.readouterr().out)["scene"].endswith("n=2, paper")
+    assert main(["fit", str(tmp / "bom.csv"), "--free", "E", "--json"]) == EXIT_OK
+    assert strict_json(capsys.readouterr().out)
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("[actuator]\n" + "".join(f"k{i} = 1\n" for i in range(100_000)), "unknown key(s) k0, k1, k10, k100, k1000 and 99995 more"),
+        ('variant = "' + "x" * 10_000_000 + '"\n', "variant='xxxx"),
+        ("[actuator]\nE = \"" + "y" * 10_000_000 + '"\n', "(10000000 characters): expected a finite number"),
+    ],
+    ids=["100000-unknown-keys", "10-MB-variant", "10-MB-E"],
+)
+def test_messages_cap_what_they_quote(capsys, places, text, needle):
+    path = Path(places["tmp"]) / "huge.toml"
+    path.write_text(text)
+    line = one_line_error(capsys, ["solve", str(path), "--no-plot"], places)
+    assert needle in line and len(line) < 300
+
+
+MEASUREMENTS = {
+    "two-pressures.csv": ("pressure_mpa,pressure_kpa,total_angle_deg\n0.1,120,50\n", "pressure_mpa=0.1 and pressure_kpa=120 disagree (0.1 vs 0.12 MPa); give the pressure once"),
+    "two-pressures.toml": ("[[measurement]]\npressure_mpa = 0.1\npressure_bar = 2\ntotal_angle_deg = 50\n", "pressure_mpa=0.1 and pressure_bar=2 disagree"),
+    "target-1e6.csv": ("target_angle_deg,tip_y_mm\n1e6,5\n", "target_angle_deg=1e+06: expected a target angle > 0 and <= 3600 deg"),
+    "angle-1e6.csv": ("pressure_mpa,total_angle_deg\n0.1,1e6\n", "total_angle_deg=1e+06: expected a measured angle from -3600 to 3600 deg"),
+    "sd-1e-300.csv": ("pressure_mpa,total_angle_deg,total_angle_sd_deg\n0.1,50,1e-300\n", "total_angle_sd_deg=1e-300: expected a standard deviation >= 1e-06 deg"),
+    "underscore.csv": ("pressure_mpa,total_angle_deg\n0.1,5_0\n", "total_angle_deg='5_0': expected a number"),
+}
+
+
+@pytest.mark.parametrize("name", list(MEASUREMENTS))
+def test_measurement_files_that_contradict_themselves_or_leave_the_model_are_refused(capsys, places, name):
+    text, needle = MEASUREMENTS[name]
+    path = Path(places["tmp"]) / name
+    path.write_text(text)
+    line = one_line_error(capsys, ["fit", str(path)], places)
+    assert needle in line and name in line
+    assert "RuntimeWarning" not in line and "CasADi" not in line
+
+
+def test_one_pressure_in_two_units_that_agree_is_taken(capsys, places):
+    path = Path(places["tmp"]) / "agree.csv"
+    path.write_text("pressure_mpa,pressure_kpa,total_angle_deg\n0.1,100,50\n0.12,,70\n")
+    assert main(["fit", str(path), "--free", "E", "--json"]) == EXIT_OK
+    assert strict_json(capsys.readouterr().out)
+
+
+RESUME = ["sweep", "--pressure", "0:0.2:5", "--resume", "--out", "s.csv", "--no-progress", "--no-compile"]
+
+
+def _edit_line(path: Path, k: int, old: str, new: str) -> None:
+    lines = path.read_text().split("\n")
+    assert old in lines[k], lines[k]
+    lines[k] = lines[k].replace(old, new, 1)
+    path.write_text("\n".join(lines))
+
+
+def _swap_rows(path: Path) -> None:
+    lines = path.read_text().split("\n")
+    lines[3], lines[4] = lines[4], lines[3]
+    path.write_text("\n".join(lines))
+
+
+LIES = {
+    "edited-pressure": (lambda p: _edit_line(p, 4, "0.1,", "0.123456,"), "row 3 has pressure_mpa=0.123456 where the plan has 0.1"),
+    "nan-result": (lambda p: _edit_line(p, 3, ",newton,29.224099507465084,", ",newton,nan,"), "row 2 has a total_angle_deg cell that is neither a finite number nor empty"),
+    "swapped-rows": (_swap_rows, "row 2 has pressure_mpa=0.1 where the plan has 0.05"),
+    "edited-plan-same-hash": (lambda p: p.write_text(p.read_text().replace("[0.0, 0.05, 0.1, 0.15, 0.2]", "[0.0, 0.05, 0.1, 0.15, 0.3]", 1)), "its header was edited"),
+    "total-not-the-sum": (lambda p: _edit_line(p, 3, "29.224", "39.224"), "row 2 has total_angle_deg=39.224"),
+}
+
+
+@pytest.mark.parametrize("lie", list(LIES))
+def test_a_resumed_study_never_keeps_a_damaged_row(capsys, places, lie):
+    assert main(RESUME) == EXIT_OK
+    capsys.readouterr()
+    path = Path(places["tmp"]) / "s.csv"
+    edit, needle = LIES[lie]
+    edit(path)
+    before = path.read_bytes()
+    line = one_line_error(capsys, RESUME, places)
+    assert needle in line and "s.csv" in line
+    assert path.read_bytes() == before  # the file is left as it is
+
+
+def test_a_resumed_study_whose_rows_are_right_goes_on(capsys, places):
+    assert main(RESUME) == EXIT_OK
+    capsys.readouterr()
+    assert main([*RESUME, "--json"]) == EXIT_OK
+    data = strict_json(capsys.readouterr().out)
+    assert data["study"]["resumed_from_row"] == 5 and data["counts"]["ok"] == 5
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not os.path.exists("/dev/full"), reason="needs FIFOs and /dev/full")
+@pytest.mark.parametrize("target", ["/dev/full", "/dev/zero", "fifo"])
+def test_a_study_file_that_is_a_device_or_fifo_is_one_line_no_hang(capsys, places, target):
+    tmp = Path(places["tmp"])
+    if target == "fifo":
+        os.mkfifo(tmp / "pipe")
+        target = str(tmp / "pipe")
+    (tmp / "s.csv").symlink_to(target)
+    line = one_line_error(capsys, RESUME, places)
+    assert "'s.csv'" in line or "s.csv:" in line
+    assert "not a regular file" in line or "FIFO" in line
+
+
+def _api_round2():
+    from esba.analysis.path_analysis import column_buckling_load
+    from esba.calibration.fit import FitError, fit, predict
+    from esba.calibration.measurements import MeasurementError, load_measurements, measurements_from_rows
+    from esba.calibration.uncertainty import UncertaintyError, draw_samples, ellipse, parse_sigma, propagate, resolve_sigmas
+    from esba.infra.errors import InputError
+    from esba.model.generated import load_model
+    from esba.model.scene import MAIN_JOB, SceneError, load_scene
+    from esba.paths.loading import history
+    from esba.paths.problem import PathError, PathProblem
+    from esba.statics.batch import BatchOptionsError, solve_arrays
+    from esba.statics.equilibrium import SolverOptionsError, solve
+    from esba.studies.sweep import SweepError, plan_sweep
+
+    sig = resolve_sigmas(MAIN_JOB, [parse_sigma("E=10%")])
+    data = measurements_from_rows("rows", [("row 1", {"pressure_mpa": 0.1, "total_angle_deg": 60.0})])
+    result = lambda: solve(MAIN_JOB)  # noqa: E731
+    problem = lambda: PathProblem.from_scene(MAIN_JOB.replace(pressure=0.0), "pressure")  # noqa: E731
+    nan = float("nan")
+    return [
+        ("propagate(r, None)", lambda: propagate(result(), None), UncertaintyError, "sigmas=None: expected a list of Sigma"),
+        ("resolve_sigmas(None, ...)", lambda: resolve_sigmas(None, [parse_sigma("E=1")]), UncertaintyError, "scene=None: expected an esba.model.scene.Scene"),
+        ("resolve_sigmas(s, 'E=1')", lambda: resolve_sigmas(MAIN_JOB, "E=1"), UncertaintyError, "specs='E=1': expected a list of SigmaSpec"),
+        ("draw_samples(s, -5, 0)", lambda: draw_samples(sig, -5, 0), UncertaintyError, "samples=-5: expected a whole number from 1 to 1000000"),
+        ("draw_samples(s, 10**12, 0)", lambda: draw_samples(sig, 10**12, 0), UncertaintyError, "samples=1000000000000"),
+        ("draw_samples(s, 10, -1)", lambda: draw_samples(sig, 10, -1), UncertaintyError, "seed=-1"),
+        ("ellipse('cov')", lambda: ellipse("cov"), UncertaintyError, "cov='cov': expected a square array"),
+        ("ellipse(not PSD)", lambda: ellipse(np.diag([1.0, -1.0])), UncertaintyError, "cov has a negative eigenvalue"),
+        ("ellipse(3 x 3)", lambda: ellipse(np.eye(3)), UncertaintyError, "expected a 2 x 2 covariance"),
+        ("ellipse(nan)", lambda: ellipse(np.diag([nan, 1.0])), UncertaintyError, "not a finite number"),
+        ("history(p, th, lam, 'abc')", lambda: history(problem(), [0.0] * 3, 0.0, "abc"), PathError, "values='abc': expected a list"),
+        ("history(None, ...)", lambda: history(None, [0.0] * 3, 0.0, [1.0]), PathError, "problem=None: expected a PathProblem"),
+        ("history(p, [nan]*3, ...)", lambda: history(problem(), [nan] * 3, 0.0, [0.1]), PathError, "theta0 has shape (3,): expected 3 finite angles"),
+        ("column_buckling_load(segments=0)", lambda: column_buckling_load(segments=0), SceneError, "segments=0: expected a whole number from 1 to 256"),
+        ("column_buckling_load(segments=2.5)", lambda: column_buckling_load(segments=2.5), SceneError, "segments=2.5"),
+        ("column_buckling_load(segments=10**6)", lambda: column_buckling_load(segments=10**6), SceneError, "segments=1000000"),
+        ("fit(d, free=None)", lambda: fit(data, free=None), FitError, "free=None: expected names of parameters"),
+        ("predict(d, negative variance)", lambda: predict(data, {"E": 0.54}, [[-1.0]]), FitError, "covariance has a negative eigenvalue"),
+        ("predict(None)", lambda: predict(None), FitError, "data=None"),
+        ("load_measurements(None)", lambda: load_measurements(None), MeasurementError, "measurement file None: expected the path"),
+        ("load_scene(None)", lambda: load_scene(None), SceneError, "scene file None: expected the path of a TOML scene file"),
+        ("plan_sweep(pressure='abc')", lambda: plan_sweep(MAIN_JOB, pressure="abc"), SweepError, "pressure: 'abc': expected start:stop:count"),
+        ("plan_sweep(pressure=[None])", lambda: plan_sweep(MAIN_JOB, pressure=[None]), SweepError, "pressure=[None]: expected one or more finite numbers"),
+        ("solve_arrays(model, {})", lambda: solve_arrays(load_model(3), {}), BatchOptionsError, "values: missing parameter(s) L, r1, r2, d, rho and 5 more"),
+        ("solve_arrays(model, P=nan)", lambda: solve_arrays(load_model(3), {**MAIN_JOB.parameters(0.1), "P": [nan]}), BatchOptionsError, "P[0] is not a finite number"),
+        ("solve_arrays(None, {})", lambda: solve_arrays(None, {}), BatchOptionsError, "model=None: expected a Model"),
+        ("with_parameters(scene, None)", lambda: __import__("esba.analysis.sensitivity", fromlist=["x"]).with_parameters(MAIN_JOB, None), InputError, "values=None: expected a mapping"),
+        ("compare(None, None)", lambda: __import__("esba.calibration.uncertainty", fromlist=["x"]).compare(None, None), UncertaintyError, "compare(NoneType, NoneType): expected a Propagation"),
+        ("solve_scenes(None)", lambda: __import__("esba.statics.batch", fromlist=["x"]).solve_scenes(None), BatchOptionsError, "scenes=None: expected a list of Scene"),
+        ("horizontal_payload_sweep(segments=2.5)", lambda: __import__("esba.figures.paper", fromlist=["x"]).horizontal_payload_sweep([1.0], segments=2.5), SceneError, "segments=2.5: expected a whole number"),
+        ("sensitivities(r, ['E', 'E'])", lambda: __import__("esba.analysis.sensitivity", fromlist=["x"]).sensitivities(result(), ["E", "E"]), InputError, "parameters: E given twice"),
+        ("solve(theta0=[1e308]*3)", lambda: solve(MAIN_JOB, theta0=[1e308] * 3), SolverOptionsError, "theta0=[1e+308, 1e+308, 1e+308]: expected 3 angles (rad) with |angle| <= 1000"),
+    ]
+
+
+API2 = _api_round2()
+
+
+@pytest.mark.parametrize("case", API2, ids=[c[0] for c in API2])
+def test_python_api_raises_esba_errors_second_round(case):
+    _, call, error, needle = case
+    with pytest.raises(error) as info:
+        call()
+    message = str(info.value)
+    assert needle in message and "\n" not in message and len(message) < 300
+    assert type(info.value).__module__.split(".")[0] == "esba"
+
+
+def test_plan_sweep_takes_what_the_cli_takes():
+    from esba.model.scene import MAIN_JOB
+    from esba.studies.sweep import parse_values, plan_sweep
+
+    assert plan_sweep(MAIN_JOB, pressure="0:0.3:4").axes["pressure"] == parse_values("0:0.3:4") == [0.0, 0.1, 0.2, 0.3]
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device whose writes fail: disk full)")
+@pytest.mark.parametrize(
+    "argv, name",
+    [
+        (["path", "--to", "0.15", "--out", "p.csv", "--no-plot"], "p.csv"),
+        (["path", "--to", "0.15", "--plot", "p.png", "--no-out"], "p.png"),
+        (["audit", "--out", "a.md"], "a.md"),
+        (["validate", "--out", "v.md"], "v.md"),
+        (["solve", "--plot", "s.png"], "s.png"),
+        (["sweep", "--pressure", "0.1", "--plot", "w.png", "--no-progress"], "w.png"),
+    ],
+)
+def test_a_full_disk_names_the_file_in_every_command(capsys, places, argv, name):
+    (Path(places["tmp"]) / name).symlink_to("/dev/full")
+    line = one_line_error(capsys, argv, places, code=EXIT_FAILED)
+    assert line == f"esba: error: {name}: cannot write (No space left on device)"
+
+
+def test_no_runtime_warning_and_no_value_the_user_did_not_give(capsys, places):
+    assert main(["stiffness", "--pressure", "0", "--json"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    tangent = strict_json(out)["tangent"]
+    assert tangent["vertical_n_per_m"] is None and tangent["horizontal_n_per_m"] > 0
+    assert "RuntimeWarning" not in err and "inf" not in err
+    assert main(["stiffness", "--pressure", "0"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    assert "vertical unbounded" in out and "inf N/m" not in out and "Warning" not in err
+    line = one_line_error(capsys, ["path", "--to", "1e-320", "--no-plot", "--no-out"], places)
+    assert "'1e-320': below the smallest normal double" in line
+    assert main(["pressure", "--total-angle", "-90"]) == EXIT_FAILED  # not reachable: said, naming no pressure the user did not give
+    out, err = capsys.readouterr()
+    assert "pressure=-" not in err and "Warning" not in err and "the target is not reachable" in err
+
+
+def test_check_of_a_missing_page_says_missing(capsys, places):
+    assert main(["audit", "--check"]) == EXIT_FAILED
+    out, err = capsys.readouterr()
+    assert "is MISSING" in out and "STALE" not in out and "derivations.md is missing" in err
+    assert main(["docs", "--check", "validation", "--dir", places["tmp"]]) == EXIT_FAILED
+    out, err = capsys.readouterr()
+    assert "missing" in out and "stale" not in out.lower()
+
+
+def test_closed_stdout_ends_without_a_traceback(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.run(f"{sys.executable} -m esba.cli solve --no-plot >&-", shell=True, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    assert p.returncode == EXIT_OK, p.stderr
+    assert "Traceback" not in p.stderr
+    assert p.stderr.strip().splitlines()[-1] == "esba: warning: standard output was closed: what the command printed is lost"
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None and shutil.which("cc") is None, reason="needs a C compiler")
+def test_damaged_compiled_library_with_a_matching_checksum_does_not_crash(tmp_path):
+    """Truncated, and its checksum record rewritten to match: the checksum cannot tell. A child
+    process loads it first and dies of the bus error instead of esba."""
+    import hashlib
+
+    env = {**os.environ, "ESBA_CACHE_DIR": str(tmp_path / "cache")}
+    argv = [sys.executable, "-m", "esba.cli", "sweep", "--pressure", "0:0.2:600", "--no-progress", "--json"]
+    first = subprocess.run(argv, env=env, capture_output=True, text=True, cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    lib = next((tmp_path / "cache" / "compiled").glob("esba_batch_*.so"))
+    data = lib.read_bytes()[:4096]
+    lib.write_bytes(data)
+    cache.record_path(lib).write_text(json.dumps({"bytes": len(data), "sha256": hashlib.sha256(data).hexdigest()}))
+    assert cache.damage(lib) is None  # the checksum is satisfied
+    again = subprocess.run(argv, env=env, capture_output=True, text=True, cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    lines = again.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"esba: compiled batch solver {lib} is damaged (") and "building it again" in lines[0]
+    assert "Traceback" not in again.stderr
+    assert strict_json(again.stdout)["counts"]["ok"] == 600
+    assert cache.library_damage(lib) is None  # rebuilt
+
+
+def test_a_path_of_a_million_steps_is_bounded_or_said_up_front(capsys, places):
+    line = one_line_error(capsys, ["path", "-n", "16", "--to", "1", "--max-steps", "1000000", "--ds-max", "1e-6", "--no-plot", "--no-out"], places)
+    assert "--max-steps 1000000 at n = 16: the branches could hold about 3.2 GiB of points (limit 2 GiB): at most" in line
+    assert main(["path", "--to", "0.13", "--max-steps", "200000", "--no-plot", "--no-out"]) == EXIT_OK
+    err = capsys.readouterr().err
+    assert err.startswith("esba: note: --max-steps 200000 at n = 3: up to 0.3 GiB of points and minutes of work")
+
+
+def _cells(line: str, k: int, value: str) -> str:
+    cells = line.split(",")
+    cells[k] = value
+    return ",".join(cells)
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        (lambda line: _cells(line, -2, "nan"), "sample row 1 has a cell that is not a finite number (as written, an empty cell is no value)"),
+        (lambda line: _cells(line, -3, "0.1"), "sample row 1 is ok but its total_angle_rad=0.1 is not the sum of its angles"),
+        (lambda line: _cells(line, 1, "0.6"), "its samples are not the ones drawn again from seed 0"),
+    ],
+    ids=["nan-tip", "total-not-the-sum", "edited-sample"],
+)
+def test_a_resumed_monte_carlo_never_keeps_a_damaged_sample_row(capsys, places, edit, needle):
+    argv = ["solve", "--no-plot", "--sigma", "E=5%", "--monte-carlo", "20", "--mc-out", "mc.csv"]
+    assert main(argv) == EXIT_OK
+    capsys.readouterr()
+    path = Path(places["tmp"]) / "mc.csv"
+    lines = path.read_text().split("\n")
+    assert lines[2].split(",")[2] == "ok"
+    lines[2] = edit(lines[2])
+    path.write_text("\n".join(lines))
+    line = one_line_error(capsys, [*argv, "--resume"], places)
+    assert "mc.csv" in line and needle in line
