@@ -276,12 +276,20 @@ def test_sweep_out_needs_csv_or_json(capsys, places):
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device whose writes fail: disk full)")
-@pytest.mark.parametrize("name", ["grid.json", "grid.csv"])
-def test_a_full_disk_is_one_line_naming_the_file_exit_1(capsys, places, name):
+def test_a_full_disk_is_one_line_naming_the_file_exit_1(capsys, places):
     """The folder is fine (the checks up front pass) but the disk fills while the file is written."""
-    (Path(places["tmp"]) / name).symlink_to("/dev/full")
-    line = one_line_error(capsys, ["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress", "--out", name], places, code=EXIT_FAILED)
-    assert line == f"esba: error: {name}: cannot write (No space left on device)"
+    (Path(places["tmp"]) / "grid.json").symlink_to("/dev/full")
+    line = one_line_error(capsys, ["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress", "--out", "grid.json"], places, code=EXIT_FAILED)
+    assert line == "esba: error: grid.json: cannot write (No space left on device)"
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_a_sweep_csv_that_is_a_device_is_refused_up_front(capsys, places):
+    """A CSV is a study file however the sweep runs (it can be resumed): a device in its place is refused
+    before anything is solved, as for --resume."""
+    (Path(places["tmp"]) / "grid.csv").symlink_to("/dev/full")
+    line = one_line_error(capsys, ["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress", "--out", "grid.csv"], places)
+    assert line.startswith("esba: error: grid.csv: ") and "not a regular file" in line
 
 
 def test_figure_folder_and_suffixless_name_say_what_was_written(capsys, places):
@@ -807,16 +815,26 @@ def _edit_line(path: Path, k: int, old: str, new: str) -> None:
 
 def _swap_rows(path: Path) -> None:
     lines = path.read_text().split("\n")
-    lines[3], lines[4] = lines[4], lines[3]
+    lines[2], lines[3] = lines[3], lines[2]
     path.write_text("\n".join(lines))
 
 
+def _edit_plan(path: Path) -> None:
+    """The plan is in the study file beside the rows (FILE.study.json): a grid value edited, its hash left."""
+    meta = path.with_name(path.stem + ".study.json")
+    data = json.loads(meta.read_text())
+    assert data["identity"]["plan"]["axes"]["pressure"] == [0.0, 0.05, 0.1, 0.15, 0.2]
+    data["identity"]["plan"]["axes"]["pressure"][-1] = 0.3
+    meta.write_text(json.dumps(data, indent=1))
+
+
+# line 0 of the CSV holds the column names; line k holds row k
 LIES = {
-    "edited-pressure": (lambda p: _edit_line(p, 4, "0.1,", "0.123456,"), "row 3 has pressure_mpa=0.123456 where the plan has 0.1"),
-    "nan-result": (lambda p: _edit_line(p, 3, ",newton,29.224099507465084,", ",newton,nan,"), "row 2 has a total_angle_deg cell that is neither a finite number nor empty"),
+    "edited-pressure": (lambda p: _edit_line(p, 3, "0.1,", "0.123456,"), "row 3 has pressure_mpa=0.123456 where the plan has 0.1"),
+    "nan-result": (lambda p: _edit_line(p, 2, ",newton,29.224099507465084,", ",newton,nan,"), "row 2 has a total_angle_deg cell that is neither a finite number nor empty"),
     "swapped-rows": (_swap_rows, "row 2 has pressure_mpa=0.1 where the plan has 0.05"),
-    "edited-plan-same-hash": (lambda p: p.write_text(p.read_text().replace("[0.0, 0.05, 0.1, 0.15, 0.2]", "[0.0, 0.05, 0.1, 0.15, 0.3]", 1)), "its header was edited"),
-    "total-not-the-sum": (lambda p: _edit_line(p, 3, "29.224", "39.224"), "row 2 has total_angle_deg=39.224"),
+    "edited-plan-same-hash": (_edit_plan, "was edited"),
+    "total-not-the-sum": (lambda p: _edit_line(p, 2, "29.224", "39.224"), "row 2 has total_angle_deg=39.224"),
 }
 
 
@@ -1032,9 +1050,9 @@ def test_a_resumed_monte_carlo_never_keeps_a_damaged_sample_row(capsys, places, 
     assert main(argv) == EXIT_OK
     capsys.readouterr()
     path = Path(places["tmp"]) / "mc.csv"
-    lines = path.read_text().split("\n")
-    assert lines[2].split(",")[2] == "ok"
-    lines[2] = edit(lines[2])
+    lines = path.read_text().split("\n")  # line 0: the column names, line 1: sample row 1
+    assert lines[1].split(",")[2] == "ok"
+    lines[1] = edit(lines[1])
     path.write_text("\n".join(lines))
     line = one_line_error(capsys, [*argv, "--resume"], places)
     assert "mc.csv" in line and needle in line
