@@ -38,7 +38,7 @@ from esba.model.generated import Model
 from esba.model.scene import Payload, Scene, SceneError, check_pressure
 from esba.solvers.eqnlp import EquilibriumNLP, model_gradient
 from esba.statics.equilibrium import (
-    DEFAULT_OPTIONS,
+    STEP_OPTIONS,
     Equilibrium,
     EquilibriumError,
     SolverOptions,
@@ -270,7 +270,7 @@ def secant_stiffness(
     checks.finite("angle_deg", angle_deg, SceneError)
     if pressure is not None:
         check_pressure(pressure)
-    options = DEFAULT_OPTIONS if options is None else options
+    options = STEP_OPTIONS if options is None else options
     base = scene.replace(payloads=(Payload(0.0, angle_deg, 1.0),))
     if pressure is None:
         pressure = scene.pressure if scene.pressure is not None else pressure_for_angle(scene)
@@ -393,7 +393,7 @@ def pressure_for_target(
     for name, value in (("tolerance", tolerance), ("max_pressure", max_pressure)):
         if checks.finite(name, value, SceneError) <= 0:
             raise SceneError(f"{name}={value!r}: expected a number > 0")
-    options = DEFAULT_OPTIONS if options is None else options
+    options = STEP_OPTIONS if options is None else options
     model = scene.model()
     n = model.n
     values = scene.parameters(0.0)

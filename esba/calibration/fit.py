@@ -73,6 +73,7 @@ from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import assess_angles
 from esba.solvers.eqnlp import EquilibriumNLP, model_gradient
 from esba.statics.equilibrium import (
+    STEP_OPTIONS,
     EquilibriumError,
     SolverOptions,
     solve,
@@ -590,7 +591,7 @@ def fit(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, options: FitOp
         for a row that cannot be solved at the start values (naming the row), before the fit.
     """
     options = FitOptions() if options is None else options
-    solver_options = SolverOptions() if solver_options is None else solver_options
+    solver_options = STEP_OPTIONS if solver_options is None else solver_options
     if not isinstance(options, FitOptions) or not isinstance(solver_options, SolverOptions):
         raise FitError("fit(data, free, options, solver_options): expected FitOptions and SolverOptions")
     if not isinstance(data, MeasurementSet):
@@ -781,7 +782,7 @@ def predict(data: MeasurementSet, params: dict[str, float] | None = None, covari
 
 def _rows_at(data: MeasurementSet, free: tuple[str, ...], p: np.ndarray, solver_options: SolverOptions | None):
     """Per row: (measurement, quantities, predictions, d predictions / dp, why not solved)."""
-    solver_options = SolverOptions() if solver_options is None else solver_options
+    solver_options = STEP_OPTIONS if solver_options is None else solver_options
     for m in data.rows:
         quantities = tuple(q for q in QUANTITIES if q in m.values)
         try:

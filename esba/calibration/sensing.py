@@ -79,7 +79,7 @@ from esba.infra.errors import InputError
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import assess
-from esba.statics.equilibrium import EquilibriumError, SolverOptions, solve
+from esba.statics.equilibrium import STEP_OPTIONS, EquilibriumError, solve
 
 __all__ = [
     "SensingError",
@@ -108,10 +108,6 @@ _ALIASES = {"force": "F", "angle": "Omega", "at": "s"}
 
 #: Carried actuator parameters that may have a covariance.
 ACTUATOR = ("L", "r1", "r2", "d", "rho", "E", "M")
-
-
-#: The history's state only: the estimate looks for the other stable states itself, where it needs them.
-_HISTORY_ONLY = SolverOptions(multistability="never")
 
 
 class SensingError(InputError):
@@ -569,7 +565,7 @@ class _PoseModel:
         """The state the inflate-then-load history reaches at ``p`` (None where it fails)."""
         try:
             scene = with_parameters(self.scene, dict(zip(self.names, p)))
-            r = solve(scene, _HISTORY_ONLY)
+            r = solve(scene, STEP_OPTIONS)
         except (SceneError, EquilibriumError):
             return None
         return np.asarray(r.theta, float) if r.success else None
@@ -1052,7 +1048,7 @@ def predict_pose(scene: Scene, kinds: Sequence[Measured], theta: np.ndarray | No
     pose = Pose(scene.pressure, tuple(kinds), target_angle_deg=scene.target_angle_deg if scene.pressure is None else None)
     pm = _PoseModel(pose, scene, (), ())
     if theta is None:
-        r = solve(scene, _HISTORY_ONLY)
+        r = solve(scene, STEP_OPTIONS)
         theta = np.asarray(r.theta, float)
     return theta, pm.call(theta, pm.p0)[3]
 

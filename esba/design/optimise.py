@@ -40,7 +40,7 @@ import numpy as np
 from esba.infra import jsonsafe
 from esba.model.scene import SceneError
 from esba.solvers.pso import PSOOptions, PSOResult, minimize
-from esba.statics.equilibrium import SolverOptions, solve, stability_verdict
+from esba.statics.equilibrium import STEP_OPTIONS, solve, stability_verdict
 
 from .evaluate import (
     Evaluation,
@@ -265,7 +265,7 @@ def _checked(
     K = 1000.0 * problem.payload_n / float(pc.u @ (tip1 - tip0))
     on_path, K_check = False, math.nan
     try:
-        eq = solve(problem.scene(r2, d, pressure), SolverOptions(), pressure=pressure)
+        eq = solve(problem.scene(r2, d, pressure), STEP_OPTIONS, pressure=pressure)
         if eq.ok:
             on_path = float(np.max(np.abs(eq.theta - states["loaded"]))) <= options.load_path_tol
             K_check = 1000.0 * problem.payload_n / float(pc.u @ (eq.tip[:2] - tip0))

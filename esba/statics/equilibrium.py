@@ -184,6 +184,11 @@ class SolverOptions:
 
 DEFAULT_OPTIONS = SolverOptions()
 
+#: The default for computations that call :func:`solve` as one step of their own (a stiffness's
+#: solves, a design's check, a fit's rows, a load estimate's histories) and report nothing of a
+#: scene's other stable states: the same solve without the multistability check.
+STEP_OPTIONS = SolverOptions(multistability="never")
+
 
 
 # ---------------------------------------------------------------------------------------------
