@@ -292,26 +292,33 @@ FORECAST_AT_LEAST = 60.0
 
 class _Forecast:
     """Says once, on the ``esba`` logger, how long the rest of a trace's ``max_steps`` could take
-    at the pace of its first :data:`FORECAST_AFTER` seconds (a million steps of 1e-6 is minutes)."""
+    at the pace of its steps over :data:`FORECAST_AFTER` seconds (a million steps of 1e-6 is minutes).
+    The pace is taken from the end of the first step on: the first pays one-off costs (a model's
+    kernels compiled to C on first use) that the rest do not."""
 
     def __init__(self, max_steps: int, label: str) -> None:
         self.max_steps, self.label = max_steps, label
-        self.t0 = time.perf_counter()
+        self.t0: float | None = None
+        self.s0 = 0
         self.done = False
 
     def tick(self, steps: int) -> None:
         if self.done or steps == 0:
             return
-        elapsed = time.perf_counter() - self.t0
-        if elapsed < FORECAST_AFTER:
+        now = time.perf_counter()
+        if self.t0 is None:
+            self.t0, self.s0 = now, steps
+            return
+        elapsed = now - self.t0
+        if elapsed < FORECAST_AFTER or steps <= self.s0:
             return
         self.done = True
-        rest = (self.max_steps - steps) * elapsed / steps
+        rest = (self.max_steps - steps) * elapsed / (steps - self.s0)
         if rest >= FORECAST_AT_LEAST:
             minutes = f"{rest / 60:.0f} min" if rest < 3600 else f"{rest / 3600:.1f} h"
             _log.warning(
                 "%s: %d steps in %.0f s; up to max_steps = %d it may take another %s (a smaller --max-steps or a larger --ds-max bounds it; Ctrl-C stops it)",
-                self.label or "the branch", steps, elapsed, self.max_steps, minutes,
+                self.label or "the branch", steps - self.s0, elapsed, self.max_steps, minutes,
             )
 
 

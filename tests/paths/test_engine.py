@@ -89,3 +89,19 @@ def test_palc_accepts_its_options(payload_problem):
     fine = continuation(problem, unloaded, 0.0, to=2.0, algorithm=PALC(PathOptions(ds_max=0.01)))
     assert len(fine) > len(coarse)
     np.testing.assert_allclose(fine.theta[-1], coarse.theta[-1], atol=1e-9)
+
+
+def test_the_forecast_of_a_long_trace_leaves_out_the_first_step(monkeypatch, caplog):
+    """The first step pays one-off costs (kernels compiled on first use): the pace is taken after it."""
+    import types
+
+    from esba.paths import continuation
+
+    clock = iter([100.0, 103.0])  # step 1 ends at 100 s (a compile); 30 more steps take 3 s
+    monkeypatch.setattr(continuation, "time", types.SimpleNamespace(perf_counter=lambda: next(clock)))
+    forecast = continuation._Forecast(2000, "the branch")
+    with caplog.at_level("WARNING", logger=continuation._log.name):
+        forecast.tick(1)
+        forecast.tick(31)
+    (record,) = caplog.records
+    assert "30 steps in 3 s" in record.getMessage() and "another 3 min" in record.getMessage()  # 1969 steps at 0.1 s
