@@ -29,6 +29,7 @@ from matplotlib.figure import Figure
 
 from esba.analysis.maps import StabilityMap
 
+from .paths import parameter_label
 from .scenes import new_figure, save_figure
 
 __all__ = ["map_figure", "draw_map", "save_figure", "COUNT_COLOURS"]
@@ -37,8 +38,9 @@ __all__ = ["map_figure", "draw_map", "save_figure", "COUNT_COLOURS"]
 COUNT_COLOURS = ("#f2f2f2", "#ffffff", "#c6dbef", "#6baed6", "#2171b5")
 
 
-def _label(name: str, unit: str) -> str:
-    return f"{name} ({unit})" if unit and unit != "1" else name
+def _what(problem) -> str:
+    """A parameter in words (``payload direction from the vertical``), as the axis says it, without the unit."""
+    return parameter_label(problem).rsplit(" (", 1)[0]
 
 
 def draw_map(ax: Axes, smap: StabilityMap) -> None:
@@ -64,13 +66,13 @@ def draw_map(ax: Axes, smap: StabilityMap) -> None:
         ax.plot([p.x for p in bps], [p.y for p in bps], "D", color="C2", ms=6, label="fold meets branch point (BP)")
     up, down = smap.jumps.get("loading", []), smap.jumps.get("unloading", [])
     if up:
-        ax.plot([p[0] for p in up], [p[1] for p in up], ">", color="C1", ms=6, label=f"jump, {smap.names[0]} rising")
+        ax.plot([p[0] for p in up], [p[1] for p in up], ">", color="C1", ms=6, label=f"jump, {_what(smap.plane.px)} rising")
     if down:
-        ax.plot([p[0] for p in down], [p[1] for p in down], "<", color="C4", ms=6, label=f"jump, {smap.names[0]} falling")
+        ax.plot([p[0] for p in down], [p[1] for p in down], "<", color="C4", ms=6, label=f"jump, {_what(smap.plane.px)} falling")
     ax.set_xlim(*smap.xrange)
     ax.set_ylim(*smap.yrange)
-    ax.set_xlabel(_label(smap.names[0], smap.plane.units[0]))
-    ax.set_ylabel(_label(smap.names[1], smap.plane.units[1]))
+    ax.set_xlabel(parameter_label(smap.plane.px))
+    ax.set_ylabel(parameter_label(smap.plane.py))
     ax.legend(fontsize=7, loc="best")
 
 

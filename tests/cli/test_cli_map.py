@@ -39,13 +39,13 @@ def test_omega_payload_map(capsys, tmp_path, monkeypatch):
     assert json.loads(out_json.read_text())["fold_curves"][0]["points"] == data["fold_curves"][0]["points"]
     # the figure shows the fold curve of the file, the cusp and the jumps
     (ax,) = drawn.axes(saved[fig.resolve()])
-    assert ax.get_xlabel() == "omega1 (deg)" and ax.get_ylabel() == "payload1 (N)"
+    assert ax.get_xlabel() == "payload direction from the vertical (deg)" and ax.get_ylabel() == "payload magnitude (N)"
     (curve,) = drawn.starting(ax, "fold curve 0")
     x = np.asarray(curve.get_xdata(), dtype=float)
     assert np.nanmin(x) == pytest.approx(data["fold_curves"][0]["x_range"][0])
     (star,) = drawn.starting(ax, "cusp")
     assert star.get_xdata()[0] == pytest.approx(cusp["omega1"])
-    assert len(drawn.starting(ax, "jump, omega1 rising")[0].get_xdata()) == len(data["jumps"]["loading"])
+    assert len(drawn.starting(ax, "jump, payload direction from the vertical rising")[0].get_xdata()) == len(data["jumps"]["loading"])
 
 
 def test_map_table(capsys, tmp_path):
