@@ -42,7 +42,7 @@ def test_the_morse_index_of_the_pivots_is_the_eigenvalues(problem):
     corr = Corrector.for_trace(problem, 0.0, 0.3)
     start = corr.at_lambda(np.zeros(3), 0.0)
     start.tangent = corr.tangent(start, None, 1.0)
-    pt, s = start, 0.0
+    pt = start
     seen = set()
     for _ in range(80):  # along the branch through both folds: Morse 0, 1, 0
         nxt = corr.on_segment(pt, 0.05)
