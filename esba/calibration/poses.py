@@ -72,6 +72,8 @@ def _pose(where: str, row: dict[str, Any], segments: int, default_label: str) ->
             if (x is None) != (y is None):
                 raise MeasurementError(f"{where}: {head}_x_mm and {head}_y_mm go together; one of them is empty")
             if x is None:
+                if kind == "marker" and _number(where, "marker_at", row.get("marker_at")) is not None:
+                    raise MeasurementError(f"{where}: marker_at is given without marker_x_mm and marker_y_mm")
                 continue
             at = None
             if kind == "marker":

@@ -64,6 +64,7 @@ Examples
 from __future__ import annotations
 
 import math
+import re
 import time
 from dataclasses import dataclass, field
 from typing import Any, Sequence
@@ -76,10 +77,11 @@ from esba.analysis.sensitivity import implicit_functions, model_values, paramete
 from esba.calibration.fit import identifiability_rule
 from esba.infra import checks, jsonsafe
 from esba.infra.errors import InputError
+from esba.model import resolution
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import assess
-from esba.statics.equilibrium import STEP_OPTIONS, EquilibriumError, solve
+from esba.statics.equilibrium import DEFAULT_OPTIONS, STEP_OPTIONS, EquilibriumError, solve
 
 __all__ = [
     "SensingError",
@@ -105,6 +107,12 @@ KINDS = {"theta": (None, "deg"), "total_angle": (1, "deg"), "tip": (2, "mm"), "m
 LOAD_KINDS = {"F": ("N", "force"), "Omega": ("deg", "angle"), "s": ("1", "at")}
 
 _ALIASES = {"force": "F", "angle": "Omega", "at": "s"}
+#: A load unknown's name: its kind and payload number (ASCII digits, no leading zero).
+_FREE = re.compile(r"(F|Omega|s)([1-9][0-9]{0,2})")
+
+#: The pose's pressure (MPa) and unloaded target angle (deg) allowed, as in a pose file.
+MAX_PRESSURE = 10.0
+MAX_TARGET_DEG = 720.0
 
 #: Carried actuator parameters that may have a covariance.
 ACTUATOR = ("L", "r1", "r2", "d", "rho", "E", "M")
@@ -152,8 +160,8 @@ class Measured:
     at: float | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in KINDS:
-            raise SensingError(f"measured kind {self.kind!r}: allowed are {', '.join(KINDS)}")
+        if not isinstance(self.kind, str) or self.kind not in KINDS:
+            raise SensingError(f"measured kind {_quote(self.kind)}: allowed are {', '.join(KINDS)}")
         count, unit = KINDS[self.kind]
         values = self.values if isinstance(self.values, (tuple, list, np.ndarray)) else (self.values,)
         values = tuple(checks.finite(self.kind, v, SensingError) for v in values)
@@ -224,6 +232,16 @@ class Pose:
         where = self.label or "pose"
         if self.pressure is None and self.target_angle_deg is None:
             raise SensingError(f"{where}: give its pressure (MPa) or the unloaded target angle that sets it")
+        if self.pressure is not None and self.target_angle_deg is not None:
+            raise SensingError(f"{where}: pressure={self.pressure!r} and target_angle_deg={self.target_angle_deg!r}: give one of the two")
+        if self.pressure is not None:
+            p = checks.finite(f"{where}: pressure", self.pressure, SensingError)
+            if not 0.0 <= p <= MAX_PRESSURE:
+                raise SensingError(f"{where}: pressure={p:g} MPa: expected a pressure from 0 to {MAX_PRESSURE:g} MPa")
+        else:
+            t = checks.finite(f"{where}: target_angle_deg", self.target_angle_deg, SensingError)
+            if not 0.0 < t <= MAX_TARGET_DEG:
+                raise SensingError(f"{where}: target_angle_deg={t:g}: expected an angle with 0 < angle <= {MAX_TARGET_DEG:g} deg")
         measured = tuple(self.measured) if isinstance(self.measured, (tuple, list)) else (self.measured,)
         if not measured or not all(isinstance(m, Measured) for m in measured):
             raise SensingError(f"{where}: measured={_quote(self.measured)}: expected one or more Measured")
@@ -440,10 +458,10 @@ def free_names(base: Scene, free: Sequence[str]) -> tuple[str, ...]:
         if not isinstance(name, str):
             raise SensingError(f"free {_quote(name)}: expected a name: {allowed}")
         name = _ALIASES[name] + "1" if name in _ALIASES else name
-        kind = next((k for k in LOAD_KINDS if name.startswith(k) and name[len(k):].isdigit()), None)
-        if kind is None:
+        match = _FREE.fullmatch(name)
+        if match is None:
             raise SensingError(f"free {_quote(name)}: expected a load unknown: {allowed}")
-        k = int(name[len(kind):])
+        k = int(match.group(2))
         if not 1 <= k <= count:
             raise SensingError(f"free {name!r}: the scene has {count} payload{'s' if count > 1 else ''}; allowed payloads are 1 to {count}")
         if name in out:
@@ -786,8 +804,9 @@ def _undetermined_words(prob: _Problem, unknown: np.ndarray, direction: dict, po
     words = _load_words(names, prob.payloads)
     if len(names) == 1:
         return [f"{words} is not determined by {seen}"]
-    combo = ", ".join(f"{k} by {v:+.3g} x {prob.scale_of(k):g} {_unit(k)}" for k, v in direction.items() if abs(v) > 1e-2) if direction else ""
-    return [f"the data do not separate {words}: {seen} sees only a combination of them"
+    combo = ", ".join(f"{k} by {v:+.3g} x {prob.scale_of(k):g}" + ("" if _unit(k) == "1" else f" {_unit(k)}")
+                      for k, v in direction.items() if abs(v) > 1e-2) if direction else ""
+    return [f"the data do not separate {words}: from {seen}, only a combination of them is determined"
             + (f" (changing {combo} together leaves every prediction unchanged to first order)" if combo else "")]
 
 
@@ -808,10 +827,14 @@ def _check(poses: Any, base: Any, carried: Any, carried_covariance: Any) -> tupl
         for m in p.measured:
             if m.kind == "theta" and len(m.values) != base.segments:
                 raise SensingError(f"{p.label or 'pose'}: theta has {len(m.values)} values; the scene has {base.segments} segments")
-    carried = tuple(carried or ())
+    carried = (carried,) if isinstance(carried, str) else tuple(carried or ())
     for c in carried:
         if c not in ACTUATOR:
             raise SensingError(f"carried parameter {_quote(c)}: allowed are {', '.join(ACTUATOR)}")
+    if len(set(carried)) != len(carried):
+        raise SensingError(f"carried={carried!r}: a parameter is given twice")
+    if not carried and carried_covariance is not None:
+        raise SensingError("carried_covariance is given without carried (the names of the parameters it is the covariance of)")
     cov = None
     if carried:
         try:
@@ -822,6 +845,12 @@ def _check(poses: Any, base: Any, carried: Any, carried_covariance: Any) -> tupl
             raise SensingError(f"parameter covariance: expected a finite {len(carried)} x {len(carried)} matrix for {', '.join(carried)}")
         if not np.allclose(cov, cov.T, rtol=1e-8, atol=0.0) or np.min(np.linalg.eigvalsh((cov + cov.T) / 2)) < -1e-12 * max(1.0, np.abs(cov).max()):
             raise SensingError("parameter covariance: expected a symmetric positive semi-definite matrix")
+        values = {p.name: p.value for p in scene_parameters(base)}
+        for c, var in zip(carried, np.diag(cov)):
+            # a first-order propagation of a standard deviation larger than the value itself means nothing
+            if math.sqrt(var) > abs(values[c]):
+                raise SensingError(f"parameter covariance: {c}'s standard deviation {math.sqrt(var):.3g} exceeds its value "
+                                   f"{values[c]:.4g}: expected one smaller than the value (first order)")
     return tuple(poses), carried, cov
 
 
@@ -866,6 +895,11 @@ def estimate_load(
     free = free_names(base, free)
     t0 = time.perf_counter()
     prob = _Problem(poses, base, free, carried, cov)
+    for pm in prob.pm:  # scales the solver cannot resolve are refused, as solve() refuses them, before anything is solved
+        try:
+            resolution.check_resolvable(pm.scene, pm.pressure, DEFAULT_OPTIONS.stationarity_tol)
+        except SceneError as exc:
+            raise SensingError(f"{pm.pose.label or 'pose'}: {exc}") from None
     m = sum(p.count() for p in poses)
     base_z = prob.pm[0].p0[prob.pm[0].free_idx]
     starts = [(why, np.tile(z, len(prob.loads))) for why, z in _start_loads(prob, base_z, options)]
@@ -963,6 +997,9 @@ def estimate_load(
     if dof > 0 and p_value < 1e-3:
         warnings.append(f"the residuals are larger than the stated standard deviations allow (chi-square {cost:.3g} on {dof} degrees "
                         f"of freedom, p = {p_value:.2g}): the model, the pressure or the deviations are off, and the intervals are too narrow")
+    elif dof <= 0 and cost > float(stats.chi2.ppf(0.999, 1)):
+        warnings.append(f"no load explains the data within the stated standard deviations (chi-square {cost:.3g} with no degrees of freedom "
+                        "left): the model, the pressure or the deviations are off")
     if len(candidates) > 1:
         warnings.append(f"not unique: {len(candidates)} loads explain the data equally well within the noise (listed under alternatives)")
     if undetermined:
@@ -1061,8 +1098,8 @@ def information(scene: Scene, kinds: Sequence[Measured], free: Sequence[str] = (
     >>> from esba.model.scene import Scene, Payload
     >>> s = Scene(target_angle_deg=90.0, payloads=(Payload(1.0, 90.0),))
     >>> info = information(s, [Measured("total_angle", (0.0,), 0.1)])
-    >>> info.undetermined[0][:77]
-    "the data do not separate the payload's magnitude and direction: the total ang"
+    >>> info.undetermined[0][:84]
+    "the data do not separate the payload's magnitude and direction: from the total angle"
     """
     options = SensingOptions() if options is None else options
     free = free_names(scene, free)

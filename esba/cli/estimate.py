@@ -83,6 +83,17 @@ def _flag_poses(args: argparse.Namespace, scene):
     return [Pose(scene.pressure, tuple(measured), label="flags", target_angle_deg=scene.target_angle_deg if scene.pressure is None else None)]
 
 
+def _scene_sets_drive(path: str | None) -> bool:
+    """Does the scene file set the pressure or the target angle itself (the scene's default of 90 deg is no measurement)?"""
+    if path is None:
+        return False
+    from esba.infra.inputs import load_toml
+    from esba.model.scene import SceneError
+
+    loads = load_toml(path, "scene file", SceneError).get("loads", {})
+    return isinstance(loads, dict) and ("pressure" in loads or "target_angle_deg" in loads)
+
+
 def _fit_file(path: str, scene):
     """Actuator values and their covariance from ``esba fit --json`` output."""
     from esba.calibration.sensing import ACTUATOR
@@ -142,7 +153,10 @@ def _estimate_table(d: dict) -> str:
     if len(names) > 1:
         lines.append("correlation: " + ", ".join(f"{a}-{b} {num(d['correlation'][i][j], '+.3f')}" for i, a in enumerate(names)
                                                  for j, b in enumerate(names) if j > i))
-    fit = f"chi-square {num(d['chi2'], '.3g')} on {d['dof']} degrees of freedom" + (f" (p = {num(d['p_value'], '.2g')})" if d["p_value"] is not None else "")
+    if d["dof"] > 0:
+        fit = f"chi-square {num(d['chi2'], '.3g')} on {d['dof']} degrees of freedom" + (f" (p = {num(d['p_value'], '.2g')})" if d["p_value"] is not None else "")
+    else:
+        fit = f"chi-square {num(d['chi2'], '.3g')}, no degrees of freedom left"
     lines.append(f"unique: {'yes' if d['unique'] else 'no'}; identifiable: {'yes' if d['identifiable'] else 'no'}; {fit}")
     for u in d["undetermined"]:
         lines.append(f"cannot see: {u}")
@@ -158,9 +172,7 @@ def _estimate_table(d: dict) -> str:
     for s in d["states"]:
         lines.append(f"{s['pose'][:12]:<12} state: theta ({', '.join(f'{t:.2f}' for t in s['theta_deg'])}) deg, total {s['total_angle_deg']:.2f} deg, "
                      f"{'stable' if s['stable'] else 'UNSTABLE'}, {'on' if s['on_load_history'] else 'not on'} the inflate-then-load history")
-    for w in d["warnings"]:
-        lines.append(f"WARNING: {w}")
-    return "\n".join(lines)
+    return "\n".join(lines)  # the warnings go to stderr, one line each
 
 
 def _cmd_estimate(args: argparse.Namespace) -> int:
@@ -176,14 +188,19 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
                "with --poses (the file holds the measurements)")
         if args.pressure is not None or args.target_angle is not None:
             raise UsageError("--pressure and --target-angle are not used with --poses (each row has its own pressure)")
-    elif args.pressure is None and args.target_angle is None and args.scene is None:
-        raise UsageError("give the pressure the shape was measured at: --pressure P (MPa) or --target-angle DEG")
+    elif args.pressure is None and args.target_angle is None and not _scene_sets_drive(args.scene):
+        raise UsageError("give the pressure the shape was measured at: --pressure P (MPa) or --target-angle DEG"
+                         + (f" (the scene file {args.scene} sets neither)" if args.scene else ""))
     carried, cov = (), None
     try:
         if args.fit is not None:
             if args.sigma:
                 raise UsageError("--fit and --sigma: give the actuator's uncertainty in one place")
             scene, carried, cov = _fit_file(args.fit, scene)
+            if args.frozen:
+                carried, cov = (), None
+        elif args.frozen:
+            raise UsageError("--frozen takes the values of --fit FIT.json without its covariance: give --fit")
         elif args.sigma:
             sigmas = resolve_sigmas(scene, [parse_sigma(s) for s in args.sigma])
             from esba.calibration.sensing import ACTUATOR
@@ -191,8 +208,11 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
             for s in sigmas:
                 if s.name not in ACTUATOR:
                     raise UsageError(f"--sigma {s.given}: {s.name} is not an actuator parameter; allowed are {', '.join(ACTUATOR)}")
+                if not s.sigma <= abs(s.nominal):
+                    raise UsageError(f"--sigma {s.given[:40]}: {s.name}'s standard deviation {s.sigma:.3g} exceeds its value {s.nominal:.4g}: "
+                                     "expected one smaller than the value (first order)")
             carried = tuple(s.name for s in sigmas)
-            cov = [[s.sigma**2 if i == j else 0.0 for j in range(len(sigmas))] for i, s in enumerate(sigmas)]
+            cov = [[s.sigma * s.sigma if i == j else 0.0 for j in range(len(sigmas))] for i, s in enumerate(sigmas)]
         poses = load_poses(args.poses, scene.segments) if args.poses is not None else _flag_poses(args, scene)
         options = SensingOptions(level=args.level, starts=args.starts)
         result = estimate_load(poses, args.free, scene, options, carried=carried, carried_covariance=cov)
@@ -224,6 +244,7 @@ def add_estimate(sub) -> None:
                    help="the unknowns: force, angle, at (of the payload), or F1, Omega1, s1, F2, ... (default force,angle)")
     p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="an actuator parameter's uncertainty carried into the load's (E=5%%, rho=±1; repeatable)")
     p.add_argument("--fit", metavar="FIT.json", help="actuator values and covariance from `esba fit --json` (carried into the load's uncertainty)")
+    p.add_argument("--frozen", action="store_true", help="with --fit: the actuator frozen at the fit's values, its covariance not carried")
     p.add_argument("--level", type=_level, default=0.95, help="confidence level of the intervals (default 0.95)")
     p.add_argument("--starts", type=count_arg("--starts", 0, 200), default=12, help="start loads besides the scene's payload (default 12)")
     p.set_defaults(func=_cmd_estimate)

@@ -38,6 +38,12 @@ def _g(v, digits: int = 3) -> str:
     return "not determined" if v is None or not math.isfinite(v) else f"{v:.{digits}g}"
 
 
+def _span(values: list[float]) -> str:
+    """"4.5" or "4.5 to 6.4": one number when both ends round alike."""
+    lo, hi = f"{min(values):.1f}", f"{max(values):.1f}"
+    return lo if lo == hi else f"{lo} to {hi}"
+
+
 def _ranges(values: list[float]) -> str:
     """Consecutive runs of a regular grid as 'a to b' pieces."""
     if not values:
@@ -86,7 +92,7 @@ def render(data: SensingCases) -> str:
         "",
         "The segment angles determine a tip load best: three numbers for two unknowns. The total angle alone is one number "
         "for two unknowns: only a combination of magnitude and direction. The tip position is two numbers for two unknowns, "
-        f"{min(ratios):.1f} to {max(ratios):.1f} times less precise in F per 0.1 mm than the angles per 0.1°. A marker at L/2 sees only the proximal half, "
+        f"{_span(ratios)} times less precise in F per 0.1 mm than the angles per 0.1°. A marker at L/2 sees only the proximal half, "
         "where a tip load's moment changes little with its direction: it is nearly blind.",
         "",
         "**First order holds for small noise only.** Repeated estimates from noisy segment angles (1 N horizontal, "

@@ -64,7 +64,7 @@ def test_a_tip_load_seen_only_through_the_total_angle_is_not_separable():
     e = estimate_load(pose, ("force", "angle"), Scene(target_angle_deg=90.0, payloads=(Payload(1.0, 90.0),)))
     assert not e.identifiable and not e.unique
     assert len(e.undetermined) == 1
-    assert "do not separate the payload's magnitude and direction" in e.undetermined[0]
+    assert "do not separate the payload's magnitude and direction: from the total angle alone, only a combination" in e.undetermined[0]
     assert "the total angle alone" in e.undetermined[0]
     assert np.all(np.isnan(e.std_error))
     assert json.loads(json.dumps(e.to_dict()))["unknowns"]["F1"]["std_error"] is None
@@ -137,6 +137,18 @@ def test_an_unstable_explanation_is_flagged_and_a_stable_one_preferred():
     (lambda: estimate_load(Pose(0.1, (Measured("total_angle", (1.0,), 0.1),)), ("F2",)), "1 payload"),
     (lambda: estimate_load(Pose(0.1, (Measured("total_angle", (1.0,), 0.1),)), ("F1",), carried=("E",), carried_covariance=[[-1.0]]),
      "positive semi-definite"),
+    (lambda: estimate_load(Pose(0.1, (Measured("total_angle", (1.0,), 0.1),)), ("F01",)), "free 'F01'"),
+    (lambda: estimate_load(Pose(0.1, (Measured("total_angle", (1.0,), 0.1),)), ("F\u0661",)), "free"),
+    (lambda: Measured(["theta"], (1.0,), 0.1), "measured kind"),
+    (lambda: Pose(0.1, (Measured("total_angle", (1.0,), 0.1),), target_angle_deg=90.0), "give one of the two"),
+    (lambda: Pose(1e300, (Measured("total_angle", (1.0,), 0.1),)), "pressure=1e\\+300 MPa"),
+    (lambda: Pose(None, (Measured("total_angle", (1.0,), 0.1),), target_angle_deg=1e9), "target_angle_deg=1e\\+09"),
+    (lambda: estimate_load(Pose(0.1, (Measured("total_angle", (1.0,), 0.1),)), ("F1",), carried=("E", "E"), carried_covariance=np.eye(2) * 1e-4),
+     "given twice"),
+    (lambda: estimate_load(Pose(0.1, (Measured("total_angle", (1.0,), 0.1),)), ("F1",), carried_covariance=[[1e-4]]), "without carried"),
+    (lambda: estimate_load(Pose(0.1, (Measured("total_angle", (1.0,), 0.1),)), ("F1",), carried=("E",), carried_covariance=[[1e300]]),
+     "exceeds its value"),
+    (lambda: estimate_load(Pose(0.1, (Measured("total_angle", (1.0,), 0.1),)), ("F1",), Scene(payloads=(Payload(1.0),)).replace(E=1e300)), "E"),
 ])
 def test_bad_input_is_refused_with_the_field_named(call, match):
     with pytest.raises(SensingError, match=match):
@@ -238,3 +250,55 @@ def test_two_payloads_are_separated_where_the_segment_angles_can_tell_them_apart
     e = estimate_load(Pose(0.12, (Measured("theta", theta, 0.01),)), ("F1", "F2"), start)
     assert e.ok and e.identifiable and e.unique
     assert e.estimate == pytest.approx([1.0, 0.8], abs=1e-6)
+
+
+def test_a_misfit_with_no_degrees_of_freedom_left_is_said(tmp_path):
+    pose = Pose(0.15, (Measured("tip", (-9999.0, 9999.0), 1e-3),))
+    e = estimate_load(pose, ("force", "angle"), _start(0.15), SensingOptions(starts=2, branches=False))
+    assert e.dof == 0 and any("no load explains the data" in w for w in e.warnings)
+
+
+def test_a_lone_carried_name_is_one_name():
+    theta = tuple(_shape(0.15, 1.0, 90.0))
+    e = estimate_load(Pose(0.15, (Measured("theta", theta, 0.1),)), ("force", "angle"), _start(0.15), carried="rho", carried_covariance=[[1.0]])
+    assert e.ok and e.value("F1") == pytest.approx(1.0, abs=1e-5)
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["--free", "F01"], "free 'F01'"),
+    (["--sigma", "E=1e300"], "exceeds its value"),
+    (["--pressure", "1e300"], "pressure=1e+300 MPa"),
+    (["--frozen"], "--frozen takes the values of --fit"),
+])
+def test_cli_hostile_values_exit_2(argv, match, capsys):
+    base = ["estimate", "--theta", "11.88,21.31,33.05", "--sigma-theta", "0.05"]
+    if "--pressure" not in argv:
+        base += ["--pressure", "0.15"]
+    assert main([*base, *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and match in err
+
+
+def test_cli_a_scene_file_without_a_pressure_is_not_a_measured_pressure(tmp_path, capsys):
+    (tmp_path / "s.toml").write_text("segments = 3\n")
+    assert main(["estimate", str(tmp_path / "s.toml"), "--theta", "11.88,21.31,33.05", "--sigma-theta", "0.05"]) == 2
+    assert "sets neither" in capsys.readouterr().err
+    (tmp_path / "p.toml").write_text("[loads]\npressure = 0.15\n")
+    assert main(["estimate", str(tmp_path / "p.toml"), "--theta", "11.88,21.31,33.05", "--sigma-theta", "0.05", "--json"]) == 0
+
+
+def test_cli_frozen_takes_the_fits_values_without_its_covariance(tmp_path, capsys):
+    (tmp_path / "fit.json").write_text(json.dumps({"parameters": {"E": {"estimate": 0.55}}, "covariance": [[0.0004]]}))
+    argv = ["estimate", "--pressure", "0.15", "--theta", "11.88,21.31,33.05", "--sigma-theta", "0.05", "--json", "--fit", str(tmp_path / "fit.json")]
+    assert main([*argv, "--frozen"]) == 0
+    frozen = json.loads(capsys.readouterr().out)["unknowns"]["F1"]["std_error"]
+    same = estimate_load(Pose(0.15, (Measured("theta", (11.88, 21.31, 33.05), 0.05),)), ("force", "angle"),
+                         Scene(pressure=0.15, payloads=(Payload(2.0, 90.0),)).replace(E=0.55))
+    assert frozen == pytest.approx(same.std_error[0], rel=1e-9)
+
+
+def test_pose_file_marker_point_without_its_position_is_refused(tmp_path):
+    f = tmp_path / "m.csv"
+    f.write_text("pressure_mpa,marker_at,total_angle_deg,total_angle_sd_deg\n0.1,0.5,60,1\n")
+    with pytest.raises(Exception, match="marker_at is given without marker_x_mm"):
+        load_poses(f)
