@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import casadi as ca
 import numpy as np
@@ -32,7 +32,7 @@ from esba.infra.errors import EquilibriumError
 from .generated import Model
 from .scene import Scene, SceneError
 
-__all__ = ["pressure_for_angle", "unloaded_pressure", "load_parameter"]
+__all__ = ["pressure_for_angle", "unloaded_pressure", "load_parameter", "chain_tip"]
 
 
 def load_parameter(name: str) -> bool:
@@ -97,3 +97,25 @@ def _pressure_for_angle(scene: Scene, angle_deg: float) -> float:
     if pressure < 0:
         raise EquilibriumError(f"target_angle_deg={angle_deg:g}: would need a negative pressure ({pressure:.4g} MPa)")
     return pressure
+
+
+def chain_tip(theta: Sequence[float], L: float) -> tuple[float, float]:
+    """The tip (x, y in mm) of the chain of arcs (Eq. 1-2) of segment angles ``theta`` (rad) and
+    length ``L``, in closed form: each segment an arc of length L/n turning by theta_i, its chord
+    2 (L/n) sin(theta_i/2) / theta_i along the mean heading. The generated kinematics' tip, without
+    a model (a resumed study checks its rows' tips with it).
+
+    >>> [round(v, 6) for v in chain_tip([0.3, 0.5, 0.9], 135.0)]
+    [96.008697, 71.253767]
+    """
+    n = len(theta)
+    seg = L / n
+    x = y = heading = 0.0
+    for t in theta:
+        t = float(t)
+        chord = seg * (1.0 - t * t / 24.0) if abs(t) < 1e-6 else 2.0 * seg * math.sin(t / 2.0) / t
+        x += chord * math.cos(heading + t / 2.0)
+        y += chord * math.sin(heading + t / 2.0)
+        heading += t
+    return x, y
+

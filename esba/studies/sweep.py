@@ -44,6 +44,7 @@ import numpy as np
 from esba.infra import checks, jsonsafe, outputs
 from esba.infra.errors import InputError
 from esba.model import resolution
+from esba.model.closed_form import chain_tip
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import Finding, assess_arrays
 from esba.statics.batch import METHODS, BatchOptions, check_size, decide_backend, solve_arrays
@@ -548,8 +549,12 @@ def resumed_row_problem(plan: SweepPlan, index: int, cells: Mapping[str, Any], p
     total = sum(got[f"theta{k + 1}_deg"] for k in range(plan.base.segments))
     if abs(total - got["total_angle_deg"]) > 1e-9 * max(1.0, abs(total)):
         return f"has total_angle_deg={cells.get('total_angle_deg')}, not the sum of its angles ({total:.12g})"
-    if math.hypot(got["tip_x_mm"], got["tip_y_mm"]) > plan.base.actuator.L * (1 + 1e-9):
+    L = plan.base.actuator.L
+    if math.hypot(got["tip_x_mm"], got["tip_y_mm"]) > L * (1 + 1e-9):
         return f"has its tip ({cells.get('tip_x_mm')}, {cells.get('tip_y_mm')}) mm further from the base than the length L"
+    x, y = chain_tip([math.radians(got[f"theta{k + 1}_deg"]) for k in range(plan.base.segments)], L)
+    if max(abs(x - got["tip_x_mm"]), abs(y - got["tip_y_mm"])) > 1e-8 * L:
+        return f"has its tip ({cells.get('tip_x_mm')}, {cells.get('tip_y_mm')}) mm where its angles put it at ({x:.12g}, {y:.12g}) mm"
     return ""
 
 

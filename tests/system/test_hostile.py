@@ -828,6 +828,16 @@ def _edit_plan(path: Path) -> None:
     meta.write_text(json.dumps(data, indent=1))
 
 
+def _move_tip(path: Path) -> None:
+    """Row 2's tip_x_mm moved by 3 mm, everything else as written."""
+    lines = path.read_text().split("\n")
+    header, cells = lines[0].split(","), lines[2].split(",")
+    k = header.index("tip_x_mm")
+    cells[k] = repr(float(cells[k]) - 3.0)
+    lines[2] = ",".join(cells)
+    path.write_text("\n".join(lines))
+
+
 # line 0 of the CSV holds the column names; line k holds row k
 LIES = {
     "edited-pressure": (lambda p: _edit_line(p, 3, "0.1,", "0.123456,"), "row 3 has pressure_mpa=0.123456 where the plan has 0.1"),
@@ -835,6 +845,7 @@ LIES = {
     "swapped-rows": (_swap_rows, "row 2 has pressure_mpa=0.1 where the plan has 0.05"),
     "edited-plan-same-hash": (_edit_plan, "was edited"),
     "total-not-the-sum": (lambda p: _edit_line(p, 2, "29.224", "39.224"), "row 2 has total_angle_deg=39.224"),
+    "moved-tip": (_move_tip, "where its angles put it at"),
 }
 
 
