@@ -141,7 +141,7 @@ def test_straight_column_between_its_fold_and_its_buckling_load(n):
     assert res.barriers and {res.barriers[0].a, res.barriers[0].b} == {res.states.index(straight[0]), res.states.index(bent[0])}
 
 
-@pytest.mark.parametrize("n", [8, pytest.param(32, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("n", [8, pytest.param(32, marks=[pytest.mark.slow, pytest.mark.ci])])
 def test_more_segments_find_the_same_bistable_window(window, n):
     res = equilibria(Scene(pressure=0.17, payloads=TWO_N, segments=n), EquilibriaOptions(connect=False))
     assert _summary(res) == _summary(window)
