@@ -64,6 +64,8 @@ def _map_table(d: dict) -> str:
     lines.append(f"stable states: {st['min']} to {st['max']}; more than one on {100 * st['fraction_multistable']:.1f}% of the map "
                  f"(anchored by brute force at {x['parameter']} = {d['reference'][x['parameter']]:g}, {y['parameter']} = {d['reference'][y['parameter']]:g}: "
                  f"{d['reference']['stable_states']})")
+    if d.get("recounted"):
+        lines.append(f"counted by brute force at {len(d['recounted'])} raster points where the fold-curve crossings gave fewer than 0 stable states")
     for name in ("loading", "unloading"):
         pts = d["jumps"][name]
         if pts:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -196,3 +197,31 @@ def test_counting_in_blocks_gives_the_same_regions(pf):
         assert np.array_equal(smap.count(xs, ys), whole)
     finally:
         maps.CROSSING_BLOCK = saved
+
+
+def test_no_segment_spans_a_cusp():
+    # esba map --x E:0.4:0.7 --y payload:0:4 --pressure 0.17: the cusp (payload 1.659058 N) lies
+    # between two traced points (the lowest at 1.6591976 N); across it the fold's side flips, and
+    # a segment spanning it gave both tips the same sign: -1 stable states just above the cusp
+    from esba.analysis import maps
+
+    plane = Plane.from_scene(replace(MAIN_JOB, pressure=0.17, target_angle_deg=None), "E", "payload")
+    smap = stability_map(plane, (0.4, 0.7), (0.0, 4.0), resolution=11, history_lines=0)
+    (cusp,) = smap.curves[0].cusps
+    assert cusp.y < float(np.min(smap.curves[0].ys))  # the case: the cusp is inside a traced segment
+    xs, ys = np.meshgrid([0.45, 0.5, cusp.x - 1e-4], [1.6591, 1.6592, 1.6595, 1.66])
+    crossings = maps.count_at(smap.curves, smap.spans, smap.reference, xs, ys)  # without the brute-force safety net
+    brute = [len(stable_states(plane, float(x), float(y))) for x, y in zip(xs.ravel(), ys.ravel())]
+    assert brute == [1] * xs.size and crossings.tolist() == brute
+    assert not smap.recounted and int(np.min(smap.counts)) >= 1
+
+
+def test_an_impossible_count_is_recounted_by_brute_force(pf):
+    from esba.analysis import maps
+
+    plane, curves = pf
+    smap = stability_map(plane, *PF_BOX, resolution=11, history_lines=0)
+    wrong = replace(smap, reference=(*smap.reference[:2], smap.reference[2] - 2))  # every count 2 too low
+    x, y = np.array([0.12, 0.168]), np.array([1.2, 2.5])  # 1 and 2 stable states (test_stable_states_...)
+    assert maps.count_at(curves, smap.spans, wrong.reference, x, y).tolist() == [-1, 0]
+    assert wrong.count(x, y).tolist() == [1, 0]  # the impossible -1 recounted (1 state), the possible 0 left
