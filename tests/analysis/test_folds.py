@@ -14,6 +14,7 @@ import pytest
 
 from esba.analysis.folds import FoldOptions, Plane, fold_curves, fold_curves_csv, folds_at, write_fold_curves
 from esba.analysis.maps import check_grid, stability_map, stable_states
+from esba.infra.errors import RunError
 from esba.model.scene import MAIN_JOB, Payload, Scene
 from esba.paths.continuation import trace
 from esba.statics.equilibrium import solve
@@ -225,3 +226,10 @@ def test_an_impossible_count_is_recounted_by_brute_force(pf):
     x, y = np.array([0.12, 0.168]), np.array([1.2, 2.5])  # 1 and 2 stable states (test_stable_states_...)
     assert maps.count_at(curves, smap.spans, wrong.reference, x, y).tolist() == [-1, 0]
     assert wrong.count(x, y).tolist() == [1, 0]  # the impossible -1 recounted (1 state), the possible 0 left
+    saved = maps.MAX_RECOUNTS
+    try:
+        maps.MAX_RECOUNTS = 0  # bounded: more impossible counts than this are an error, not a long brute force
+        with pytest.raises(RunError, match="below 0 stable states at 1 points"):
+            wrong.count(x, y)
+    finally:
+        maps.MAX_RECOUNTS = saved
