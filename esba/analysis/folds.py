@@ -253,11 +253,13 @@ class FoldCurve:
             row = {"curve": self.index, "point": k, self.names[0]: self.xs[k], self.names[1]: self.ys[k], "arclength": self.arclength[k]}
             row.update({f"theta{i + 1}_deg": float(np.degrees(t)) for i, t in enumerate(self.theta[k])})
             row.update({"total_angle_deg": float(self.total_angle_deg[k]), "stable_fold": int(self.stable[k]), "cusp_test": self.cusp_test[k], "special": ""})
+            row.update({f"v{i + 1}": "" for i in range(self.theta.shape[1])})
             rows.append(row)
         for p in self.special:
             row = {"curve": self.index, "point": "", self.names[0]: p.x, self.names[1]: p.y, "arclength": p.arclength}
             row.update({f"theta{i + 1}_deg": float(np.degrees(t)) for i, t in enumerate(p.theta)})
             row.update({"total_angle_deg": math.degrees(float(np.sum(p.theta))), "stable_fold": "", "cusp_test": "", "special": p.kind})
+            row.update({f"v{i + 1}": float(v) for i, v in enumerate(p.vector)})  # the critical vector, as the JSON's critical_vector
             rows.append(row)
         return rows
 

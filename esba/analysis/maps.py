@@ -31,6 +31,7 @@ from typing import Any, Callable, Sequence
 import casadi as ca
 import numpy as np
 
+from esba.infra.errors import RunError
 from esba.model.generated import Model
 from esba.model.stability import CRITICAL_TOL
 from esba.paths.loading import history
@@ -52,6 +53,8 @@ STATES_TOL = 1e-9
 CROSSING_BLOCK = 1_000_000
 #: Two minima closer than this (max over the segments, rad) are one state.
 SAME_STATE = 1e-5
+#: The most points of one count whose crossings give an impossible count (below 0) recounted by brute force.
+MAX_RECOUNTS = 200
 
 
 # ---------------------------------------------------------------------------------------------
@@ -153,16 +156,46 @@ def stable_states(plane: Plane, x: float, y: float, starts: np.ndarray | None = 
 # counting across fold curves
 
 
+def _with_cusps(c: FoldCurve, spans) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The curve's points in scaled coordinates with each located cusp inserted at its arclength:
+    points (m, 2), side normals (m, 2; NaN at a cusp, where the normal flips), stable (m,), is-a-cusp (m,).
+
+    The side normal flips at a cusp, so that a segment across one would carry the average of two
+    opposite normals; with the cusp a point of the polyline no segment spans one.
+    """
+    pts = np.column_stack([c.xs / spans[0], c.ys / spans[1]])
+    side = c.side(spans)
+    stable = np.asarray(c.stable, dtype=bool)
+    cusp = np.zeros(len(c), dtype=bool)
+    s = np.asarray(c.arclength, dtype=float)
+    if len(c) < 2 or not np.all(np.diff(s) > 0):
+        return pts, side, stable, cusp
+    for p in sorted(c.cusps, key=lambda q: q.arclength, reverse=True):  # from the end: earlier indices stay valid
+        k = int(np.searchsorted(s, p.arclength))  # s[k - 1] < p.arclength <= s[k]
+        if not (0 < k < len(s)) or not math.isfinite(p.arclength):
+            continue
+        at = np.array([p.x / spans[0], p.y / spans[1]])
+        pts = np.insert(pts, k, at, axis=0)
+        side = np.insert(side, k, [np.nan, np.nan], axis=0)
+        stable = np.insert(stable, k, bool(stable[k - 1] and stable[k]))
+        cusp = np.insert(cusp, k, True)
+        s = np.insert(s, k, p.arclength)
+    return pts, side, stable, cusp
+
+
 def _segments(curves: Sequence[FoldCurve], spans) -> tuple[np.ndarray, np.ndarray]:
-    """The stable fold curves' segments in scaled coordinates, (k, 2, 2), and each one's side normal (k, 2)."""
+    """The stable fold curves' segments in scaled coordinates, (k, 2, 2), and each one's side normal (k, 2):
+    the sum of its ends' normals, or at a cusp (a point of the polyline, see :func:`_with_cusps`) the other end's."""
     segs, sides = [], []
     for c in curves:
         if len(c) < 2:
             continue
-        pts = np.column_stack([c.xs / spans[0], c.ys / spans[1]])
-        side = c.side(spans)
-        keep = c.stable[:-1] & c.stable[1:] & np.all(np.isfinite(side[:-1]), axis=1) & np.all(np.isfinite(side[1:]), axis=1)
-        mid = side[:-1] + side[1:]
+        pts, side, stable, cusp = _with_cusps(c, spans)
+        finite = np.all(np.isfinite(side), axis=1)
+        usable = finite | cusp
+        keep = stable[:-1] & stable[1:] & usable[:-1] & usable[1:] & (finite[:-1] | finite[1:])
+        known = np.where(finite[:, None], side, 0.0)
+        mid = known[:-1] + known[1:]
         segs.append(np.stack([pts[:-1], pts[1:]], axis=1)[keep])
         sides.append(mid[keep])
     if not segs:
@@ -205,6 +238,24 @@ def count_at(curves: Sequence[FoldCurve], spans, reference: tuple[float, float, 
     return out
 
 
+def _recount(plane: Plane, x: np.ndarray, y: np.ndarray, counts: np.ndarray) -> list[list[float]]:
+    """Recount by brute force, in place, where ``counts`` is impossible (below 0): the crossings
+    went wrong there (a fold curve traced too coarsely, a cusp not located). Returns [x, y, crossing
+    count, brute-force count] per recounted point."""
+    bad = np.flatnonzero(counts < 0)
+    if len(bad) > MAX_RECOUNTS:
+        raise RunError(
+            f"the stability map counts below 0 stable states at {len(bad)} points (at most {MAX_RECOUNTS} are recounted by brute force): "
+            "its fold curves are traced too coarsely; try a smaller box"
+        )
+    done = []
+    for i in bad:
+        n = len(stable_states(plane, float(x[i]), float(y[i])))
+        done.append([float(x[i]), float(y[i]), int(counts[i]), n])
+        counts[i] = n
+    return done
+
+
 def _distance_to_curves(curves: Sequence[FoldCurve], spans, x: float, y: float) -> float:
     best = math.inf
     for c in curves:
@@ -244,7 +295,9 @@ class StabilityMap:
 
     ``reference`` (x, y, count): where the count was anchored by brute force; ``grid_x``, ``grid_y``
     the raster's coordinates and ``counts`` (len(grid_y), len(grid_x)) the number of stable states;
-    ``jumps`` the loading and unloading lines; ``seconds`` the time of each part.
+    ``jumps`` the loading and unloading lines; ``seconds`` the time of each part; ``recounted`` the
+    raster points (x, y, crossing count, brute-force count) where the crossings gave an impossible
+    count (below 0) and brute force counted instead.
     """
 
     plane: Plane
@@ -257,6 +310,7 @@ class StabilityMap:
     counts: np.ndarray
     jumps: dict[str, list[list[float]]]
     seconds: dict[str, float]
+    recounted: tuple[tuple[float, float, int, int], ...] = ()
 
     @property
     def spans(self) -> tuple[float, float]:
@@ -271,8 +325,13 @@ class StabilityMap:
         return [p for c in self.curves for p in c.special]
 
     def count(self, x, y) -> np.ndarray:
-        """The number of stable states the map gives at the points (x, y)."""
-        return count_at(self.curves, self.spans, self.reference, x, y)
+        """The number of stable states the map gives at the points (x, y) (by brute force where the
+        crossings give an impossible count, below 0)."""
+        x = np.asarray(x, dtype=float).ravel()
+        y = np.asarray(y, dtype=float).ravel()
+        counts = count_at(self.curves, self.spans, self.reference, x, y)
+        _recount(self.plane, x, y, counts)
+        return counts
 
     def distance(self, x: float, y: float) -> float:
         """Distance from (x, y) to the nearest fold curve point, in spans."""
@@ -292,6 +351,7 @@ class StabilityMap:
                 "min": int(np.min(self.counts)) if self.counts.size else 0,
                 "fraction_multistable": float(np.mean(self.counts > 1)) if self.counts.size else 0.0,
             },
+            "recounted": [{nx: r[0], ny: r[1], "crossings": r[2], "brute_force": r[3]} for r in self.recounted],
             "jumps": self.jumps,
             "seconds": self.seconds,
         }
@@ -328,13 +388,17 @@ def stability_map(
     gx = np.linspace(xrange[0], xrange[1], resolution)
     gy = np.linspace(yrange[0], yrange[1], resolution)
     mx, my = np.meshgrid(gx, gy)
-    counts = count_at(curves, spans, reference, mx, my).reshape(mx.shape)
+    counts = count_at(curves, spans, reference, mx, my)
+    recounted = _recount(plane, mx.ravel(), my.ravel(), counts)
+    if recounted:
+        say(f"{len(recounted)} raster points counted below 0 stable states by the crossings: recounted by brute force")
+    counts = counts.reshape(mx.shape)
     seconds["regions"] = time.perf_counter() - t
     t = time.perf_counter()
     say("loading and unloading")
     jumps = jump_lines(plane, xrange, yrange, history_lines) if history_lines else {"loading": [], "unloading": []}
     seconds["jumps"] = time.perf_counter() - t
-    return StabilityMap(plane, xrange, yrange, curves, reference, gx, gy, counts, jumps, seconds)
+    return StabilityMap(plane, xrange, yrange, curves, reference, gx, gy, counts, jumps, seconds, tuple(tuple(r) for r in recounted))
 
 
 # ---------------------------------------------------------------------------------------------

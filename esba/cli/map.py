@@ -64,6 +64,8 @@ def _map_table(d: dict) -> str:
     lines.append(f"stable states: {st['min']} to {st['max']}; more than one on {100 * st['fraction_multistable']:.1f}% of the map "
                  f"(anchored by brute force at {x['parameter']} = {d['reference'][x['parameter']]:g}, {y['parameter']} = {d['reference'][y['parameter']]:g}: "
                  f"{d['reference']['stable_states']})")
+    if d.get("recounted"):
+        lines.append(f"counted by brute force at {len(d['recounted'])} raster points where the fold-curve crossings gave fewer than 0 stable states")
     for name in ("loading", "unloading"):
         pts = d["jumps"][name]
         if pts:
@@ -101,8 +103,8 @@ def _cmd_map(args: argparse.Namespace) -> int:
     for flag, v in (("--x", args.x), ("--y", args.y)):
         if v is None:
             raise UsageError(f"the following arguments are required: {flag} PARAM:FROM:TO")
-    out = None if args.no_out else outputs.check_file(args.out or DEFAULT_MAP_OUT, "--out", (".csv", ".json"))
-    plot = None if args.no_plot else outputs.figure_file(args.plot or DEFAULT_MAP_FIGURE, "--plot", DEFAULT_MAP_FIGURE)
+    out = None if args.no_out else outputs.check_file(DEFAULT_MAP_OUT if args.out is None else args.out, "--out", (".csv", ".json"))
+    plot = None if args.no_plot else outputs.figure_file(DEFAULT_MAP_FIGURE if args.plot is None else args.plot, "--plot", DEFAULT_MAP_FIGURE)
     (xname, x0, x1), (yname, y0, y1) = args.x, args.y
     scene = scene_from_args(args)
     from esba.analysis.folds import Plane, check_box, write_fold_curves
@@ -130,6 +132,9 @@ def _cmd_map(args: argparse.Namespace) -> int:
         data["check_grid"] = checked.to_dict()
     if out:
         extra = {k: v for k, v in smap.to_dict(points=False).items() if k != "fold_curves"}
+        extra["scene"] = data["scene"]
+        if checked is not None:
+            extra["check_grid"] = data["check_grid"]
         data["out"] = str(write_fold_curves(smap.curves, out, extra).resolve())
     if plot:
         from esba.figures.maps import map_figure, save_figure

@@ -3,7 +3,10 @@ docs/paths.md on the curves, and stability maps checked cell by cell against bru
 
 from __future__ import annotations
 
+import csv
+import io
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +14,7 @@ import pytest
 
 from esba.analysis.folds import FoldOptions, Plane, fold_curves, fold_curves_csv, folds_at, write_fold_curves
 from esba.analysis.maps import check_grid, stability_map, stable_states
+from esba.infra.errors import RunError
 from esba.model.scene import MAIN_JOB, Payload, Scene
 from esba.paths.continuation import trace
 from esba.statics.equilibrium import solve
@@ -150,7 +154,9 @@ def test_fold_curve_files(pf, tmp_path):
     text = fold_curves_csv(curves)
     head = text.splitlines()[0].split(",")
     assert head[:4] == ["curve", "point", "pressure", "payload1"]
-    assert sum(1 for line in text.splitlines() if line.endswith(",cusp")) == 1
+    (cusp_row,) = [r for r in csv.DictReader(io.StringIO(text)) if r["special"] == "cusp"]
+    vector = curves[0].cusps[0].vector
+    assert [float(cusp_row[f"v{i + 1}"]) for i in range(len(vector))] == pytest.approx(vector, rel=1e-11)  # the critical vector, as in the JSON
     import json
 
     path = write_fold_curves(curves, tmp_path / "f.json", {"what": "test"})
@@ -192,3 +198,38 @@ def test_counting_in_blocks_gives_the_same_regions(pf):
         assert np.array_equal(smap.count(xs, ys), whole)
     finally:
         maps.CROSSING_BLOCK = saved
+
+
+def test_no_segment_spans_a_cusp():
+    # esba map --x E:0.4:0.7 --y payload:0:4 --pressure 0.17: the cusp (payload 1.659058 N) lies
+    # between two traced points (the lowest at 1.6591976 N); across it the fold's side flips, and
+    # a segment spanning it gave both tips the same sign: -1 stable states just above the cusp
+    from esba.analysis import maps
+
+    plane = Plane.from_scene(replace(MAIN_JOB, pressure=0.17, target_angle_deg=None), "E", "payload")
+    smap = stability_map(plane, (0.4, 0.7), (0.0, 4.0), resolution=11, history_lines=0)
+    (cusp,) = smap.curves[0].cusps
+    assert cusp.y < float(np.min(smap.curves[0].ys))  # the case: the cusp is inside a traced segment
+    xs, ys = np.meshgrid([0.45, 0.5, cusp.x - 1e-4], [1.6591, 1.6592, 1.6595, 1.66])
+    crossings = maps.count_at(smap.curves, smap.spans, smap.reference, xs, ys)  # without the brute-force safety net
+    brute = [len(stable_states(plane, float(x), float(y))) for x, y in zip(xs.ravel(), ys.ravel())]
+    assert brute == [1] * xs.size and crossings.tolist() == brute
+    assert not smap.recounted and int(np.min(smap.counts)) >= 1
+
+
+def test_an_impossible_count_is_recounted_by_brute_force(pf):
+    from esba.analysis import maps
+
+    plane, curves = pf
+    smap = stability_map(plane, *PF_BOX, resolution=11, history_lines=0)
+    wrong = replace(smap, reference=(*smap.reference[:2], smap.reference[2] - 2))  # every count 2 too low
+    x, y = np.array([0.12, 0.168]), np.array([1.2, 2.5])  # 1 and 2 stable states (test_stable_states_...)
+    assert maps.count_at(curves, smap.spans, wrong.reference, x, y).tolist() == [-1, 0]
+    assert wrong.count(x, y).tolist() == [1, 0]  # the impossible -1 recounted (1 state), the possible 0 left
+    saved = maps.MAX_RECOUNTS
+    try:
+        maps.MAX_RECOUNTS = 0  # bounded: more impossible counts than this are an error, not a long brute force
+        with pytest.raises(RunError, match="below 0 stable states at 1 points"):
+            wrong.count(x, y)
+    finally:
+        maps.MAX_RECOUNTS = saved

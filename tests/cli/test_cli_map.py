@@ -36,7 +36,9 @@ def test_omega_payload_map(capsys, tmp_path, monkeypatch):
     (cusp,) = [p for p in data["special_points"] if p["kind"] == "cusp"]
     assert 122.0 < cusp["omega1"] < 122.4 and cusp["status"] == "converged"
     assert data["check_grid"]["agrees"] and data["check_grid"]["k"] == 4
-    assert json.loads(out_json.read_text())["fold_curves"][0]["points"] == data["fold_curves"][0]["points"]
+    written = json.loads(out_json.read_text())
+    assert written["fold_curves"][0]["points"] == data["fold_curves"][0]["points"]
+    assert written["check_grid"] == data["check_grid"] and written["scene"] == data["scene"]  # the file holds what --json prints
     # the figure shows the fold curve of the file, the cusp and the jumps
     (ax,) = drawn.axes(saved[fig.resolve()])
     assert ax.get_xlabel() == "payload direction from the vertical (deg)" and ax.get_ylabel() == "payload magnitude (N)"

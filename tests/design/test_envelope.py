@@ -46,6 +46,7 @@ def test_the_fold_constraint_is_the_nearest_fold():
 
 
 @pytest.mark.slow
+@pytest.mark.ci  # about 22 s alone: CI checks the envelope optimum against PSO
 def test_the_stiffest_design_clear_of_folds_against_pso():
     m, p = optimise_envelope(DesignProblem(), ENVELOPE, method="both")
     # without the constraint IPOPT finds the paper's optimum, which snaps inside

@@ -677,6 +677,8 @@ ROUND2_FLAGS = [
     (["solve", "--plot", "x.png/"], "--plot 'x.png/': ends in '/' but is not an existing folder"),
     (["sweep", "--pressure", "0.1", "--out", "g.csv/", "--no-progress"], "--out 'g.csv/': ends in '/'"),
     (["design", "--max-pressure", "1e9"], "max_pressure=1e+09 MPa: its moment on a segment"),
+    (["map", "--x", "omega:110:135", "--y", "payload:0:4", "--out", "", "--no-plot"], "--out '': expected a file name"),
+    (["map", "--x", "omega:110:135", "--y", "payload:0:4", "--plot", "", "--no-out"], "--plot '': expected a figure file"),
 ]
 
 
