@@ -677,6 +677,14 @@ ROUND2_FLAGS = [
     (["solve", "--plot", "x.png/"], "--plot 'x.png/': ends in '/' but is not an existing folder"),
     (["sweep", "--pressure", "0.1", "--out", "g.csv/", "--no-progress"], "--out 'g.csv/': ends in '/'"),
     (["design", "--max-pressure", "1e9"], "max_pressure=1e+09 MPa: its moment on a segment"),
+    (["sweep", "--pressure", "0.1", "--out", "", "--no-progress"], "--out '': expected a file name"),
+    (["sweep", "--pressure", "0.1", "--plot", "", "--no-progress"], "--plot '': expected a figure file"),
+    (["sweep", "--fig12", "", "--no-progress"], "--fig12 '': expected a figure file"),
+    (["solve", "--plot", ""], "--plot '': expected a figure file"),
+    (["equilibria", "--plot", ""], "--plot '': expected a figure file"),
+    (["design", "--plot", ""], "--plot '': expected a figure file"),
+    (["solve", "--no-plot", "--history", ""], "--history '': expected a name"),
+    (["solve", "--no-plot", "--history", "  "], "--history '': expected a name"),
 ]
 
 
