@@ -698,6 +698,7 @@ ROUND2_FLAGS = [
     (["design", "--plot", ""], "--plot '': expected a figure file"),
     (["solve", "--no-plot", "--history", ""], "--history '': expected a name"),
     (["solve", "--no-plot", "--history", "  "], "--history '': expected a name"),
+    (["stiffness", "--payload", "1e-300", "--json"], "payload 1e-300 N: below 1e-09 N"),
 ]
 
 
