@@ -74,7 +74,7 @@ from typing import Any, Mapping
 
 from esba.infra import checks, inputs
 from esba.infra.errors import InputError
-from esba.model.scene import Payload, Scene, SceneError, scene_from_dict
+from esba.model.scene import MAX_TARGET_ANGLE_DEG, Payload, Scene, SceneError, scene_from_dict
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -92,7 +92,7 @@ MIN_SD = 1e-6
 #: The largest angle a row may state (a target, or a measured total angle), degrees: ten turns.
 #: A bend past one turn is fitted with a warning (the actuator would pass through itself);
 #: one past ten is no measurement of a bending actuator (1e6 deg is a typo).
-MAX_ANGLE_DEG = 3600.0
+MAX_ANGLE_DEG = MAX_TARGET_ANGLE_DEG  # the bound of a scene's target angle, 3600
 _TURN = "ten turns; past one the model already warns that the actuator passes through itself"
 
 #: The most rows a file may have (each row adds its equilibria to the fit's NLP).
