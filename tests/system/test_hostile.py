@@ -700,6 +700,7 @@ ROUND2_FLAGS = [
     (["solve", "--no-plot", "--history", "  "], "--history '': expected a name"),
     (["stiffness", "--payload", "1e-300", "--json"], "payload 1e-300 N: below 1e-09 N"),
     (["pressure", "--target-angle", "1e6"], "target_angle_deg=1e+06: expected an angle <= 3600 degrees"),
+    (["design", "--objective", "pressure", "--min-stiffness", "30", "--target-angle", "1e6"], "target_angle_deg=1e+06: expected an angle <= 3600 degrees"),
 ]
 
 
