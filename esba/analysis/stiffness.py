@@ -64,6 +64,11 @@ PAPER_FORCES: tuple[float, ...] = (0.5, 1.0, 2.0)
 #: The most payloads one stiffness call solves for (one equilibrium each).
 MAX_FORCES = 1_000
 
+#: The smallest payload, N, whose secant stiffness is refused as round-off below it: on Table 1's
+#: actuator at the 90 degree target (tangent 55.761 N/m) 1e-9 N moves the tip 1.8e-8 mm of its
+#: 86 mm and the secant is 55.7609 N/m; 1e-12 N gives 55.67 (0.2 % off); 1e-300 N gave 2.3e-284 N/m.
+MIN_FORCE = 1e-9
+
 def tip_jacobian(model: Model, theta: Sequence[float], L: float) -> np.ndarray:
     """J = d[x, y]_tip / d theta, shape (2, n), mm/rad (CasADi AD of the generated kinematics)."""
 
@@ -265,6 +270,11 @@ def secant_stiffness(
         raise SceneError(f"forces={list(forces)!r}: expected one or more finite payloads > 0 N") from None
     if not forces or any(f <= 0 for f in forces):
         raise SceneError(f"forces={list(forces)!r}: expected one or more payloads > 0 N")
+    small = [f for f in forces if f < MIN_FORCE]
+    if small:
+        raise SceneError(
+            f"payload {small[0]:g} N: below {MIN_FORCE:g} N, the tip would move less than double precision resolves (the secant stiffness would be round-off)"
+        )
     if len(forces) > MAX_FORCES:
         raise SceneError(f"forces: {len(forces)} given, at most {MAX_FORCES} (one solve each)")
     checks.finite("angle_deg", angle_deg, SceneError)

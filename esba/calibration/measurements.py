@@ -61,6 +61,7 @@ esba.calibration.measurements.MeasurementError: ...m.csv: column 'pressure' stat
 
 from __future__ import annotations
 
+import collections
 import csv
 import dataclasses
 import io
@@ -73,7 +74,7 @@ from typing import Any, Mapping
 
 from esba.infra import checks, inputs
 from esba.infra.errors import InputError
-from esba.model.scene import Payload, Scene, SceneError, scene_from_dict
+from esba.model.scene import MAX_TARGET_ANGLE_DEG, Payload, Scene, SceneError, scene_from_dict
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -91,7 +92,7 @@ MIN_SD = 1e-6
 #: The largest angle a row may state (a target, or a measured total angle), degrees: ten turns.
 #: A bend past one turn is fitted with a warning (the actuator would pass through itself);
 #: one past ten is no measurement of a bending actuator (1e6 deg is a typo).
-MAX_ANGLE_DEG = 3600.0
+MAX_ANGLE_DEG = MAX_TARGET_ANGLE_DEG  # the bound of a scene's target angle, 3600
 _TURN = "ten turns; past one the model already warns that the actuator passes through itself"
 
 #: The most rows a file may have (each row adds its equilibria to the fit's NLP).
@@ -375,9 +376,12 @@ def _csv_rows(source: str, text: str) -> list[tuple[str, dict]]:
     header = [h.strip() for h in table[0]]
     if any(not h for h in header):
         raise MeasurementError(f"{source} line {lines[0][0]}: an empty column name in the header")
-    dup = sorted({h for h in header if header.count(h) > 1})
+    seen = collections.Counter(header)  # header.count per column was quadratic: 300k columns took over a minute
+    dup = sorted(h for h, n in seen.items() if n > 1)
     if dup:
         raise MeasurementError(f"{source} line {lines[0][0]}: column(s) {', '.join(dup)} appear twice")
+    for h in header:  # an unknown name is said before any row's cell count
+        _column(f"{source} line {lines[0][0]}", h)
     rows = []
     for (lineno, _), cells in zip(lines[1:], table[1:]):
         if len(cells) != len(header):

@@ -157,7 +157,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         refuse(args, ["particles", "iterations", "seed"], "with --method ipopt (they set the swarm: use --method pso or both)")
     if method == "pso":
         refuse(args, ["starts"], "with --method pso (it sets IPOPT's starts: use --method ipopt or both)")
-    figure = outputs.figure_file(args.plot, "--plot", "esba-design.png") if args.plot else None
+    figure = outputs.figure_file(args.plot, "--plot", "esba-design.png") if args.plot is not None else None
     try:
         pso_options = PSOOptions(
             particles=30 if args.particles is None else args.particles,

@@ -58,7 +58,7 @@ def _cmd_equilibria(args: argparse.Namespace) -> int:
     plot = args.plot
     if plot is None and args.scene is None and not args.no_plot:
         plot = DEFAULT_EQUILIBRIA_FIGURE
-    figure = outputs.figure_file(plot, "--plot", DEFAULT_EQUILIBRIA_FIGURE) if plot and not args.no_plot else None
+    figure = outputs.figure_file(plot, "--plot", DEFAULT_EQUILIBRIA_FIGURE) if plot is not None and not args.no_plot else None
     scene = scene_from_args(args)
     try:
         extra = {} if args.starts is None else {"starts": args.starts}

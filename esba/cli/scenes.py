@@ -128,7 +128,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     plot = args.plot
     if plot is None and args.scene is None and not args.no_plot:
         plot = DEFAULT_SOLVE_FIGURE
-    figure = outputs.figure_file(plot, "--plot", DEFAULT_SOLVE_FIGURE) if plot and not args.no_plot else None
+    figure = outputs.figure_file(plot, "--plot", DEFAULT_SOLVE_FIGURE) if plot is not None and not args.no_plot else None
     scene = scene_from_args(args)
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
@@ -278,6 +278,8 @@ def _seed(text: str) -> int:
 def _history_arg(text: str):
     """``--history``: a name, or steps ``P:L,P:L,...`` of pressure and load fractions."""
     text = text.strip()
+    if not text:
+        raise argparse.ArgumentTypeError("--history '': expected a name (inflate-then-load, load-then-inflate, together) or steps P:L,P:L,...")
     if ":" not in text:
         return text  # a name: SolverOptions says which are allowed
     steps = []

@@ -80,15 +80,15 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     from esba.statics.batch import BatchOptions
     from esba.studies.sweep import sweep
 
-    if args.fig12:
+    if args.fig12 is not None:
         refuse(args, ["pressure", "payload", "payload_angle", "r2", "d", "target_angle", "out", "plot"], "with --fig12 (it draws its own grid: r2 and d at P = 0.2 MPa, no payload)")
         figure = outputs.figure_file(args.fig12, "--fig12", "sweep-fig12.png")
         out = None
     else:
         if args.pressure is not None:
             refuse(args, ["target_angle"], "with --pressure (it sets the pressure of designs swept without --pressure)")
-        out = outputs.check_file(args.out, "--out", (".csv", ".json")) if args.out else None
-        figure = outputs.figure_file(args.plot, "--plot", "esba-sweep.png") if args.plot else None
+        out = outputs.check_file(args.out, "--out", (".csv", ".json")) if args.out is not None else None
+        figure = outputs.figure_file(args.plot, "--plot", "esba-sweep.png") if args.plot is not None else None
     base = load_scene_file(args.scene, None) or Scene()
     changes = scene_changes(args, skip=("pressure",))
     base = base.replace(**changes) if changes else base
@@ -96,7 +96,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if on_cluster(args) or args.resume:
         return _sweep_in_chunks(args, base, options, out, figure)
     refuse(args, ["chunk"], "without --workers, --scheduler or --resume (a sweep in this process is one batch)")
-    if args.fig12:
+    if args.fig12 is not None:
         fig, sweeps = fig12(base.replace(pressure=0.2, payloads=()), options=options)
         path = save_figure(fig, figure)
         curves = [s for group in sweeps.values() for s in group]
@@ -149,13 +149,13 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
     from esba.studies.sweep import SweepError, plan_sweep
     from esba.studies.sweep_runner import DEFAULT_CHUNK, check_study, sweep_study
 
-    if args.fig12:
+    if args.fig12 is not None:
         raise UsageError("--fig12 draws its own small grid in this process: give it without --workers, --scheduler or --resume")
     out = None if out is None else str(out)
     streamed = out is not None and out.lower().endswith(".csv")
     if args.resume and not streamed:
         raise UsageError(f"--resume continues a study from the CSV file it streams to: give --out FILE.csv (given: {out!r})")
-    if args.plot and streamed:
+    if args.plot is not None and streamed:
         raise UsageError("--plot needs every row in memory, and with --out FILE.csv on --workers, --scheduler or --resume the rows stream to the file: plot in a run without them")
     try:
         plan = plan_sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d)
@@ -179,7 +179,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
         data["out"] = out
     elif out is not None:
         data["out"] = str(study.result.write(out))
-    if args.plot:
+    if args.plot is not None:
         try:
             data["figure"] = str(save_figure(sweep_figure(study.result), figure))
         except SweepError as exc:

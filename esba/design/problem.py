@@ -20,7 +20,7 @@ from derive.effects import DEFAULT_VARIANT, VARIANTS
 from esba.infra import checks
 from esba.infra.errors import InputError
 from esba.model import resolution
-from esba.model.scene import Actuator, Payload, Scene
+from esba.model.scene import MAX_TARGET_ANGLE_DEG, Actuator, Payload, Scene
 from esba.statics.equilibrium import DEFAULT_OPTIONS
 
 __all__ = ["OBJECTIVES", "METHODS", "GEOMETRY_EPS", "DesignError", "DesignProblem", "DesignOptions", "DEFAULT_DESIGN_OPTIONS"]
@@ -127,6 +127,10 @@ class DesignProblem:
             value = getattr(self, name)
             if value is not None:
                 object.__setattr__(self, name, _finite(name, value, 0.0, open_low=True))
+        for name in ("start_angle_deg", "target_angle_deg"):  # as a scene's target angle
+            value = getattr(self, name)
+            if value is not None and value > MAX_TARGET_ANGLE_DEG:
+                raise DesignError(f"{name}={value:g}: expected an angle <= {MAX_TARGET_ANGLE_DEG:g} degrees (ten turns; past one the actuator already passes through itself)")
         wall = _finite("min_wall", self.min_wall, 0.0)
         if wall >= self.actuator.r1:
             raise DesignError(f"min_wall={wall:g}: expected 0 <= min_wall < r1 = {self.actuator.r1:g} mm")

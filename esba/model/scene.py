@@ -70,6 +70,10 @@ from .generated import Model, load_model
 
 __all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure"]
 
+#: The largest target angle (the unloaded bend a pressure is sought for), degrees: ten turns, as a
+#: measurement file allows (:data:`esba.calibration.measurements.MAX_ANGLE_DEG`); 1e6 deg is a typo.
+MAX_TARGET_ANGLE_DEG = 3600.0
+
 #: Standard gravity, m/s^2.
 STANDARD_GRAVITY = 9.81
 
@@ -274,6 +278,10 @@ class Scene:
             target = _number("target_angle_deg", target)
             if target <= 0:
                 raise SceneError(f"target_angle_deg={target:g}: expected an angle > 0 degrees")
+            if target > MAX_TARGET_ANGLE_DEG:
+                raise SceneError(
+                    f"target_angle_deg={target:g}: expected an angle <= {MAX_TARGET_ANGLE_DEG:g} degrees (ten turns; past one the actuator already passes through itself)"
+                )
             object.__setattr__(self, "target_angle_deg", target)
         payloads = self.payloads
         if isinstance(payloads, Payload):

@@ -61,6 +61,7 @@ from typing import Any, Callable, Iterator, Mapping, Sequence
 
 from esba.infra import inputs
 from esba.infra.errors import InputError
+from esba.infra.outputs import WriteFailed
 
 from .distributed import StudyStopped, run_task
 
@@ -211,24 +212,24 @@ class StudyFile:
         except OSError as exc:
             raise StudyError(f"{self.path}: cannot make its folder ({exc.strerror or exc})") from None
         fd = self._acquire(os.O_WRONLY | os.O_CREAT | os.O_APPEND, f"{self.path}: cannot write the study file")
-        try:
-            self.replaced = self._rows_of_this_study()
-            if stat.S_ISREG(os.fstat(fd).st_mode):  # not a device (a pipe, /dev/null)
-                os.ftruncate(fd, 0)  # only now, under the lock
-        except OSError as exc:
-            os.close(fd)
-            raise StudyError(f"{self.path}: cannot write the study file ({exc.strerror or exc})") from None
-        if self.replaced:
-            _log.warning("%s held %d rows of this study; starting over (give --resume to continue it)", self.path, self.replaced)
-        self._fd, self._size = fd, 0
+        self.replaced = self._rows_of_this_study()  # from the old metadata: read before it is replaced
         meta, tmp = sidecar(self.path), sidecar(self.path).with_name(sidecar(self.path).name + f".{os.getpid()}.tmp")
         try:  # whole or not at all: written beside it, then renamed over the old one
             tmp.write_text(json.dumps(header, sort_keys=True, allow_nan=False, indent=1) + "\n", encoding="utf-8")
             os.replace(tmp, meta)
-        except OSError as exc:
+        except OSError as exc:  # a full disk is a run-time failure (exit 1); the CSV is not cut yet, so it is kept as it was
             tmp.unlink(missing_ok=True)
-            self.close()
-            raise StudyError(f"{meta}: cannot write the study's metadata ({exc.strerror or exc})") from None
+            os.close(fd)
+            raise WriteFailed(f"{meta}: cannot write the study's metadata ({exc.strerror or exc}); {self.path} is left as it was") from None
+        try:
+            if stat.S_ISREG(os.fstat(fd).st_mode):  # not a device (a pipe, /dev/null)
+                os.ftruncate(fd, 0)  # only now, under the lock, after the metadata is written
+        except OSError as exc:
+            os.close(fd)
+            raise WriteFailed(f"{self.path}: cannot write the study file ({exc.strerror or exc})") from None
+        if self.replaced:
+            _log.warning("%s held %d rows of this study; starting over (give --resume to continue it)", self.path, self.replaced)
+        self._fd, self._size = fd, 0
         names = io.StringIO()
         csv.writer(names, lineterminator="\n").writerow(self.columns)
         self._write(names.getvalue())

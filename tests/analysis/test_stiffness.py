@@ -111,6 +111,16 @@ def test_secant_uses_scene_pressure_and_rejects_bad_forces():
         secant_stiffness(Scene(), forces=())
 
 
+def test_a_payload_too_small_to_resolve_is_refused_naming_it_and_the_bound():
+    # 1e-300 N reported ok with K = 2.3e-284 N/m: the displacement was round-off
+    for forces in ((1e-300,), (0.5, 1e-12)):
+        with pytest.raises(SceneError) as info:
+            secant_stiffness(Scene(), forces=forces)
+        assert str(info.value).startswith(f"payload {forces[-1]:g} N: below 1e-09 N") and "\n" not in str(info.value)
+    k = secant_stiffness(Scene(), forces=(1e-9,))  # at the bound: the secant is the tangent
+    assert k.ok and k.stiffness_n_per_m[0] == pytest.approx(k.tangent.along(90.0), rel=1e-4)
+
+
 def test_tangent_needs_ok_equilibrium():
     r = solve(MAIN_JOB, SolverOptions(max_iter=1, continuation=False))
     with pytest.raises(EquilibriumError, match="stable equilibrium"):

@@ -100,6 +100,24 @@ def test_bad_csv_files_name_the_problem(tmp_path, text, needle):
 
 
 @pytest.mark.parametrize(
+    "header, needle",
+    [
+        (",".join(f"c{i}" for i in range(200_000)), "line 1: unknown column 'c0'; allowed are"),
+        (",".join(["tip_y_mm"] * 200_000), "line 1: column(s) tip_y_mm appear twice"),
+    ],
+    ids=["unknown", "repeated"],
+)
+def test_a_header_of_200k_columns_is_refused_by_its_names(tmp_path, header, needle):
+    # the header is judged before any row's cell count (the row here has one cell), and in one pass:
+    # a per-column header.count took minutes for such a file
+    path = _csv(tmp_path, header + "\n1\n")
+    with pytest.raises(MeasurementError) as info:
+        load_measurements(path)
+    message = str(info.value)
+    assert needle in message and str(path) in message and "\n" not in message
+
+
+@pytest.mark.parametrize(
     "text, needle",
     [
         ("[[measurement]]\npressure_mpa = 0.1\ntotal_angle_deg = 'x'\n", "total_angle_deg='x': expected a number"),

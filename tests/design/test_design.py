@@ -287,6 +287,8 @@ def test_term_curvatures_pressure_terms_add_no_stiffness():
         ({"segments": 0}, "segments=0"),
         ({"target_angle_deg": 45.0}, "only used with objective='pressure'"),
         ({"variant": "typo"}, "variant='typo': allowed are paper, printed"),
+        ({"objective": "pressure", "min_stiffness": 30.0, "target_angle_deg": 1e6}, "target_angle_deg=1e.06: expected an angle <= 3600 degrees"),
+        ({"start_angle_deg": 4000.0}, "start_angle_deg=4000: expected an angle <= 3600 degrees"),
     ],
 )
 def test_bad_problem_names_the_value(kwargs, message):

@@ -70,6 +70,7 @@ def test_frozen(obj):
         (lambda: Scene(pressure=-0.1), "pressure=-0.1: expected a pressure >= 0 MPa"),
         (lambda: Scene(pressure=0.1, target_angle_deg=90.0), "give one of the two, not both"),
         (lambda: Scene(target_angle_deg=0.0), "target_angle_deg=0: expected an angle > 0 degrees"),
+        (lambda: Scene(target_angle_deg=1e6), "target_angle_deg=1e+06: expected an angle <= 3600 degrees"),
         (lambda: Scene(gravity="yes"), "gravity='yes': expected true or false"),
         (lambda: Scene(fibres=1), "fibres=1: expected true or false"),
         (lambda: Scene(g=0.0), "g=0: expected a number > 0"),

@@ -283,6 +283,19 @@ def test_a_full_disk_is_one_line_naming_the_file_exit_1(capsys, places):
     assert line == "esba: error: grid.json: cannot write (No space left on device)"
 
 
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device whose writes fail: disk full)")
+def test_a_full_disk_for_a_sweeps_metadata_is_exit_1_and_keeps_the_old_csv(capsys, places):
+    """The metadata is written (beside the CSV, through a temporary file) before the CSV is cut: when
+    the disk fills there, the run fails (exit 1, naming the file) and the CSV keeps what it held."""
+    tmp = Path(places["tmp"])
+    (tmp / "grid.csv").write_text("old,rows\n1,2\n")
+    (tmp / f"grid.study.json.{os.getpid()}.tmp").symlink_to("/dev/full")
+    line = one_line_error(capsys, ["sweep", "--pressure", "0,0.1", "--no-compile", "--no-progress", "--out", "grid.csv"], places, code=EXIT_FAILED)
+    assert line.startswith("esba: error: grid.study.json: cannot write the study's metadata (No space left on device)")
+    assert (tmp / "grid.csv").read_text() == "old,rows\n1,2\n"
+    assert not (tmp / "grid.study.json").exists()
+
+
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
 def test_a_sweep_csv_that_is_a_device_is_refused_up_front(capsys, places):
     """A CSV is a study file however the sweep runs (it can be resumed): a device in its place is refused
@@ -679,6 +692,17 @@ ROUND2_FLAGS = [
     (["design", "--max-pressure", "1e9"], "max_pressure=1e+09 MPa: its moment on a segment"),
     (["map", "--x", "omega:110:135", "--y", "payload:0:4", "--out", "", "--no-plot"], "--out '': expected a file name"),
     (["map", "--x", "omega:110:135", "--y", "payload:0:4", "--plot", "", "--no-out"], "--plot '': expected a figure file"),
+    (["sweep", "--pressure", "0.1", "--out", "", "--no-progress"], "--out '': expected a file name"),
+    (["sweep", "--pressure", "0.1", "--plot", "", "--no-progress"], "--plot '': expected a figure file"),
+    (["sweep", "--fig12", "", "--no-progress"], "--fig12 '': expected a figure file"),
+    (["solve", "--plot", ""], "--plot '': expected a figure file"),
+    (["equilibria", "--plot", ""], "--plot '': expected a figure file"),
+    (["design", "--plot", ""], "--plot '': expected a figure file"),
+    (["solve", "--no-plot", "--history", ""], "--history '': expected a name"),
+    (["solve", "--no-plot", "--history", "  "], "--history '': expected a name"),
+    (["stiffness", "--payload", "1e-300", "--json"], "payload 1e-300 N: below 1e-09 N"),
+    (["pressure", "--target-angle", "1e6"], "target_angle_deg=1e+06: expected an angle <= 3600 degrees"),
+    (["design", "--objective", "pressure", "--min-stiffness", "30", "--target-angle", "1e6"], "target_angle_deg=1e+06: expected an angle <= 3600 degrees"),
 ]
 
 
