@@ -56,7 +56,7 @@ Examples
 >>> load_measurements(path)  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
-esba.calibration.measurements.MeasurementError: ...m.csv: column 'pressure' states no unit: write pressure_mpa, pressure_kpa or pressure_bar
+esba.calibration.measurements.MeasurementError: ...m.csv line 1: column 'pressure' states no unit: write pressure_mpa, pressure_kpa or pressure_bar
 """
 
 from __future__ import annotations
@@ -70,7 +70,7 @@ import re
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 from esba.infra import checks, inputs
 from esba.infra.errors import InputError
@@ -364,7 +364,10 @@ def _read(path: Path) -> str:
     return inputs.read_text(path, "measurement file", MeasurementError)
 
 
-def _csv_rows(source: str, text: str) -> list[tuple[str, dict]]:
+def _csv_rows(source: str, text: str, check_column: Callable[[str, str], Any] | None = None) -> list[tuple[str, dict]]:
+    """The rows of a CSV text as (where, {column: cell}); every column name is checked by
+    ``check_column(where, name)`` (default: a measurement file's columns) before any row is read."""
+    check_column = _column if check_column is None else check_column
     lines = [(k, line) for k, line in enumerate(text.splitlines(), start=1) if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
         raise MeasurementError(f"{source}: the file is empty (expected a header row of column names)")
@@ -381,7 +384,7 @@ def _csv_rows(source: str, text: str) -> list[tuple[str, dict]]:
     if dup:
         raise MeasurementError(f"{source} line {lines[0][0]}: column(s) {', '.join(dup)} appear twice")
     for h in header:  # an unknown name is said before any row's cell count
-        _column(f"{source} line {lines[0][0]}", h)
+        check_column(f"{source} line {lines[0][0]}", h)
     rows = []
     for (lineno, _), cells in zip(lines[1:], table[1:]):
         if len(cells) != len(header):

@@ -44,6 +44,12 @@ COLUMNS = ("label", "load", "pressure_mpa", "target_angle_deg", "theta_sd_deg", 
 _THETA = re.compile(r"^theta([1-9][0-9]*)_deg$")
 
 
+def _column(where: str, name: str) -> None:
+    """A pose file's column name, or one line naming it and what is allowed."""
+    if name not in COLUMNS and not _THETA.match(name):
+        raise MeasurementError(f"{where}: unknown column {name[:40]!r}; allowed are {', '.join(COLUMNS)} and theta1_deg ... thetaN_deg")
+
+
 def _sd(where: str, row: dict, name: str, measured: str) -> float:
     sd = _number(where, name, row.get(name))
     if sd is None:
@@ -104,14 +110,9 @@ def load_poses(path: str | Path, segments: int = 3) -> list[Pose]:
     source = str(path)
     if path.suffix.lower() != ".csv":
         raise MeasurementError(f"pose file {source!r}: expected a .csv file")
-    rows = _csv_rows(source, _read(path))
+    rows = _csv_rows(source, _read(path), _column)
     if not rows:
         raise MeasurementError(f"{source}: no rows below the header")
     if len(rows) > MAX_POSES:
         raise MeasurementError(f"{source}: {len(rows)} rows; at most {MAX_POSES}")
-    header = set(rows[0][1])
-    unknown = sorted(h for h in header if h not in COLUMNS and not _THETA.match(h))
-    if unknown:
-        shown = ", ".join(unknown[:5]) + (" ..." if len(unknown) > 5 else "")
-        raise MeasurementError(f"{source}: unknown column(s) {shown}; allowed are {', '.join(COLUMNS)} and theta1_deg ... thetaN_deg")
     return [_pose(f"{source} {where}", row, segments, where) for where, row in rows]

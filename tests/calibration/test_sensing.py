@@ -195,7 +195,7 @@ def test_pose_file_errors_name_the_line(tmp_path):
     with pytest.raises(Exception, match=r"line 2: tip_x_mm and tip_y_mm go together"):
         load_poses(f)
     f.write_text("pressure_mpa,weight\n0.1,60\n")
-    with pytest.raises(Exception, match=r"unknown column\(s\) weight"):
+    with pytest.raises(Exception, match=r"line 1: unknown column 'weight'"):
         load_poses(f)
 
 

@@ -63,12 +63,14 @@ def test_pressure_5_solves_and_warns(capsys, tmp_path, monkeypatch):
     assert "total bend 8968 deg is more than a full turn" in err
 
 
-def test_target_angle_1e6_solves_and_warns(capsys, tmp_path, monkeypatch):
+def test_target_angle_1e6_is_refused_and_ten_turns_solve_and_warn(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    assert main(["solve", "--target-angle", "1e6", "--no-plot", "--json"]) == EXIT_OK
+    assert main(["solve", "--target-angle", "1e6", "--no-plot", "--json"]) == 2  # past ten turns: refused up front
+    assert "target_angle_deg=1e+06: expected an angle <= 3600 degrees" in capsys.readouterr().err
+    assert main(["solve", "--target-angle", "3600", "--no-plot", "--json"]) == EXIT_OK
     out, err = capsys.readouterr()
     assert {"axial_strain", "total_bend"} <= {f["check"] for f in json.loads(out)["validity"]}
-    assert "esba: warning: total bend 1e+06 deg" in err
+    assert "esba: warning: total bend 3600 deg" in err
 
 
 def test_radial_strain_on_a_squeezed_chamber():
