@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 from typing import Callable, Sequence
 
 from derive.effects import DEFAULT_VARIANT, VARIANTS
@@ -168,3 +169,34 @@ def output_file_arg(*suffixes: str) -> Callable[[str], str]:
         return text
 
     return check
+
+
+def scene_figure(args: argparse.Namespace, default: str) -> str | None:
+    """The figure a scene command writes: ``--plot`` (a file or a folder), else ``default`` when no
+    scene file is given, none with ``--no-plot`` (which cannot be combined with ``--plot``)."""
+    if args.no_plot and args.plot is not None:
+        raise UsageError("--plot and --no-plot: give one of the two")
+    plot = args.plot
+    if plot is None and args.scene is None and not args.no_plot:
+        plot = default
+    return outputs.figure_file(plot, "--plot", default) if plot is not None and not args.no_plot else None
+
+
+def write_page(args: argparse.Namespace, command: str, page, settings_type, ignored: Sequence[tuple[str, object]]) -> None:
+    """``esba COMMAND --write-doc FILE``: write the docs page ``page`` (its own cases of the Table 1
+    actuator, so none of the flags ``ignored`` (flag, value) may be given with it), its progress on
+    stderr unless ``--json``, then the file written."""
+    from .results import print_result
+
+    given = [flag for flag, v in ignored if v is not None]
+    if given:
+        raise UsageError(f"--write-doc runs its own cases of the Table 1 actuator: give no {', '.join(given)} with it")
+    outputs.check_file(args.write_doc, "--write-doc", (".md",))
+
+    def say(msg):
+        if not args.json:
+            print(f"  {msg}", file=sys.stderr)
+
+    written = page.write(args.write_doc, settings_type(f"esba {command} --write-doc {args.write_doc}"), progress=say).path
+    print_result(args, {"page": str(written.resolve())}, lambda d: f"wrote {d['page']}")
+

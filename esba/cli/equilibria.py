@@ -5,9 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from esba.infra import outputs
-
-from .arguments import UsageError, add_scene_flags, count_arg, float_arg, scene_from_args
+from .arguments import UsageError, add_scene_flags, count_arg, float_arg, scene_figure, scene_from_args
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 #: Where ``esba equilibria`` writes its figure unless told otherwise.
@@ -53,12 +51,7 @@ def _equilibria_table(d: dict) -> str:
 def _cmd_equilibria(args: argparse.Namespace) -> int:
     from esba.statics.equilibria import EquilibriaOptions, EquilibriaOptionsError, equilibria
 
-    if args.no_plot and args.plot is not None:
-        raise UsageError("--plot and --no-plot: give one of the two")
-    plot = args.plot
-    if plot is None and args.scene is None and not args.no_plot:
-        plot = DEFAULT_EQUILIBRIA_FIGURE
-    figure = outputs.figure_file(plot, "--plot", DEFAULT_EQUILIBRIA_FIGURE) if plot is not None and not args.no_plot else None
+    figure = scene_figure(args, DEFAULT_EQUILIBRIA_FIGURE)
     scene = scene_from_args(args)
     try:
         extra = {} if args.starts is None else {"starts": args.starts}

@@ -8,7 +8,7 @@ import sys
 
 from esba.infra import outputs
 
-from .arguments import UsageError, add_scene_flags, count_arg, scene_from_args
+from .arguments import UsageError, add_scene_flags, count_arg, scene_from_args, write_page
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 #: Where ``esba map`` writes its fold curves and figure unless told otherwise (the current folder).
@@ -82,18 +82,10 @@ def _map_table(d: dict) -> str:
 
 def _map_write_doc(args: argparse.Namespace) -> int:
     """``esba map --write-doc FILE``: the maps of docs/maps.md (no other map flags)."""
-    given = [flag for flag, v in (("--x", args.x), ("--y", args.y), ("--out", args.out), ("--plot", args.plot), ("--check-grid", args.check_grid), ("SCENE.toml", args.scene)) if v is not None]
-    if given:
-        raise UsageError(f"--write-doc runs its own maps of the Table 1 actuator: give no {', '.join(given)} with it")
-    outputs.check_file(args.write_doc, "--write-doc", (".md",))
     from esba.pages.maps import PAGE, MapsSettings
 
-    def say(msg):
-        if not args.json:
-            print(f"  {msg}", file=sys.stderr)
-
-    page = PAGE.write(args.write_doc, MapsSettings(f"esba map --write-doc {args.write_doc}"), progress=say).path
-    print_result(args, {"page": str(page.resolve())}, lambda d: f"wrote {d['page']}")
+    write_page(args, "map", PAGE, MapsSettings, (("--x", args.x), ("--y", args.y), ("--out", args.out), ("--plot", args.plot),
+                                                ("--check-grid", args.check_grid), ("SCENE.toml", args.scene)))
     return EXIT_OK
 
 

@@ -14,6 +14,7 @@ from .arguments import (
     count_arg,
     float_arg,
     scene_from_args,
+    write_page,
 )
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
 
@@ -72,18 +73,10 @@ def _path_table(d: dict) -> str:
 
 def _path_write_doc(args: argparse.Namespace) -> int:
     """``esba path --write-doc FILE``: every path case of docs/paths.md (no other path flags)."""
-    given = [flag for flag, v in (("--to", args.to), ("--from", args.start), ("--out", args.out), ("--plot", args.plot), ("SCENE.toml", args.scene)) if v is not None]
-    if given:
-        raise UsageError(f"--write-doc runs its own path cases of the Table 1 actuator: give no {', '.join(given)} with it")
-    outputs.check_file(args.write_doc, "--write-doc", (".md",))
     from esba.pages.paths import PAGE, PathsSettings
 
-    def say(msg):
-        if not args.json:
-            print(f"  {msg}", file=sys.stderr)
-
-    page = PAGE.write(args.write_doc, PathsSettings(f"esba path --write-doc {args.write_doc}"), progress=say).path
-    print_result(args, {"page": str(page.resolve())}, lambda d: f"wrote {d['page']}")
+    write_page(args, "path", PAGE, PathsSettings, (("--to", args.to), ("--from", args.start), ("--out", args.out), ("--plot", args.plot),
+                                                  ("SCENE.toml", args.scene)))
     return EXIT_OK
 
 

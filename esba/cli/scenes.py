@@ -18,6 +18,7 @@ from .arguments import (
     float_arg,
     output_file_arg,
     refuse,
+    scene_figure,
     scene_from_args,
 )
 from .cluster import add_cluster_flags, chunk_arg, on_cluster, study_stopped
@@ -123,12 +124,7 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
 def _cmd_solve(args: argparse.Namespace) -> int:
     from esba.statics.equilibrium import EquilibriumError, SolverOptions, SolverOptionsError, solve
 
-    if args.no_plot and args.plot is not None:
-        raise UsageError("--plot and --no-plot: give one of the two")
-    plot = args.plot
-    if plot is None and args.scene is None and not args.no_plot:
-        plot = DEFAULT_SOLVE_FIGURE
-    figure = outputs.figure_file(plot, "--plot", DEFAULT_SOLVE_FIGURE) if plot is not None and not args.no_plot else None
+    figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
     scene = scene_from_args(args)
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
