@@ -82,7 +82,7 @@ from esba.statics.equilibrium import (
 
 from .measurements import QUANTITIES, Measurement, MeasurementError, MeasurementSet
 
-__all__ = ["FitError", "FitOptions", "FitResult", "fit", "predict", "Prediction", "identifiability", "Identifiability", "identifiability_rule", "FITTABLE", "DEFAULT_FREE", "DEFAULT_SD"]
+__all__ = ["FitError", "FitOptions", "FitResult", "fit", "predict", "Prediction", "identifiability", "Identifiability", "identifiability_rule", "fisher_correlation", "FITTABLE", "DEFAULT_FREE", "DEFAULT_SD"]
 
 #: Parameters a fit may free (the actuator's; pressures and payloads are each row's own).
 FITTABLE = ("L", "r1", "r2", "d", "rho", "E", "M")
@@ -526,6 +526,24 @@ def identifiability_rule(F: np.ndarray, count: int, free: tuple[str, ...], scale
     return identifiable, ratio, unknown, warnings, direction
 
 
+def fisher_correlation(F: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """The correlation matrix of the parameters from their Fisher matrix ``F`` (pseudo-inverse of the
+    one of relative changes, ``scale`` each parameter's size): defined even where F is singular,
+    +-1 along a direction the data do not determine. The load estimate uses it too.
+
+    >>> fisher_correlation(np.array([[2.0, 1.0], [1.0, 2.0]]), np.ones(2)).round(4).tolist()
+    [[1.0, -0.5], [-0.5, 1.0]]
+    >>> fisher_correlation(np.array([[1.0, 1.0], [1.0, 1.0]]), np.ones(2)).round(9).tolist()  # a trade-off
+    [[1.0, 1.0], [1.0, 1.0]]
+    """
+    Finv = np.linalg.pinv(scale[:, None] * F * scale[None, :])
+    d = np.sqrt(np.abs(np.diag(Finv)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = Finv / np.outer(d, d)
+    np.fill_diagonal(corr, 1.0)
+    return corr
+
+
 def _statistics(J: np.ndarray, r: np.ndarray, free: tuple[str, ...], scale: np.ndarray, estimate: np.ndarray, at_bound: list[str],
                 all_sd_given: bool, options: FitOptions) -> dict:
     """Fisher matrix, covariance, standard errors, intervals, correlation and identifiability."""
@@ -554,12 +572,7 @@ def _statistics(J: np.ndarray, r: np.ndarray, free: tuple[str, ...], scale: np.n
         cov[np.ix_(known, known)] = scale2 * np.linalg.inv(F[np.ix_(known, known)])
     se = np.sqrt(np.where(np.isfinite(np.diag(cov)), np.maximum(np.diag(cov), 0.0), np.nan))
     interval = np.column_stack([estimate - quantile * se, estimate + quantile * se])
-    # correlations from F itself (defined even where F is singular: +-1 along a trade-off)
-    Finv = np.linalg.pinv(scale[:, None] * F * scale[None, :])
-    d = np.sqrt(np.abs(np.diag(Finv)))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = Finv / np.outer(d, d)
-    np.fill_diagonal(corr, 1.0)
+    corr = fisher_correlation(F, scale)
     if identifiable:
         for a in range(k):
             for c in range(a + 1, k):

@@ -74,7 +74,7 @@ import numpy as np
 from scipy import stats
 
 from esba.analysis.sensitivity import implicit_functions, model_values, parameter_names, scene_parameters, with_parameters
-from esba.calibration.fit import identifiability_rule
+from esba.calibration.fit import fisher_correlation, identifiability_rule
 from esba.infra import checks, jsonsafe
 from esba.infra.errors import InputError
 from esba.model import resolution
@@ -966,11 +966,8 @@ def estimate_load(
     scale = prob.scales(x)
     ident, _, unknown, _, direction = identifiability_rule(F, m, prob.labels, scale, x, [], options.identifiability_tol,
                                                           options.identifiability_floor, prob.units)
-    cov_x = np.full((prob.size, prob.size), np.nan)
     known = ~unknown
-    if np.any(known):
-        cov_x[np.ix_(known, known)] = np.linalg.inv(F[np.ix_(known, known)])
-    se = np.sqrt(np.where(np.isfinite(np.diag(cov_x)), np.maximum(np.diag(cov_x), 0.0), np.nan))
+    cov_x, se = _covariance(F, known)
     # the distinct loads that explain the data within the noise
     candidates: list[Candidate] = []
     for c, xr, th, _, pr, w in runs:
@@ -984,11 +981,7 @@ def estimate_load(
     x = _wrap(x, prob)
     q = float(stats.norm.ppf(0.5 + options.level / 2))
     interval = np.column_stack([x - q * se, x + q * se])
-    Finv = np.linalg.pinv(scale[:, None] * F * scale[None, :])
-    d = np.sqrt(np.abs(np.diag(Finv)))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = Finv / np.outer(d, d)
-    np.fill_diagonal(corr, 1.0)
+    corr = fisher_correlation(F, scale)
     dof = m - prob.size
     p_value = float(stats.chi2.sf(cost, dof)) if dof > 0 else math.nan
     warnings: list[str] = []
@@ -1116,15 +1109,21 @@ def information(scene: Scene, kinds: Sequence[Measured], free: Sequence[str] = (
     F = J.T @ J
     ident, _, unknown, _, direction = identifiability_rule(F, pose.count(), prob.labels, prob.scales(x), x, [], options.identifiability_tol,
                                                           options.identifiability_floor, prob.units)
-    cov = np.full(F.shape, np.nan)
-    known = ~unknown
-    if np.any(known):
-        cov[np.ix_(known, known)] = np.linalg.inv(F[np.ix_(known, known)])
-    se = np.sqrt(np.where(np.isfinite(np.diag(cov)), np.maximum(np.diag(cov), 0.0), np.nan))
+    cov, se = _covariance(F, ~unknown)
     fc = _force_covariance(prob.labels, x, cov)
     eig0 = float(np.linalg.eigvalsh(parts[0][0])[0])
     return Information(prob.labels, prob.units, x, F, cov, se, tuple(_undetermined_words(prob, unknown, direction, [pose])), theta,
                        eig0 > 0, pm.model.tip(theta, scene.actuator.L), fc)
+
+
+def _covariance(F: np.ndarray, known: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(covariance, standard errors) of the unknowns from the Fisher matrix: the determined ones
+    (``known``) with the others held where they are; NaN for the undetermined."""
+    cov = np.full(F.shape, np.nan)
+    if np.any(known):
+        cov[np.ix_(known, known)] = np.linalg.inv(F[np.ix_(known, known)])
+    diag = np.diag(cov)
+    return cov, np.sqrt(np.where(np.isfinite(diag), np.maximum(diag, 0.0), np.nan))
 
 
 def _force_covariance(labels: Sequence[str], x: np.ndarray, cov: np.ndarray) -> np.ndarray:
