@@ -60,9 +60,9 @@ def _cmd_bench_accuracy(args: argparse.Namespace) -> int:
         raise UsageError(f"--reference-n {ref_n}: expected a multiple of 4 (the reference extrapolates from n/4, n/2, n)")
     doc = fig = None
     if not args.no_write:
-        doc = outputs.check_file(outputs.default_page("accuracy-vs-time.md") if args.out is None else args.out, "--out", (".md",))
-        fig = outputs.figures_dir() / "accuracy-vs-time.png" if args.figure is None else args.figure
-        if args.figure is None and outputs.checkout_root() is None:
+        doc = outputs.check_file(outputs.default_page("accuracy-vs-time.md", create=True) if args.out is None else args.out, "--out", (".md",))
+        fig = outputs.figures_dir(create=True) / "accuracy-vs-time.png" if args.figure is None else args.figure
+        if args.figure is None:
             outputs.check_folder(fig.parent, "--figure")
         fig = outputs.figure_file(fig, "--figure", "accuracy-vs-time.png")
     command = "esba bench accuracy" + (" --quick" if args.quick else "")
@@ -252,7 +252,7 @@ def _cmd_bench_embedded(args: argparse.Namespace) -> int:
         refuse(args, ["out"], "with --no-write")
     page = None
     if not args.no_write:
-        page = outputs.check_file(outputs.default_page("embedded.md") if args.out is None else args.out, "--out", (".md",))
+        page = outputs.check_file(outputs.default_page("embedded.md", create=True) if args.out is None else args.out, "--out", (".md",))
     ns = tuple(sorted(set(args.segments))) if args.segments else _EMBEDDED_NS
     from esba.bench import embedded as bench_embedded
 

@@ -24,7 +24,7 @@ _SLOW = [e.name for e in ENTRIES.values() if e.slow]
 
 def _folder(args: argparse.Namespace):
     if args.dir is None:
-        return outputs.docs_dir()
+        return outputs.docs_dir(create=args.write is not None)
     if args.write is not None:
         return outputs.check_folder(args.dir, "--dir", create=False)
     folder = Path(args.dir)

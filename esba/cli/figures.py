@@ -19,7 +19,7 @@ def _cmd_figures(args: argparse.Namespace) -> int:
         names = figures.check_names(args.only)
     except figures.FigureError as exc:
         raise UsageError(f"--only: {exc}") from None
-    out = outputs.check_folder(outputs.figures_dir() if args.out is None else args.out, "--out")
+    out = outputs.check_folder(outputs.figures_dir(create=True) if args.out is None else args.out, "--out")
     written = figures.write_all(out, names)
     data = {"out": str(Path(out).resolve()), "figures": {name: str(path.resolve()) for name, path in written.items()}}
     print_result(args, data, lambda d: "\n".join(f"wrote {path}" for path in d["figures"].values()))

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from pathlib import Path
 
 from derive.effects import VARIANTS
 from esba.infra import outputs
@@ -176,7 +177,8 @@ def _cmd_experiments(args: argparse.Namespace) -> int:
         page = outputs.default_page("experiments.md") if args.check is True else args.check
         check = PAGE.check(page)
         if not check.ok:
-            print(f"esba: {page} is {check.status}: run `{DOC_COMMAND}` and commit it", file=sys.stderr)
+            again = DOC_COMMAND if Path(page).resolve() == outputs.default_page("experiments.md").resolve() else f"esba experiments --write-doc {page}"
+            print(f"esba: {page} is {check.status}: run `{again}` and commit it", file=sys.stderr)
             return EXIT_FAILED
         print(f"{page} is up to date")
         return EXIT_OK

@@ -100,7 +100,7 @@ def add_generate(sub) -> None:
 def _cmd_audit(args: argparse.Namespace) -> int:
     from esba.pages.derivations import PAGE
 
-    page = outputs.default_page("derivations.md") if args.out is None else args.out
+    page = outputs.default_page("derivations.md", create=not args.check) if args.out is None else args.out
     if args.check:
         check = PAGE.check(page)
         stale = not check.ok

@@ -8,6 +8,7 @@ import math
 import re
 import sys
 import time
+from pathlib import Path
 
 from esba.infra import checks, outputs
 
@@ -468,7 +469,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
     if args.check not in (None, True) and args.out is not None:
         raise UsageError("give the page to check once: --check FILE or --out FILE")
-    page = args.check if args.check not in (None, True) else outputs.default_page("validation.md") if args.out is None else args.out
+    page = args.check if args.check not in (None, True) else outputs.default_page("validation.md", create=not args.check) if args.out is None else args.out
     if not args.check:
         page = outputs.check_file(page, "--out", (".md",))
     cases = PAGE.compute()
@@ -476,7 +477,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     if args.check:
         check = PAGE.check(page, data=cases)
         if not check.ok:
-            print(f"esba: {page} is {check.status}: run `esba validate` and commit it", file=sys.stderr)
+            again = "esba validate" if Path(page).resolve() == outputs.default_page("validation.md").resolve() else f"esba validate --out {page}"
+            print(f"esba: {page} is {check.status}: run `{again}` and commit it", file=sys.stderr)
             return EXIT_FAILED
     else:
         page = PAGE.write(page, data=cases).path

@@ -505,5 +505,5 @@ def write_all(out_dir: str | Path | None = None, names: Sequence[str] | None = N
     """
     figures = registry()
     chosen = check_names(names) or list(figures)
-    out = check_folder(figures_dir() if out_dir is None else out_dir, "out_dir")
+    out = check_folder(figures_dir(create=True) if out_dir is None else out_dir, "out_dir")
     return {name: save_figure(figures[name](), Path(out) / f"{name}.png") for name in chosen}

@@ -1,15 +1,18 @@
 """Where esba writes, and whether it can: output paths checked before any long computation.
 
-Every command writes where the user is. The repository's own ``docs/`` and ``generated/`` are
-the defaults only when esba runs from a checkout of the repository *and* the current folder is
-inside that checkout (a developer refreshing the pages); anywhere else the defaults are relative
-to the current folder, and an installed esba never writes into its own package folder.
+Every command writes where the user is, and one rule says where the pages are, for every command
+that writes or checks one (``esba docs``, ``validate``, ``audit``, ``experiments``, ``bench``, the
+``--write-doc`` pages): the ``docs/`` folder of the esba checkout that holds the current folder,
+whichever esba runs (an editable install, or ``pip install .`` run in the clone), and anywhere else
+``./docs/`` (made when a page is first written there, as the README's ``mkdir -p docs``). The
+repository's ``generated/`` is written only by the esba that runs from that checkout (an editable
+install), and an installed esba never writes into its own package folder.
 
 =====================  ==================================  ====================================
 output                 in a checkout                       elsewhere
 =====================  ==================================  ====================================
-pages (``*.md``)       ``docs/NAME.md``                    ``./NAME.md``
-figures                ``docs/figures/``                   ``./figures/``
+pages (``*.md``)       ``docs/NAME.md``                    ``./docs/NAME.md``
+figures                ``docs/figures/``                   ``./docs/figures/``
 generated models       ``generated/`` (+ manifest)         the model cache (:mod:`esba.infra.cache`)
 =====================  ==================================  ====================================
 
@@ -55,6 +58,7 @@ __all__ = [
     "write_text",
     "PACKAGE_ROOT",
     "checkout_root",
+    "enclosing_checkout",
     "docs_dir",
     "figures_dir",
     "default_page",
@@ -110,11 +114,18 @@ def write_text(path: str | Path, text: str) -> Path:
 
 def is_checkout(root: Path = PACKAGE_ROOT) -> bool:
     """True when ``root`` is a checkout of the esba repository (not an installed package)."""
-    return (root / "pyproject.toml").is_file() and all((root / d).is_dir() for d in ("derive", "generated", "docs", "esba"))
+    if not all((root / d).is_dir() for d in ("derive", "generated", "docs", "esba")):
+        return False
+    try:
+        text = (root / "pyproject.toml").read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return False
+    return 'name = "esba"' in text
 
 
 def checkout_root(cwd: Path | None = None) -> Path | None:
-    """The checkout esba runs from, when the current folder is inside it; else None.
+    """The checkout esba runs from (an editable install), when the current folder is inside it;
+    else None. Only this esba's own checkout takes its ``generated/`` models.
 
     >>> checkout_root(Path("/")) is None
     True
@@ -125,20 +136,38 @@ def checkout_root(cwd: Path | None = None) -> Path | None:
     return PACKAGE_ROOT if here == PACKAGE_ROOT or PACKAGE_ROOT in here.parents else None
 
 
-def docs_dir() -> Path:
-    """Where pages go by default: the checkout's ``docs/``, else the current folder."""
-    root = checkout_root()
-    return root / "docs" if root is not None else Path.cwd()
+def enclosing_checkout(cwd: Path | None = None) -> Path | None:
+    """The esba checkout that holds the current folder (or is it), whichever esba runs; else None.
+
+    >>> enclosing_checkout(Path("/")) is None
+    True
+    """
+    here = (Path.cwd() if cwd is None else Path(cwd)).resolve()
+    for folder in (here, *here.parents):
+        if is_checkout(folder):
+            return folder
+    return None
 
 
-def figures_dir() -> Path:
+def docs_dir(create: bool = False) -> Path:
+    """Where pages are, for writing and checking alike: the ``docs/`` of the checkout that holds the
+    current folder, else ``./docs``; with ``create``, ``./docs`` is made when missing (one level)."""
+    root = enclosing_checkout()
+    folder = root / "docs" if root is not None else Path.cwd() / "docs"
+    if create and not folder.is_dir():
+        check_folder(folder, "the pages' folder")
+    return folder
+
+
+def figures_dir(create: bool = False) -> Path:
     """Where figures go by default: ``figures/`` beside the pages (:func:`docs_dir`)."""
-    return docs_dir() / "figures"
+    return docs_dir(create) / "figures"
 
 
-def default_page(name: str) -> Path:
-    """The default path of the page ``name`` (e.g. ``"validation.md"``)."""
-    return docs_dir() / name
+def default_page(name: str, create: bool = False) -> Path:
+    """The default path of the page ``name`` (e.g. ``"validation.md"``); ``create`` makes the
+    pages' folder when missing (for a page about to be written)."""
+    return docs_dir(create) / name
 
 
 def _show(path: Path | str) -> str:

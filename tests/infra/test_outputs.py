@@ -24,8 +24,30 @@ def test_checkout_detected_only_from_inside(tmp_path, monkeypatch):
     assert outputs.figures_dir() == ROOT / "docs" / "figures"
     monkeypatch.chdir(tmp_path)
     assert outputs.checkout_root() is None
-    assert outputs.default_page("validation.md") == tmp_path / "validation.md"
-    assert outputs.figures_dir() == tmp_path / "figures"
+    assert outputs.default_page("validation.md") == tmp_path / "docs" / "validation.md"
+    assert outputs.figures_dir() == tmp_path / "docs" / "figures"
+    assert not (tmp_path / "docs").exists()  # looking up where a page is makes nothing
+    assert outputs.default_page("validation.md", create=True).parent.is_dir()
+
+
+def test_pages_of_a_clone_with_a_non_editable_install(tmp_path, monkeypatch):
+    """One rule for where pages are: the docs/ of the esba checkout that holds the current folder,
+    whichever esba runs (`pip install .` in the clone leaves the package in site-packages)."""
+    clone = tmp_path / "clone"
+    for d in ("esba", "derive", "generated", "docs/figures"):
+        (clone / d).mkdir(parents=True)
+    (clone / "pyproject.toml").write_text('[project]\nname = "esba"\n')
+    monkeypatch.setattr(outputs, "PACKAGE_ROOT", tmp_path / "site-packages")
+    monkeypatch.chdir(clone / "docs" / "figures")
+    assert outputs.checkout_root() is None  # not this esba's own checkout: its generated/ is not ours
+    assert outputs.enclosing_checkout() == clone
+    assert outputs.default_page("validation.md") == clone / "docs" / "validation.md"
+    other = tmp_path / "other"
+    for d in ("esba", "derive", "generated", "docs"):
+        (other / d).mkdir(parents=True)
+    (other / "pyproject.toml").write_text('[project]\nname = "something-else"\n')
+    monkeypatch.chdir(other)
+    assert outputs.enclosing_checkout() is None
 
 
 def test_an_installed_package_is_not_a_checkout(tmp_path):

@@ -30,18 +30,36 @@ def test_the_committed_pages_are_fresh(capsys):
 
 
 def test_write_then_check_outside_a_checkout(capsys, tmp_path, monkeypatch):
-    """Outside a checkout the pages go to the current folder (esba.infra.outputs)."""
+    """Outside a checkout the pages go to docs/ in the current folder (esba.infra.outputs), where
+    the README's commands write them; checking makes nothing, writing makes the folder."""
     monkeypatch.chdir(tmp_path)
     code, out, err = run(capsys, "--check", "validation")
-    assert code == EXIT_FAILED and "validation  missing" in out
+    assert code == EXIT_FAILED and "validation  missing" in out and str(tmp_path / "docs" / "validation.md") in out
     assert err == "esba: validation is missing: run `esba docs --write validation` and commit the pages\n"
+    assert not (tmp_path / "docs").exists()
     # its figures beside it (as `esba figures` there writes them): the page is the checkout's, and links them
-    (tmp_path / "figures").mkdir()
+    (tmp_path / "docs" / "figures").mkdir(parents=True)
     for figure in (ROOT / "docs" / "figures").glob("fig*.png"):
-        shutil.copy(figure, tmp_path / "figures" / figure.name)
+        shutil.copy(figure, tmp_path / "docs" / "figures" / figure.name)
     assert run(capsys, "--write", "validation")[0] == EXIT_OK
-    assert (tmp_path / "validation.md").read_text() == (ROOT / "docs" / "validation.md").read_text()
+    assert (tmp_path / "docs" / "validation.md").read_text() == (ROOT / "docs" / "validation.md").read_text()
     assert run(capsys, "--check", "validation")[0] == EXIT_OK
+
+
+def test_the_same_page_for_every_command_that_writes_or_checks_it(capsys, tmp_path, monkeypatch):
+    """`esba experiments --write-doc docs/experiments.md` (the README's command) and `esba
+    experiments --check` agree on the file outside a checkout too; a page checked under another
+    name is written again by the command with that name."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["validate"]) == EXIT_OK
+    assert (tmp_path / "docs" / "validation.md").is_file()
+    capsys.readouterr()
+    assert main(["validate", "--check"]) == EXIT_OK
+    other = tmp_path / "other.md"
+    other.write_text("stale\n")
+    capsys.readouterr()
+    assert main(["validate", "--check", str(other)]) == EXIT_FAILED
+    assert f"run `esba validate --out {other}`" in capsys.readouterr().err
 
 
 def test_a_stale_page_is_named(capsys, tmp_path):

@@ -611,16 +611,16 @@ def test_growth_exponent_not_printed_as_nan(capsys, places):
 
 
 def test_nothing_is_written_into_the_package_when_run_elsewhere(capsys, places):
-    """Outside a checkout the pages and figures go to the current folder."""
+    """Outside a checkout the pages and figures go to docs/ in the current folder."""
     from esba.infra import outputs
 
     tmp = Path(places["tmp"])
     assert outputs.checkout_root() is None
-    assert outputs.default_page("validation.md") == tmp / "validation.md"
+    assert outputs.default_page("validation.md") == tmp / "docs" / "validation.md"
     assert main(["validate"]) == EXIT_OK
-    assert (tmp / "validation.md").is_file()
+    assert (tmp / "docs" / "validation.md").is_file()
     assert main(["figures", "--only", "fig7b"]) == EXIT_OK
-    assert (tmp / "figures" / "fig7b.png").is_file()
+    assert (tmp / "docs" / "figures" / "fig7b.png").is_file()
     capsys.readouterr()
     assert main(["generate", "--refresh"]) == EXIT_USAGE
     assert "run it inside a checkout, or give --out DIR" in capsys.readouterr().err
