@@ -120,23 +120,30 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if figure is not None:
         data["figure"] = str(save_figure(drawn, figure))
     print_result(args, data, _sweep_table)
-    _warn_sweep(result.validity)
+    _warn_sweep(result.tally())
     if data["counts"]["not ok"]:
         print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
 
 
-def _warn_sweep(validity, outside: int = 0, out: str | None = None) -> None:
-    """One ``esba: warning:`` line per kind of finding of a sweep's points (per-point
-    :mod:`esba.model.validity` findings), or their count when the rows were streamed to ``out``."""
-    found = [f for point in validity for f in point]
-    for check in dict.fromkeys(f.check for f in found):
-        first = next(f for f in found if f.check == check)
-        count = sum(1 for point in validity if any(f.check == check for f in point))
-        print(f"esba: warning: {count} point(s) outside the model's range, e.g. {first.message}", file=sys.stderr)
-    if not validity and outside:
-        print(f"esba: warning: {outside} point(s) outside the model's range: see the validity column of {out}", file=sys.stderr)
+def _warn_sweep(tally) -> None:
+    """One ``esba: warning:`` line per kind of finding of a sweep's points
+    (:class:`esba.model.validity.Tally`): the same words in this process and on Dask, rows in
+    memory or streamed to a file."""
+    for line in tally.lines():
+        print(f"esba: warning: {line}", file=sys.stderr)
+
+
+def _rows_held(path: str | None) -> int:
+    """The lines after the column names in the study file ``path`` (0 when there is none): a
+    resumed study that holds every row of its plan solves nothing, so it needs no cluster (its rows
+    are still checked one by one as it is read back)."""
+    try:
+        with open(path, "rb") as fh:
+            return max(0, sum(1 for _ in fh) - 1)
+    except (OSError, TypeError):
+        return 0
 
 
 def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, figure) -> int:
@@ -162,8 +169,11 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
         check_study(plan, args.chunk or DEFAULT_CHUNK, streamed)  # before a cluster starts
     except (SweepError, SceneError, StudyError) as exc:
         raise UsageError(str(exc)) from None
+    workers, scheduler = args.workers, args.scheduler
+    if args.resume and _rows_held(out) >= plan.size:  # nothing left to solve: no cluster to start for it
+        workers = scheduler = None
     try:
-        with open_runner(args.workers, args.scheduler, args.connect_timeout) as runner:
+        with open_runner(workers, scheduler, args.connect_timeout) as runner:
             study = sweep_study(plan, options, runner=runner, chunk=args.chunk or DEFAULT_CHUNK, out=out if streamed else None, resume=args.resume, progress=options.progress)
     except (DistributedError, StudyError) as exc:
         raise UsageError(str(exc)) from None
@@ -185,7 +195,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
         except SweepError as exc:
             raise UsageError(str(exc)) from None
     print_result(args, data, _sweep_table)
-    _warn_sweep(study.result.validity if study.result is not None else (), study.outside, out)
+    _warn_sweep(study.tally)
     if data["counts"]["not ok"]:
         print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
         return EXIT_FAILED

@@ -58,6 +58,9 @@ __all__ = [
     "PAPER_MAX_PRESSURE",
     "PAPER_MAX_PAYLOAD",
     "FAR_FACTOR",
+    "MESSAGE_STARTS",
+    "check_of",
+    "Tally",
 ]
 
 #: The strain up to which the paper takes the rubber as linear-elastic (Section 3.2.2).
@@ -226,3 +229,56 @@ def assess_angles(scene: Scene, theta: Sequence[float], pressure: float) -> tupl
     the scene's model (its kinematics)."""
     theta = np.asarray(theta, dtype=float)
     return assess(scene, theta, pressure, scene.model().tip(theta, scene.actuator.L))
+
+
+#: How each check's message starts, so that a finding kept as text (a study file's ``validity``
+#: column, its findings joined by `` | ``) is known again by its check.
+MESSAGE_STARTS = {
+    "axial_strain": "outer-fibre axial strain ",
+    "radial_strain": "chamber-wall radial strain ",
+    "total_bend": "total bend ",
+    "tip_behind_base": "the tip is ",
+    "pressure_range": "pressure ",
+    "payload_range": "payload ",
+}
+
+
+def check_of(message: str) -> str:
+    """The check whose message ``message`` is (``"other"`` for none of them).
+
+    >>> check_of("total bend 1609 deg is more than a full turn: ..."), check_of("?")
+    ('total_bend', 'other')
+    """
+    return next((check for check, start in MESSAGE_STARTS.items() if message.startswith(start)), "other")
+
+
+class Tally:
+    """Points outside the model's range, counted by check with the first point's message: one
+    report, whether the findings are at hand (:class:`Finding`) or read back as text from a file.
+
+    >>> t = Tally()
+    >>> t.add([Finding("total_bend", 400.0, 360.0, "deg", "total bend 400 deg is more than a full turn")])
+    >>> t.add("total bend 500 deg is more than a full turn | the tip is 1 mm behind the base (x < 0)")
+    >>> t.add(())
+    >>> t.points, t.lines()[0]
+    (2, "2 point(s) outside the model's range, e.g. total bend 400 deg is more than a full turn")
+    """
+
+    def __init__(self) -> None:
+        self.points = 0
+        self.counts: dict[str, int] = {}
+        self.examples: dict[str, str] = {}
+
+    def add(self, found: Sequence[Finding] | str) -> None:
+        """One point's findings: :class:`Finding` objects, or their messages joined by `` | ``."""
+        pairs = [(check_of(m), m) for m in found.split(" | ") if m] if isinstance(found, str) else [(f.check, f.message) for f in found]
+        if not pairs:
+            return
+        self.points += 1
+        for check in dict.fromkeys(c for c, _ in pairs):
+            self.counts[check] = self.counts.get(check, 0) + 1
+            self.examples.setdefault(check, next(m for c, m in pairs if c == check))
+
+    def lines(self) -> list[str]:
+        """One line per check, in the order the checks were first met."""
+        return [f"{count} point(s) outside the model's range, e.g. {self.examples[check]}" for check, count in self.counts.items()]

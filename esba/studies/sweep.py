@@ -46,7 +46,7 @@ from esba.infra.errors import InputError
 from esba.model import resolution
 from esba.model.closed_form import chain_tip
 from esba.model.scene import Payload, Scene, SceneError
-from esba.model.validity import Finding, assess_arrays
+from esba.model.validity import Finding, Tally, assess_arrays
 from esba.statics.batch import METHODS, BatchOptions, check_size, decide_backend, solve_arrays
 from esba.statics.batch_options import DEFAULT_BATCH_OPTIONS
 from esba.statics.equilibrium import (
@@ -673,6 +673,13 @@ class SweepResult:
     def counts(self) -> dict[str, int]:
         """Points ok, not ok and infeasible."""
         return {s: int(np.sum(self.status == s)) for s in ("ok", "not ok", "infeasible")}
+
+    def tally(self) -> Tally:
+        """The points outside the model's range, by check (:class:`esba.model.validity.Tally`)."""
+        t = Tally()
+        for found in self.validity:
+            t.add(found)
+        return t
 
     def scene(self, i: int) -> Scene:
         """The scene of point ``i`` (the base scene with the point's axis values)."""

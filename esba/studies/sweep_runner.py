@@ -40,6 +40,7 @@ from esba.statics.batch import (
     decide_backend,
     prepare,
 )
+from esba.model.validity import Tally
 from esba.statics.batch_options import DEFAULT_BATCH_OPTIONS
 
 from .chunks import MAX_CHUNK, StudyError, StudyFile, chunk_bounds, run_chunks
@@ -94,8 +95,8 @@ class SweepStudy:
         The study's hash (in the file's metadata, beside it).
     result : SweepResult or None
         Every point, when the rows were gathered in memory (no ``out``).
-    outside : int
-        Rows outside the range the paper's model describes (a non-empty ``validity`` column).
+    tally : Tally
+        Rows outside the range the paper's model describes (a non-empty ``validity`` column), by check.
     """
 
     plan: SweepPlan
@@ -110,7 +111,12 @@ class SweepStudy:
     out: Path | None = None
     hash: str | None = None
     result: SweepResult | None = None
-    outside: int = 0
+    tally: Tally = dataclasses.field(default_factory=Tally)
+
+    @property
+    def outside(self) -> int:
+        """Rows outside the range the paper's model describes."""
+        return self.tally.points
 
     def rows(self) -> list[dict[str, Any]]:
         """Every row, from memory or read back from the file (exactly the values written)."""
@@ -226,7 +232,7 @@ def sweep_study(
     t0 = time.perf_counter()
     model = plan.base.model()
     counts = {"ok": 0, "not ok": 0, "infeasible": 0}
-    outside = 0
+    tally = Tally()
     file = start = None
     if out is not None:
         file = StudyFile(out, "sweep", _identity(plan, options), row_fields(plan.base.segments), plan.size)
@@ -234,13 +240,13 @@ def sweep_study(
         kept = 0
 
         def count(row: dict[str, str]) -> None:  # each row the file holds, checked before it is kept
-            nonlocal outside, kept
+            nonlocal kept
             problem = resumed_row_problem(plan, kept, row)
             if problem:
                 raise StudyError(f"--resume {out}: row {kept + 1} {problem}; it is not kept: remove the file or give another output to start anew")
             kept += 1
             counts[row["status"]] = counts.get(row["status"], 0) + 1
-            outside += bool(row.get("validity"))
+            tally.add(row.get("validity") or "")
 
         if resume and file.path.exists() and file.path.stat().st_size > 0:
             start = file.resume(count)
@@ -266,10 +272,10 @@ def sweep_study(
                 return
             rows = point_rows(plan.columns(a, b), part)
             file.append(rows)
-            nonlocal outside
             for r in rows:
                 counts[r["status"]] = counts.get(r["status"], 0) + 1
-                outside += bool(r["validity"])
+            for found in part.get("validity", ()):
+                tally.add(found)
 
         workers = runner.workers
         run_chunks(runner, ModelKey.of(plan.base), solve_points, bounds, lambda a, b: (plan, a, b, fixed), keep, "esba sweep" if progress else None)
@@ -280,7 +286,7 @@ def sweep_study(
     if file is None:
         result = SweepResult.from_parts(plan, parts, backend, _identity(plan, options), {"compile": fixed.compile, "backend": backend})
         counts = result.counts()
-        outside = sum(1 for v in result.validity if v)
+        tally = result.tally()
     return SweepStudy(
         plan=plan,
         counts=counts,
@@ -294,5 +300,5 @@ def sweep_study(
         out=file.path if file is not None else None,
         hash=file.hash if file is not None else None,
         result=result,
-        outside=outside,
+        tally=tally,
     )
