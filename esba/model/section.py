@@ -1,0 +1,590 @@
+"""The actuator's cross-section: its geometry, torsion constant, shear centre and stiffnesses.
+
+The paper's actuator (Section 2, Fig. 1, Fig. 3) is a silicone disc of radius ``r1`` with a
+circular chamber of radius ``r2`` whose centre is offset by ``d`` from the disc's centre, away from
+the inextensible layer (Eq. 7: a chamber fibre at angle beta stretches by (r1 + d - r2 cos beta)
+theta, the layer being the line at distance r1 from the disc's centre); a nylon mesh close to
+the bottom is the inextensible layer (E = 6500 MPa, nu = 0.2 in Section 4.2); Kevlar fibres are
+wound in a double helix at the angle rho from the hoop direction (N = (L + r1 theta)/(2 pi r1
+tan rho) turns per fibre, Eq. 18).
+
+Frame
+-----
+The section lies in the (y, z) plane of the base frame S of the README: x down the unbent axis,
+y horizontal toward the bending side, z = x × y. The origin is the paper's inextensible line (the
+origin of S, on the ventral side). The silicone then spans y in [-2 r1, 0]: the disc's centre is
+at (-r1, 0) and the chamber's centre at (-(r1 + d), 0), on the side away from the bend. The
+section is symmetric about the y axis (z -> -z).
+
+Second moments are about axes through the centroid (y_c, z_c):
+
+* ``I_yy = ∫ (z - z_c)² dA``, about the axis parallel to y: it resists the *sideways* bend
+  (curvature about y, in the x-z plane);
+* ``I_zz = ∫ (y - y_c)² dA``, about the axis parallel to z: it resists the paper's in-plane bend
+  (the joints of Eq. 2 turn about z);
+* ``I_yz = ∫ (y - y_c)(z - z_c) dA`` (zero by the symmetry).
+
+Closed forms (disc minus offset disc, by the parallel-axis theorem; exact, used by the API)::
+
+    A    = pi (r1² - r2²)
+    y_c  = -r1 + d r2² / (r1² - r2²)                     (the centroid moves away from the chamber)
+    I_yy = pi (r1⁴ - r2⁴) / 4
+    I_zz = pi (r1⁴ - r2⁴) / 4 - pi r1² r2² d² / (r1² - r2²)
+
+Torsion (Saint-Venant, finite elements)
+---------------------------------------
+Prandtl's stress function phi (shear stresses tau_xy = d phi/dz, tau_xz = -d phi/dy per unit
+G theta') solves ∇² phi = -2 on the silicone, phi = 0 on the outer circle and phi = C (a constant)
+on the chamber's circle: the section is doubly connected, and C follows from the chamber's
+circulation condition ∮ d phi/dn ds = -2 A_chamber (n out of the silicone), which says that the
+warping displacement is single-valued around the chamber. Both are the stationarity conditions of
+the complementary energy::
+
+    Pi(phi, C) = 1/2 ∫ |∇phi|² dA - 2 ∫ phi dA - 2 C A_chamber
+
+over phi = 0 on the outer circle and phi = C on the chamber (the chamber's boundary nodes are one
+unknown, C), and then ``J = 2 ∫ phi dA + 2 C A_chamber``. Concentric check: phi = (r1² - r²)/2,
+C = (r1² - r2²)/2 and J = pi (r1⁴ - r2⁴)/2, the polar moment.
+
+The same J also comes from the warping function omega (∇² omega = 0, d omega/dn = z n_y - y n_z
+on every boundary: the chamber is a free surface), ``J = I_p - ∫ |∇omega|² dA``. Finite elements
+on the complementary energy (phi) bound J from below and on the potential energy (omega) from
+above; the tests check that the two bracket J and close under refinement.
+
+The shear centre (Trefftz's definition, the centre of twist, independent of Poisson's ratio) is
+the point (y_s, z_s) about which the warping function is orthogonal to y and z::
+
+    ∫ (omega_c - z_s y + y_s z) y dA = 0,   ∫ (omega_c - z_s y + y_s z) z dA = 0
+
+with omega_c the warping about the centroid and y, z centroidal; by symmetry z_s = 0.
+
+Mesh: a structured grid in (s, t) in [0, 1] x [0, 2 pi) mapped by the blend
+p(s, t) = (1 - s) (c + r2 e^{it}) + s r1 e^{it} from the chamber's circle (s = 0) to the outer one
+(s = 1), whose Jacobian is (r1 - r2 - d cos t) ((1 - s) r2 + s r1) > 0 whenever r2 + d < r1.
+Elements are quadratic (P2) and isoparametric (every node, edge mid-points included, placed by
+the map), so the circles are curved to third order and J converges at the order of P2.
+
+Composite stiffness (:func:`section_stiffness`)
+-----------------------------------------------
+Bending, by the modulus-weighted (transformed) section of the silicone (E) and the layer
+(a rectangle of E_layer, ``layer_width`` across z and ``layer_thickness`` across y, its mid-plane
+at y = -``layer_depth``, default 0 as in the paper, replacing the silicone where it lies)::
+
+    EA      = E A + (E_layer - E) A_l
+    y_N     = (E A y_c + (E_layer - E) A_l y_l) / EA          (the composite neutral axis)
+    EI_bend = E (I_zz + A (y_c - y_N)²) + (E_layer - E) (w t³/12 + A_l (y_l - y_N)²)
+    EI_side = E I_yy + (E_layer - E) t w³ / 12
+
+Torsion, three parts::
+
+    GJ = G J + (G_layer - G) beta(w/t) w t³ + GJ_fibres
+
+* the silicone, G = E / (2 (1 + nu)), nu = 0.5 (incompressible: G = E/3), J from phi above;
+* the layer's own Saint-Venant torsion (a w x t rectangle, beta from the classical series,
+  1/3 for a thin strip), G_layer = E_layer / (2 (1 + nu_layer)), nu_layer = 0.2 (Section 4.2).
+  Assumed: the mesh adds no in-plane shear constraint on the silicone's warping (a woven mesh
+  trellises freely in shear), so it acts as a strip of its own;
+* the fibres (a stated first-order model). A twist theta' shears the surface by
+  gamma = r1 theta'; a fibre at angle rho from the hoop direction strains by
+  eps_f = eps_a sin² rho + eps_h cos² rho + gamma sin rho cos rho (axial, hoop, shear strains).
+  Kevlar is taken inextensible in tension and slack in compression: one helix of the double
+  helix goes slack, the other keeps its length, which the incompressible silicone allows only by
+  contracting: with a uniaxial contraction (eps_h = -eps_a / 2, the axial extension left free),
+  eps_a (sin² rho - cos² rho / 2) = -gamma sin rho cos rho, whose strain energy
+  1/2 E A eps_a² per length gives::
+
+      GJ_fibres = fibre_efficiency * E A r1² (sin rho cos rho / (sin² rho - cos² rho / 2))²
+
+  (zero for hoop windings, rho = 0; it grows without bound toward the "magic" angle
+  rho = 35.26 deg, where the uniaxial contraction leaves the fibre's length unchanged and the
+  fibres lock the twist, so rho_deg is limited to 30 deg). Neglected: the layer's restraint of
+  the axial extension (which couples twist to bending), the chamber's collapse as an alternative
+  mode, and the fibres' discreteness (the smeared model assumes many turns over the section's
+  size). ``fibre_efficiency`` (default 1: the smeared model as derived; 0: the fibres add
+  nothing) is the parameter a fit can adjust.
+
+Every number the paper does not give is a named parameter of :func:`section_stiffness` with its
+default and the reason for it (see there).
+
+Examples
+--------
+>>> p = section_properties(8.0, 3.0, 4.0)
+>>> round(p.area, 4), round(p.centroid[0], 4), p.centroid[1]
+(172.7876, -7.3455, 0.0)
+>>> round(p.torsion_constant, 1), round(p.shear_centre[1], 9)
+(5084.4, 0.0)
+>>> section_properties(8.0, 5.0, 4.0)
+Traceback (most recent call last):
+...
+esba.model.section.SectionError: r2=5 with d=4, r1=8: the chamber must lie inside the actuator, r2 + d < r1
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+from esba.infra import checks
+from esba.infra.errors import InputError
+
+__all__ = [
+    "SectionError",
+    "SectionProperties",
+    "SectionStiffness",
+    "section_properties",
+    "section_stiffness",
+    "exact_properties",
+    "rectangle_torsion_factor",
+    "MESH_LEVELS",
+    "DEFAULT_MESH",
+    "LAYER_E",
+    "LAYER_NU",
+    "LAYER_THICKNESS",
+    "SILICONE_NU",
+    "MAX_FIBRE_ANGLE_DEG",
+]
+
+#: The inextensible layer's Young's modulus, MPa (Section 4.2, from Polygerinos et al., ref. [40]).
+LAYER_E = 6500.0
+#: The layer's Poisson's ratio (Section 4.2).
+LAYER_NU = 0.2
+#: The layer's thickness, mm: not in the paper. A woven nylon mesh is 0.2-0.4 mm thick; 0.3 mm.
+LAYER_THICKNESS = 0.3
+#: The silicone's Poisson's ratio: incompressible rubber (the paper's Eq. 9 conserves its volume).
+SILICONE_NU = 0.5
+#: The largest fibre angle the fibre model takes, degrees (it locks at 35.26 deg, see the module).
+MAX_FIBRE_ANGLE_DEG = 30.0
+#: The Kevlar fibres' angle from the hoop direction, degrees (Table 1).
+FIBRE_ANGLE_DEG = 10.0
+
+#: Mesh levels: (radial layers, divisions around). Level k doubles both of level k - 1.
+MESH_LEVELS = {k: (3 * 2**k, 24 * 2**k) for k in range(0, 7)}
+#: The default level: J within 1e-5 relative (its bracket by the warping function) at the Table 1 section, in about 0.1 s.
+DEFAULT_MESH = 2
+
+
+class SectionError(InputError):
+    """A section parameter that is not allowed: the message names it, its value and what is allowed."""
+
+
+@dataclass(frozen=True)
+class SectionProperties:
+    """The silicone section (disc r1 minus the chamber r2 offset by d), mm units.
+
+    Attributes
+    ----------
+    area : float
+        A, mm².
+    centroid : tuple[float, float]
+        (y_c, z_c), mm, in the base frame's (y, z) with the origin on the inextensible line
+        (the disc's centre is at y = -r1).
+    I_yy : float
+        ∫ (z - z_c)² dA, mm⁴: about the centroidal axis parallel to y (the sideways bend).
+    I_zz : float
+        ∫ (y - y_c)² dA, mm⁴: about the centroidal axis parallel to z (the paper's in-plane bend).
+    I_yz : float
+        ∫ (y - y_c)(z - z_c) dA, mm⁴ (0: the section is symmetric about y).
+    torsion_constant : float
+        Saint-Venant's J, mm⁴, from Prandtl's stress function (finite elements, the chamber a hole
+        with its circulation condition).
+    shear_centre : tuple[float, float]
+        (y_s, z_s), mm, Trefftz's shear centre (centre of twist), same frame as ``centroid``.
+    torsion_upper : float
+        J from the warping function on the same mesh, mm⁴: an upper bound (``torsion_constant``
+        is a lower bound); their gap bounds the discretisation error.
+    mesh : int
+        The mesh level used (:data:`MESH_LEVELS`).
+    """
+
+    area: float
+    centroid: tuple[float, float]
+    I_yy: float
+    I_zz: float
+    I_yz: float
+    torsion_constant: float
+    shear_centre: tuple[float, float]
+    torsion_upper: float
+    mesh: int
+
+    @property
+    def polar_moment(self) -> float:
+        """I_p = I_yy + I_zz about the centroid, mm⁴."""
+        return self.I_yy + self.I_zz
+
+
+@dataclass(frozen=True)
+class SectionStiffness:
+    """The composite section's stiffnesses (silicone + layer + fibres), N·mm² (and N for EA).
+
+    Attributes
+    ----------
+    EI_bend : float
+        The paper's in-plane bend (curvature about z), about the composite neutral axis.
+    EI_side : float
+        The sideways bend (curvature about y), about the axis of symmetry z = 0.
+    GJ : float
+        Torsion: silicone + layer + fibres (the three parts below add up to it).
+    GJ_silicone, GJ_layer, GJ_fibres : float
+        The parts of GJ.
+    EA : float
+        Axial stiffness, N.
+    neutral_axis : tuple[float, float]
+        (y_N, z_N), mm: the modulus-weighted centroid, where the bending axes pass.
+    section : SectionProperties
+        The silicone section it was built on.
+    """
+
+    EI_bend: float
+    EI_side: float
+    GJ: float
+    GJ_silicone: float
+    GJ_layer: float
+    GJ_fibres: float
+    EA: float
+    neutral_axis: tuple[float, float]
+    section: SectionProperties
+
+
+# --- inputs -----------------------------------------------------------------------------------
+
+
+def _positive(name: str, value: Any) -> float:
+    v = checks.finite(name, value, SectionError)
+    if v <= 0:
+        raise SectionError(f"{name}={v:g}: expected a number > 0")
+    return v
+
+
+def _geometry(r1: Any, r2: Any, d: Any) -> tuple[float, float, float]:
+    r1, r2 = _positive("r1", r1), _positive("r2", r2)
+    d = checks.finite("d", d, SectionError)
+    if d < 0:
+        raise SectionError(f"d={d:g}: expected a number >= 0")
+    if not r2 + d < r1:
+        raise SectionError(f"r2={r2:g} with d={d:g}, r1={r1:g}: the chamber must lie inside the actuator, r2 + d < r1")
+    # the thinnest wall, r1 - r2 - d, is meshed by the radial layers: below 1e-6 r1 it is no longer a section
+    if r1 - r2 - d < 1e-6 * r1:
+        raise SectionError(f"r2={r2:g} with d={d:g}, r1={r1:g}: the wall r1 - r2 - d is thinner than 1e-6 r1; expected a wall the mesh can resolve")
+    return r1, r2, d
+
+
+def _mesh_level(mesh: Any) -> int:
+    return checks.whole("mesh", mesh, 0, SectionError, high=max(MESH_LEVELS), why="each level doubles the mesh: the top level resolves J to round-off")
+
+
+# --- closed forms -----------------------------------------------------------------------------
+
+
+def exact_properties(r1: float, r2: float, d: float) -> dict[str, float]:
+    """Area, centroid and second moments of the section in closed form (see the module).
+
+    >>> p = exact_properties(8.0, 3.0, 0.0)
+    >>> round(p["I_yy"] - p["I_zz"], 12), round(p["y_c"], 12)
+    (0.0, -8.0)
+    """
+    r1, r2, d = _geometry(r1, r2, d)
+    a1, a2 = math.pi * r1**2, math.pi * r2**2
+    area = a1 - a2
+    ring = math.pi * (r1**4 - r2**4) / 4
+    return {
+        "area": area,
+        "y_c": -r1 + d * a2 / area,
+        "z_c": 0.0,
+        "I_yy": ring,
+        "I_zz": ring - a1 * a2 * d**2 / area,
+        "I_yz": 0.0,
+    }
+
+
+def rectangle_torsion_factor(aspect: float, terms: int = 50) -> float:
+    """beta in J = beta w t³ of a w x t rectangle (w >= t), Saint-Venant's series.
+
+    beta = 1/3 (1 - 192/pi^5 (t/w) sum_{k odd} tanh(k pi w / (2 t)) / k^5); 1/3 for a thin strip.
+
+    >>> round(rectangle_torsion_factor(1.0), 4), round(rectangle_torsion_factor(1e6), 6)
+    (0.1406, 0.333333)
+    """
+    a = max(aspect, 1.0 / aspect)
+    s = sum(math.tanh(k * math.pi * a / 2) / k**5 for k in range(1, 2 * terms, 2))
+    return (1 - 192 / math.pi**5 / a * s) / 3
+
+
+# --- finite elements --------------------------------------------------------------------------
+
+
+def _blend(r1: float, r2: float, d: float, s, t):
+    """The map of (s, t) to (y, z): the chamber's circle at s = 0, the outer one at s = 1."""
+    import numpy as np
+
+    yc = -(r1 + d)  # the chamber's centre; the disc's centre is at -r1
+    y = (1 - s) * (yc + r2 * np.cos(t)) + s * (-r1 + r1 * np.cos(t))
+    z = (1 - s) * r2 * np.sin(t) + s * r1 * np.sin(t)
+    return y, z
+
+
+def _annulus_mesh(r1: float, r2: float, d: float, level: int):
+    """A quadratic isoparametric triangle mesh of the section and the chamber's and outer boundary facets."""
+    import numpy as np
+    from skfem import MeshTri1, MeshTri2
+
+    nr, nt = MESH_LEVELS[level]
+    s = np.linspace(0.0, 1.0, nr + 1)
+    t = np.linspace(0.0, 2 * np.pi, nt + 1)[:-1]
+    S, T = np.meshgrid(s, t, indexing="ij")  # node (i, j) is i * nt + j
+    y, z = _blend(r1, r2, d, S.ravel(), T.ravel())
+    idx = np.arange((nr + 1) * nt).reshape(nr + 1, nt)
+    a, b = idx[:-1, :], np.roll(idx[:-1, :], -1, axis=1)
+    c, e = idx[1:, :], np.roll(idx[1:, :], -1, axis=1)
+    # each quad (a b e c) split along a diagonal, a-e for t in [0, pi) and b-c for t in [pi, 2 pi):
+    # the mesh is the mirror image of itself in z -> -z, as the section is
+    up = (np.arange(nt) < nt // 2)[None, :].repeat(nr, axis=0).ravel()
+    a, b, c, e = a.ravel(), b.ravel(), c.ravel(), e.ravel()
+    first = np.where(up, np.vstack([a, b, e]), np.vstack([a, b, c]))
+    second = np.where(up, np.vstack([a, e, c]), np.vstack([b, e, c]))
+    tri = np.hstack([first, second])
+    linear = MeshTri1(np.vstack([y, z]), tri)
+    quad = MeshTri2.from_mesh(linear)
+    # place every node (vertices and edge mid-points) by the map: the parameters of a node are
+    # the mean of its edge's ends, with the angle unwrapped across t = 2 pi
+    sp, tp = S.ravel(), T.ravel()
+    doflocs = quad.doflocs.copy()
+    edges = quad.facets  # 2 x nfacets, vertex indices (the edges, in 2-D; their dofs follow the vertices)
+    s_mid = 0.5 * (sp[edges[0]] + sp[edges[1]])
+    dt = np.angle(np.exp(1j * (tp[edges[1]] - tp[edges[0]])))
+    t_mid = tp[edges[0]] + 0.5 * dt
+    ey, ez = _blend(r1, r2, d, s_mid, t_mid)
+    nv = linear.nvertices
+    doflocs[:, nv : nv + edges.shape[1]] = np.vstack([ey, ez])
+    from dataclasses import replace
+
+    quad = replace(quad, doflocs=doflocs)
+    inner_v = np.zeros(nv, bool)
+    inner_v[idx[0]] = True
+    outer_v = np.zeros(nv, bool)
+    outer_v[idx[-1]] = True
+    f = quad.facets
+    inner_f = np.nonzero(inner_v[f[0]] & inner_v[f[1]])[0]
+    outer_f = np.nonzero(outer_v[f[0]] & outer_v[f[1]])[0]
+    return quad, inner_f, outer_f
+
+
+@lru_cache(maxsize=64)
+def _torsion(r1: float, r2: float, d: float, level: int, yc: float) -> tuple[float, float, float, float]:
+    """(J from phi, J from omega, y_s, z_s) of the section on mesh ``level``; y_s, z_s in the frame."""
+    import numpy as np
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import spsolve
+    from skfem import Basis, BilinearForm, ElementTriP2, LinearForm
+    from skfem.helpers import dot, grad
+
+    mesh, inner_f, outer_f = _annulus_mesh(r1, r2, d, level)
+    basis = Basis(mesh, ElementTriP2(), intorder=4)
+
+    @BilinearForm
+    def laplace(u, v, w):
+        return dot(grad(u), grad(v))
+
+    @LinearForm
+    def two(v, w):
+        return 2.0 * v
+
+    K = laplace.assemble(basis).tocsr()
+    f = two.assemble(basis)
+    N = K.shape[0]
+
+    # Prandtl: phi = 0 on the outer circle, phi = C on the chamber (one unknown), circulation by stationarity
+    hole = basis.get_dofs(facets=inner_f).all()
+    outer = basis.get_dofs(facets=outer_f).all()
+    free = np.setdiff1d(np.arange(N), np.union1d(hole, outer))
+    rows = np.concatenate([free, hole])
+    cols = np.concatenate([np.arange(free.size), np.full(hole.size, free.size)])
+    T = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(N, free.size + 1))
+    a_hole = math.pi * r2**2
+    Kr = (T.T @ K @ T).tocsc()
+    fr = T.T @ f
+    fr[-1] += 2.0 * a_hole
+    u = spsolve(Kr, fr, permc_spec="MMD_AT_PLUS_A")
+    J_phi = float(fr @ u)  # = 2 ∫ phi dA + 2 C A_chamber
+
+    # warping about the centroid: ∫ ∇omega·∇v = ∫ (z' v_y - y' v_z), omega fixed at one node
+    @LinearForm
+    def rot(v, w):
+        yy, zz = w.x[0] - yc, w.x[1]
+        return zz * v.grad[0] - yy * v.grad[1]
+
+    g = rot.assemble(basis)
+    m1 = LinearForm(lambda v, w: v).assemble(basis)
+    # omega is fixed at one node, then shifted to ∫ omega dA = 0 (the constant does no work)
+    keep = np.arange(1, N)
+    omega = np.zeros(N)
+    omega[keep] = spsolve(K[keep][:, keep].tocsc(), g[keep], permc_spec="MMD_AT_PLUS_A")
+    omega -= (m1 @ omega) / m1.sum()
+
+    def moment(fun):
+        return LinearForm(lambda v, w: fun(w.x[0] - yc, w.x[1]) * v).assemble(basis)
+
+    ones = np.ones(N)
+    Ip = float(moment(lambda y, z: y**2 + z**2) @ ones)
+    J_omega = Ip - float(omega @ (K @ omega))
+    Iyw, Izw = float(moment(lambda y, z: y) @ omega), float(moment(lambda y, z: z) @ omega)
+    Iy2, Iz2 = float(moment(lambda y, z: y**2) @ ones), float(moment(lambda y, z: z**2) @ ones)
+    Iyz = float(moment(lambda y, z: y * z) @ ones)
+    # omega_P = omega_c - z_s y + y_s z orthogonal to y and z (centroidal):
+    #   Iyz y_s - Iy2 z_s = -Iyw ;  Iz2 y_s - Iyz z_s = -Izw
+    ys, zs = np.linalg.solve([[Iyz, -Iy2], [Iz2, -Iyz]], [-Iyw, -Izw])
+    return J_phi, J_omega, float(yc + ys), float(zs)
+
+
+def section_properties(r1: float, r2: float, d: float, *, mesh: int = DEFAULT_MESH) -> SectionProperties:
+    """The silicone section's properties (closed forms where exact, finite elements for J and the shear centre).
+
+    Parameters
+    ----------
+    r1, r2, d : float
+        External radius, chamber radius and eccentric distance, mm (r1, r2 > 0, d >= 0, r2 + d < r1).
+    mesh : int
+        Mesh level, 0 to 6 (:data:`MESH_LEVELS`); the default 3 (72 x 192 quadratic... see
+        :data:`MESH_LEVELS`) takes about a tenth of a second and gives J to about 1e-7.
+
+    Returns
+    -------
+    SectionProperties
+
+    Raises
+    ------
+    SectionError
+        A parameter that is not a finite number, not positive, or a chamber outside the disc.
+    """
+    r1, r2, d = _geometry(r1, r2, d)
+    level = _mesh_level(mesh)
+    ex = exact_properties(r1, r2, d)
+    J_phi, J_omega, ys, zs = _torsion(r1, r2, d, level, ex["y_c"])
+    return SectionProperties(
+        area=ex["area"],
+        centroid=(ex["y_c"], ex["z_c"]),
+        I_yy=ex["I_yy"],
+        I_zz=ex["I_zz"],
+        I_yz=ex["I_yz"],
+        torsion_constant=J_phi,
+        shear_centre=(ys, 0.0 if abs(zs) < 1e-12 * r1 else zs),
+        torsion_upper=J_omega,
+        mesh=level,
+    )
+
+
+def section_stiffness(
+    r1: float,
+    r2: float,
+    d: float,
+    E: float,
+    *,
+    E_layer: float = LAYER_E,
+    nu_layer: float = LAYER_NU,
+    layer_width: float | None = None,
+    layer_thickness: float = LAYER_THICKNESS,
+    layer_depth: float = 0.0,
+    nu: float = SILICONE_NU,
+    rho_deg: float = FIBRE_ANGLE_DEG,
+    fibre_efficiency: float = 1.0,
+    mesh: int = DEFAULT_MESH,
+) -> SectionStiffness:
+    """The composite section's bending, torsion and axial stiffnesses (see the module for the formulas).
+
+    Parameters
+    ----------
+    r1, r2, d : float
+        The section, mm (Table 1: 8, 3, 4).
+    E : float
+        The silicone's Young's modulus, MPa (Section 4.2: 0.54).
+    E_layer, nu_layer : float
+        The inextensible layer's modulus, MPa, and Poisson's ratio (Section 4.2: 6500 and 0.2).
+    layer_width : float or None
+        The layer's width across z, mm. Not in the paper; default (None) ``r1``: a flat mesh half
+        as wide as the actuator, well inside the round bottom.
+    layer_thickness : float
+        The layer's thickness across y, mm. Not in the paper; default 0.3 (a woven nylon mesh).
+    layer_depth : float
+        Depth of the layer's mid-plane from the paper's inextensible line y = 0 (the tangent at
+        the disc's bottom) toward the chamber, mm, >= 0. Default 0: where the paper's model puts
+        it (Eq. 6-8 bend the silicone about y = 0), so that ``EI_bend`` is E times the second
+        moment of Eq. 8 plus the layer's own, E pi (5 r1⁴ - 4 r2² (r1 + d)² - r2⁴)/4 + ...
+        (a flat strip at the tangent leaves the round disc at its edges: an idealisation the
+        paper makes too; give the depth at which the strip fits, r1 - sqrt(r1² - w²/4) + t/2,
+        for the other reading).
+    nu : float
+        The silicone's Poisson's ratio, 0 <= nu <= 0.5 (default 0.5, incompressible: G = E/3).
+    rho_deg : float
+        The fibres' angle from the hoop direction, degrees, 0 to 30 (Table 1: 10).
+    fibre_efficiency : float
+        Multiplies the fibres' torsional stiffness of the smeared model, >= 0 (default 1: the
+        model as derived; 0: the fibres add nothing).
+    mesh : int
+        Mesh level of the torsion constant (:func:`section_properties`).
+
+    Returns
+    -------
+    SectionStiffness
+
+    Examples
+    --------
+    >>> k = section_stiffness(8.0, 3.0, 4.0, 0.54)
+    >>> k.EI_side > k.EI_bend > 0, round(k.GJ, 3) == round(k.GJ_silicone + k.GJ_layer + k.GJ_fibres, 3)
+    (True, True)
+    """
+    r1, r2, d = _geometry(r1, r2, d)
+    E = _positive("E", E)
+    E_layer = _positive("E_layer", E_layer)
+    if E_layer < E:
+        raise SectionError(f"E_layer={E_layer:g} below E={E:g}: expected an inextensible layer stiffer than the silicone")
+    t = _positive("layer_thickness", layer_thickness)
+    w = r1 if layer_width is None else _positive("layer_width", layer_width)
+    nu = checks.finite("nu", nu, SectionError)
+    if not 0 <= nu <= 0.5:
+        raise SectionError(f"nu={nu:g}: expected a Poisson's ratio from 0 to 0.5")
+    nu_layer = checks.finite("nu_layer", nu_layer, SectionError)
+    if not -1 < nu_layer <= 0.5:
+        raise SectionError(f"nu_layer={nu_layer:g}: expected a Poisson's ratio above -1 and at most 0.5")
+    rho = checks.finite("rho_deg", rho_deg, SectionError)
+    if not 0 <= rho <= MAX_FIBRE_ANGLE_DEG:
+        raise SectionError(
+            f"rho_deg={rho:g}: expected a fibre angle from 0 to {MAX_FIBRE_ANGLE_DEG:g} degrees (the fibre model locks the twist at 35.26)"
+        )
+    eta = checks.finite("fibre_efficiency", fibre_efficiency, SectionError)
+    if eta < 0:
+        raise SectionError(f"fibre_efficiency={eta:g}: expected a number >= 0 (0: the fibres add nothing)")
+    if w / 2 >= r1:
+        raise SectionError(f"layer_width={w:g}: expected a layer narrower than the actuator's diameter 2 r1 = {2 * r1:g}")
+    depth = checks.finite("layer_depth", layer_depth, SectionError)
+    if depth < 0:
+        raise SectionError(f"layer_depth={depth:g}: expected a depth >= 0 mm from the inextensible line toward the chamber")
+    chamber_low = r1 + d - r2  # the chamber's nearest point to the layer, depth below y = 0
+    if depth + t / 2 >= chamber_low:
+        raise SectionError(f"layer_depth={depth:g}: the layer reaches the chamber (at depth {chamber_low:g} mm); expected a shallower layer")
+
+    p = section_properties(r1, r2, d, mesh=mesh)
+    A, (yc, _zc) = p.area, p.centroid
+    A_l, y_l = w * t, -depth
+    dE = E_layer - E
+    EA = E * A + dE * A_l
+    yN = (E * A * yc + dE * A_l * y_l) / EA
+    EI_bend = E * (p.I_zz + A * (yc - yN) ** 2) + dE * (w * t**3 / 12 + A_l * (y_l - yN) ** 2)
+    EI_side = E * p.I_yy + dE * t * w**3 / 12
+    G = E / (2 * (1 + nu))
+    G_layer = E_layer / (2 * (1 + nu_layer))
+    GJ_s = G * p.torsion_constant
+    GJ_l = (G_layer - G) * rectangle_torsion_factor(w / t) * max(w, t) * min(w, t) ** 3
+    s, c = math.sin(math.radians(rho)), math.cos(math.radians(rho))
+    GJ_f = eta * E * A * r1**2 * (s * c / (s * s - c * c / 2)) ** 2
+    return SectionStiffness(
+        EI_bend=EI_bend,
+        EI_side=EI_side,
+        GJ=GJ_s + GJ_l + GJ_f,
+        GJ_silicone=GJ_s,
+        GJ_layer=GJ_l,
+        GJ_fibres=GJ_f,
+        EA=EA,
+        neutral_axis=(yN, 0.0),
+        section=p,
+    )
