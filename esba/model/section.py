@@ -36,7 +36,8 @@ Torsion (Saint-Venant, finite elements)
 Prandtl's stress function phi (shear stresses tau_xy = d phi/dz, tau_xz = -d phi/dy per unit
 G theta') solves ∇² phi = -2 on the silicone, phi = 0 on the outer circle and phi = C (a constant)
 on the chamber's circle: the section is doubly connected, and C follows from the chamber's
-circulation condition ∮ d phi/dn ds = -2 A_chamber (n out of the silicone), which says that the
+circulation condition ∮ d phi/dn ds = -2 A_chamber (n the chamber's outward normal, into the
+silicone), which says that the
 warping displacement is single-valued around the chamber. Both are the stationarity conditions of
 the complementary energy::
 
@@ -136,6 +137,8 @@ __all__ = [
     "section_properties",
     "section_stiffness",
     "exact_properties",
+    "finite_elements",
+    "FESection",
     "rectangle_torsion_factor",
     "MESH_LEVELS",
     "DEFAULT_MESH",
@@ -370,9 +373,42 @@ def _annulus_mesh(r1: float, r2: float, d: float, level: int):
     return quad, inner_f, outer_f
 
 
+@dataclass(frozen=True)
+class FESection:
+    """What the finite elements give for the section (mm units), each an approximation on ``mesh``.
+
+    ``area``, ``centroid``, ``I_yy``, ``I_zz``, ``I_yz`` as in :class:`SectionProperties` (the API
+    uses the closed forms; these check the mesh); ``J_lower`` from Prandtl's stress function (the
+    complementary energy: a lower bound), ``J_upper`` from the warping function (the potential
+    energy: an upper bound); ``hole_constant`` the stress function's value C on the chamber;
+    ``shear_centre`` (Trefftz) in the frame of the module.
+    """
+
+    area: float
+    centroid: tuple[float, float]
+    I_yy: float
+    I_zz: float
+    I_yz: float
+    J_lower: float
+    J_upper: float
+    hole_constant: float
+    shear_centre: tuple[float, float]
+    mesh: int
+
+
+def finite_elements(r1: float, r2: float, d: float, *, mesh: int = DEFAULT_MESH) -> FESection:
+    """The section by finite elements (P2, isoparametric) on mesh level ``mesh``; cached by its inputs.
+
+    >>> fe = finite_elements(8.0, 3.0, 0.0, mesh=1)
+    >>> round(fe.hole_constant, 3), round(fe.J_lower / (3.14159265358979 * (8**4 - 3**4) / 2), 5)
+    (27.5, 1.0)
+    """
+    r1, r2, d = _geometry(r1, r2, d)
+    return _finite_elements(r1, r2, d, _mesh_level(mesh))
+
+
 @lru_cache(maxsize=64)
-def _torsion(r1: float, r2: float, d: float, level: int, yc: float) -> tuple[float, float, float, float]:
-    """(J from phi, J from omega, y_s, z_s) of the section on mesh ``level``; y_s, z_s in the frame."""
+def _finite_elements(r1: float, r2: float, d: float, level: int) -> FESection:
     import numpy as np
     import scipy.sparse as sp
     from scipy.sparse.linalg import spsolve
@@ -393,6 +429,11 @@ def _torsion(r1: float, r2: float, d: float, level: int, yc: float) -> tuple[flo
     K = laplace.assemble(basis).tocsr()
     f = two.assemble(basis)
     N = K.shape[0]
+    ones = np.ones(N)
+    m1 = LinearForm(lambda v, w: v).assemble(basis)  # ∫ v dA
+    area = float(m1.sum())
+    yc = float(LinearForm(lambda v, w: w.x[0] * v).assemble(basis).sum()) / area
+    zc = float(LinearForm(lambda v, w: w.x[1] * v).assemble(basis).sum()) / area
 
     # Prandtl: phi = 0 on the outer circle, phi = C on the chamber (one unknown), circulation by stationarity
     hole = basis.get_dofs(facets=inner_f).all()
@@ -411,11 +452,10 @@ def _torsion(r1: float, r2: float, d: float, level: int, yc: float) -> tuple[flo
     # warping about the centroid: ∫ ∇omega·∇v = ∫ (z' v_y - y' v_z), omega fixed at one node
     @LinearForm
     def rot(v, w):
-        yy, zz = w.x[0] - yc, w.x[1]
+        yy, zz = w.x[0] - yc, w.x[1] - zc
         return zz * v.grad[0] - yy * v.grad[1]
 
     g = rot.assemble(basis)
-    m1 = LinearForm(lambda v, w: v).assemble(basis)
     # omega is fixed at one node, then shifted to ∫ omega dA = 0 (the constant does no work)
     keep = np.arange(1, N)
     omega = np.zeros(N)
@@ -423,9 +463,8 @@ def _torsion(r1: float, r2: float, d: float, level: int, yc: float) -> tuple[flo
     omega -= (m1 @ omega) / m1.sum()
 
     def moment(fun):
-        return LinearForm(lambda v, w: fun(w.x[0] - yc, w.x[1]) * v).assemble(basis)
+        return LinearForm(lambda v, w: fun(w.x[0] - yc, w.x[1] - zc) * v).assemble(basis)
 
-    ones = np.ones(N)
     Ip = float(moment(lambda y, z: y**2 + z**2) @ ones)
     J_omega = Ip - float(omega @ (K @ omega))
     Iyw, Izw = float(moment(lambda y, z: y) @ omega), float(moment(lambda y, z: z) @ omega)
@@ -434,7 +473,18 @@ def _torsion(r1: float, r2: float, d: float, level: int, yc: float) -> tuple[flo
     # omega_P = omega_c - z_s y + y_s z orthogonal to y and z (centroidal):
     #   Iyz y_s - Iy2 z_s = -Iyw ;  Iz2 y_s - Iyz z_s = -Izw
     ys, zs = np.linalg.solve([[Iyz, -Iy2], [Iz2, -Iyz]], [-Iyw, -Izw])
-    return J_phi, J_omega, float(yc + ys), float(zs)
+    return FESection(
+        area=area,
+        centroid=(yc, zc),
+        I_yy=Iz2,  # ∫ z'² dA: about the axis parallel to y
+        I_zz=Iy2,  # ∫ y'² dA: about the axis parallel to z
+        I_yz=Iyz,
+        J_lower=J_phi,
+        J_upper=J_omega,
+        hole_constant=float(u[-1]),
+        shear_centre=(float(yc + ys), float(zc + zs)),
+        mesh=level,
+    )
 
 
 def section_properties(r1: float, r2: float, d: float, *, mesh: int = DEFAULT_MESH) -> SectionProperties:
@@ -460,16 +510,17 @@ def section_properties(r1: float, r2: float, d: float, *, mesh: int = DEFAULT_ME
     r1, r2, d = _geometry(r1, r2, d)
     level = _mesh_level(mesh)
     ex = exact_properties(r1, r2, d)
-    J_phi, J_omega, ys, zs = _torsion(r1, r2, d, level, ex["y_c"])
+    fe = _finite_elements(r1, r2, d, level)
+    ys, zs = fe.shear_centre
     return SectionProperties(
         area=ex["area"],
         centroid=(ex["y_c"], ex["z_c"]),
         I_yy=ex["I_yy"],
         I_zz=ex["I_zz"],
         I_yz=ex["I_yz"],
-        torsion_constant=J_phi,
+        torsion_constant=fe.J_lower,
         shear_centre=(ys, 0.0 if abs(zs) < 1e-12 * r1 else zs),
-        torsion_upper=J_omega,
+        torsion_upper=fe.J_upper,
         mesh=level,
     )
 
