@@ -51,8 +51,9 @@ The same J also comes from the warping function omega (∇² omega = 0, d omega/
 on every boundary: the chamber is a free surface), ``J = I_p - ∫ |∇omega|² dA``. Finite elements
 on the complementary energy (phi) bound J from below and on the potential energy (omega) from
 above, up to the O(h⁴) error of the curved boundary (which shows only where the two agree to
-about 1e-7 of J anyway, near the concentric section); the tests check both against a series
-solution, the bracket on eccentric sections and the convergence order (4, as P2's energy error).
+about 1e-7 of J anyway, near the concentric section); the tests check both against the series
+solution of :func:`series_torsion` (exact to round-off), the bracket on eccentric sections and
+the convergence order (4, as P2's energy error).
 
 The shear centre (Trefftz's definition, the centre of twist, independent of Poisson's ratio) is
 the point (y_s, z_s) about which the warping function is orthogonal to y and z::
@@ -130,7 +131,7 @@ from functools import lru_cache
 from typing import Any
 
 from esba.infra import checks
-from esba.infra.errors import InputError
+from esba.infra.errors import InputError, RunError
 
 __all__ = [
     "SectionError",
@@ -140,6 +141,9 @@ __all__ = [
     "section_stiffness",
     "exact_properties",
     "finite_elements",
+    "series_torsion",
+    "SeriesError",
+    "SERIES_TERMS",
     "FESection",
     "rectangle_torsion_factor",
     "MESH_LEVELS",
@@ -164,6 +168,9 @@ MAX_FIBRE_ANGLE_DEG = 30.0
 #: The Kevlar fibres' angle from the hoop direction, degrees (Table 1).
 FIBRE_ANGLE_DEG = 10.0
 
+#: Terms of :func:`series_torsion`: J to round-off down to walls of 0.5 mm at r1 = 8 (r2 = 1, d = 6.5).
+SERIES_TERMS = 160
+
 #: Mesh levels: (radial layers, divisions around). Level k doubles both of level k - 1.
 MESH_LEVELS = {k: (3 * 2**k, 24 * 2**k) for k in range(0, 6)}
 #: The default level: J within 1e-5 relative (its bracket by the warping function) at the Table 1 section, in about 0.1 s.
@@ -172,6 +179,10 @@ DEFAULT_MESH = 2
 
 class SectionError(InputError):
     """A section parameter that is not allowed: the message names it, its value and what is allowed."""
+
+
+class SeriesError(RunError):
+    """The series solution did not converge with the terms given."""
 
 
 @dataclass(frozen=True)
@@ -488,6 +499,69 @@ def _finite_elements(r1: float, r2: float, d: float, level: int) -> FESection:
         shear_centre=(float(yc + ys), float(zc + zs)),
         mesh=level,
     )
+
+
+def series_torsion(r1: float, r2: float, d: float, *, terms: int = SERIES_TERMS) -> tuple[float, float]:
+    """(J, C): the torsion constant and the chamber's stress-function value by a series, exact to
+    round-off once converged (the cross-check of the finite elements; a few milliseconds).
+
+    Prandtl's phi = -|w|²/2 + Re F(w) with w = y + r1 + i z (the disc's centre at 0, the chamber's
+    at c = -d) and F = sum_k a_k (w/r1)^k + sum_k b_k (r2/(w - c))^k: analytic in the disc plus
+    analytic outside the chamber, which spans every harmonic function of the annulus but the
+    logarithm ln|w - c|, whose coefficient the chamber's circulation condition sets to zero. The
+    real coefficients (the section is symmetric) and C are fitted by least squares to phi = 0 on
+    the outer circle and phi = C on the chamber's; then J = 2 ∫phi dA + 2 C pi r2², with ∫phi dA
+    by Green's identity (q = |w|²/4, ∇²q = 1) as integrals over the two circles, by the
+    trapezoidal rule (spectrally accurate for these periodic integrands).
+
+    Raises
+    ------
+    SeriesError
+        When the series does not fit the boundary values to 1e-9 r1² (too few terms for a wall
+        this thin): more ``terms`` are needed.
+
+    Examples
+    --------
+    >>> J, C = series_torsion(8.0, 3.0, 0.0, terms=4)
+    >>> round(float(J) / (math.pi * (8**4 - 3**4) / 2), 12), round(C, 9)
+    (1.0, 27.5)
+    """
+    import numpy as np
+
+    r1, r2, d = _geometry(r1, r2, d)
+    K = checks.whole("terms", terms, 1, SectionError, high=1000, why="the fit's matrix grows as terms²")
+    M = 4 * K + 16
+    c = -d
+    t = 2 * np.pi * np.arange(M) / M
+    outer, inner = r1 * np.exp(1j * t), c + r2 * np.exp(1j * t)
+    k = np.arange(K + 1)
+
+    def columns(w):
+        return (w[:, None] / r1) ** k[None, :], (r2 / (w[:, None] - c)) ** k[None, 1:]
+
+    (ao, bo), (ai, bi) = columns(outer), columns(inner)
+    G = np.vstack([np.hstack([ao.real, bo.real, np.zeros((M, 1))]), np.hstack([ai.real, bi.real, -np.ones((M, 1))])])
+    rhs = np.concatenate([np.full(M, r1**2 / 2), np.abs(inner) ** 2 / 2])
+    coef = np.linalg.lstsq(G, rhs, rcond=None)[0]
+    misfit = float(np.max(np.abs(G @ coef - rhs)))
+    if not misfit < 1e-9 * r1**2:
+        raise SeriesError(f"the series of {K} terms did not fit the boundary values (misfit {misfit:.2g} mm²): give more terms")
+    a, b, C = coef[: K + 1], coef[K + 1 : -1], coef[-1]
+
+    def dF(w):
+        da = ((k[1:] / r1) * (w[:, None] / r1) ** (k[1:] - 1)) @ a[1:]
+        db = (-(k[1:] / (w[:, None] - c)) * (r2 / (w[:, None] - c)) ** k[1:]) @ b
+        return da + db
+
+    def green(w, n, ds, phi):  # ∮ (phi dq/dn - q dphi/dn) ds
+        dq = (w * np.conj(n)).real / 2
+        dphi = -(w * np.conj(n)).real + (dF(w) * n).real
+        return float(np.sum((phi * dq - np.abs(w) ** 2 / 4 * dphi) * ds))
+
+    q_area = (math.pi * r1**4 / 2 - math.pi * r2**4 / 2 - math.pi * r2**2 * d**2) / 4  # ∫ q dA
+    # n out of the silicone: outward on the outer circle, into the chamber on the inner one
+    phi_area = green(outer, np.exp(1j * t), 2 * np.pi * r1 / M, 0.0) + green(inner, -np.exp(1j * t), 2 * np.pi * r2 / M, C) - 2 * q_area
+    return float(2 * phi_area + 2 * C * math.pi * r2**2), float(C)
 
 
 def section_properties(r1: float, r2: float, d: float, *, mesh: int = DEFAULT_MESH) -> SectionProperties:
