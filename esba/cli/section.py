@@ -7,7 +7,7 @@ import argparse
 import dataclasses
 
 from .arguments import UsageError, count_arg, float_arg, load_scene_file
-from .results import EXIT_OK, print_result
+from .results import EXIT_OK, print_result, warn_findings
 
 #: The finest mesh level the command takes (each level doubles the mesh both ways; level 4 takes
 #: seconds and resolves J to about 1e-8).
@@ -55,6 +55,7 @@ def _section_data(args: argparse.Namespace) -> dict:
             "I_yz": p.I_yz,
             "torsion_constant": p.torsion_constant,
             "torsion_upper": p.torsion_upper,
+            "torsion_error": p.torsion_error,
             "shear_centre": list(p.shear_centre),
             "mesh": p.mesh,
         },
@@ -77,7 +78,6 @@ def _point(p) -> str:
 
 def _table(d: dict) -> str:
     i, s, k = d["inputs"], d["section"], d["stiffness"]
-    gap = (s["torsion_upper"] - s["torsion_constant"]) / s["torsion_constant"]
     rows = [
         f"section r1={i['r1']:g} r2={i['r2']:g} d={i['d']:g} mm, E={i['E']:g} MPa, rho={i['rho_deg']:g} deg "
         "(y toward the bending side from the inextensible line, z = x × y)",
@@ -87,7 +87,7 @@ def _table(d: dict) -> str:
         f"  I_yy = ∫z² dA           {s['I_yy']:12.3f} mm⁴   (sideways bend)",
         f"  I_zz = ∫y² dA           {s['I_zz']:12.3f} mm⁴   (in-plane bend)",
         f"  I_yz                    {s['I_yz']:12.3f} mm⁴",
-        f"  torsion constant J      {s['torsion_constant']:12.3f} mm⁴   (Prandtl; warping bound {s['torsion_upper']:.3f}, gap {gap:.1e}, mesh {s['mesh']})",
+        f"  torsion constant J      {s['torsion_constant']:12.3f} mm⁴   (Prandtl; warping bound {s['torsion_upper']:.3f}, gap {s['torsion_error']:.1e}, mesh {s['mesh']})",
         f"  shear centre (y, z)     {_point(s['shear_centre'])} mm",
         "composite (silicone + layer + fibres)",
         f"  EI_bend                 {k['EI_bend']:12.2f} N·mm²  (about the neutral axis y = {k['neutral_axis'][0]:.4f} mm)",
@@ -98,8 +98,17 @@ def _table(d: dict) -> str:
     return "\n".join(rows)
 
 
+#: The relative gap between J's two bounds above which the command warns (a wall too thin for the mesh).
+WARN_TORSION_ERROR = 1e-3
+
+
 def _cmd_section(args: argparse.Namespace) -> int:
-    print_result(args, _section_data(args), _table)
+    data = _section_data(args)
+    print_result(args, data, _table)
+    s = data["section"]
+    if s["torsion_error"] > WARN_TORSION_ERROR:
+        finer = f"; a finer --mesh (up to {MAX_CLI_MESH}) narrows it" if s["mesh"] < MAX_CLI_MESH else ""
+        warn_findings([{"message": f"the torsion constant's bounds differ by {s['torsion_error']:.1e} of J on mesh {s['mesh']} (a thin wall){finer}"}])
     return EXIT_OK
 
 

@@ -62,7 +62,8 @@ the point (y_s, z_s) about which the warping function is orthogonal to y and z::
 
 with omega_c the warping about the centroid and y, z centroidal; by symmetry z_s = 0.
 
-Mesh: a structured grid in (s, t) in [0, 1] x [0, 2 pi) mapped by the blend
+Mesh: a structured grid in (s, t) in [0, 1] x [0, 2 pi) (the divisions around closer toward the
+thin wall, t = tau + beta sin tau with beta = 1 - sqrt(thin wall / thick wall)) mapped by the blend
 p(s, t) = (1 - s) (c + r2 e^{it}) + s r1 e^{it} from the chamber's circle (s = 0) to the outer one
 (s = 1), whose Jacobian is (r1 - r2 - d cos t) ((1 - s) r2 + s r1) > 0 whenever r2 + d < r1.
 Elements are quadratic (P2) and isoparametric (every node, edge mid-points included, placed by
@@ -226,6 +227,12 @@ class SectionProperties:
     mesh: int
 
     @property
+    def torsion_error(self) -> float:
+        """The relative gap (torsion_upper - torsion_constant) / torsion_constant: the estimate of
+        J's discretisation error (refine ``mesh`` when it matters)."""
+        return (self.torsion_upper - self.torsion_constant) / self.torsion_constant
+
+    @property
     def polar_moment(self) -> float:
         """I_p = I_yy + I_zz about the centroid, mm⁴."""
         return self.I_yy + self.I_zz
@@ -348,7 +355,11 @@ def _annulus_mesh(r1: float, r2: float, d: float, level: int):
 
     nr, nt = MESH_LEVELS[level]
     s = np.linspace(0.0, 1.0, nr + 1)
-    t = np.linspace(0.0, 2 * np.pi, nt + 1)[:-1]
+    # divisions around, closer toward the thin wall at t = pi: t = tau + beta sin(tau) spaces them
+    # by (1 - beta) there and (1 + beta) at the thick wall, beta = 1 - sqrt(thin / thick wall)
+    beta = 1 - math.sqrt((r1 - r2 - d) / (r1 - r2 + d))
+    tau = np.linspace(0.0, 2 * np.pi, nt + 1)[:-1]
+    t = tau + beta * np.sin(tau)
     S, T = np.meshgrid(s, t, indexing="ij")  # node (i, j) is i * nt + j
     y, z = _blend(r1, r2, d, S.ravel(), T.ravel())
     idx = np.arange((nr + 1) * nt).reshape(nr + 1, nt)
@@ -597,7 +608,7 @@ def section_properties(r1: float, r2: float, d: float, *, mesh: int = DEFAULT_ME
         I_zz=ex["I_zz"],
         I_yz=ex["I_yz"],
         torsion_constant=fe.J_lower,
-        shear_centre=(ys, 0.0 if abs(zs) < 1e-12 * r1 else zs),
+        shear_centre=(ys, 0.0),  # z_s = 0 by the symmetry (the mesh's own is round-off)
         torsion_upper=fe.J_upper,
         mesh=level,
     )

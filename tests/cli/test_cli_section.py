@@ -60,3 +60,11 @@ def test_section_refuses_bad_input_in_one_line(capsys, argv, needle):
     assert code == EXIT_USAGE and out == ""
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("esba: error: ") and needle in lines[0], err
+
+
+def test_section_warns_when_the_mesh_does_not_resolve_a_thin_wall(capsys):
+    code, out, err = run(capsys, "section", "--d", "4.9999", "--mesh", "1", "--json")
+    assert code == EXIT_OK and json.loads(out)["section"]["torsion_error"] > 1e-3
+    assert err.startswith("esba: warning: the torsion constant's bounds differ by") and "--mesh" in err
+    code, out, err = run(capsys, "section")
+    assert err == ""  # Table 1 on the default mesh: within 1e-5
