@@ -119,7 +119,7 @@ def add_section(sub) -> None:
     p.add_argument("--r2", type=float_arg, metavar="MM", help="chamber radius (default: the scene's)")
     p.add_argument("--d", type=float_arg, metavar="MM", help="eccentric distance of the chamber (default: the scene's)")
     p.add_argument("--E", type=float_arg, metavar="MPA", help="silicone's Young's modulus (default: the scene's)")
-    p.add_argument("--rho", dest="rho_deg", type=float_arg, metavar="DEG", help="fibre angle from the hoop direction, 0 to 30 (default: the scene's)")
+    p.add_argument("--rho", dest="rho_deg", type=float_arg, metavar="DEG", help="fibre angle from the hoop direction, degrees (default: the scene's)")
     p.add_argument("--E-layer", dest="E_layer", type=float_arg, metavar="MPA", help="inextensible layer's modulus (default 6500, Section 4.2)")
     p.add_argument("--layer-width", type=float_arg, metavar="MM", help="layer width across z (default r1; not in the paper)")
     p.add_argument("--layer-thickness", type=float_arg, metavar="MM", help="layer thickness (default 0.3; not in the paper)")

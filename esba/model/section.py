@@ -102,7 +102,8 @@ Torsion, three parts::
 
   (zero for hoop windings, rho = 0; it grows without bound toward the "magic" angle
   rho = 35.26 deg, where the uniaxial contraction leaves the fibre's length unchanged and the
-  fibres lock the twist, so rho_deg is limited to 30 deg). Neglected: the layer's restraint of
+  fibres lock the twist: rho_deg within 1 deg of it is refused unless fibre_efficiency = 0;
+  beyond it the same fibre keeps its length by an axial shortening). Neglected: the layer's restraint of
   the axial extension (which couples twist to bending), the chamber's collapse as an alternative
   mode, and the fibres' discreteness (the smeared model assumes many turns over the section's
   size). ``fibre_efficiency`` (default 1: the smeared model as derived; 0: the fibres add
@@ -153,7 +154,8 @@ __all__ = [
     "LAYER_NU",
     "LAYER_THICKNESS",
     "SILICONE_NU",
-    "MAX_FIBRE_ANGLE_DEG",
+    "MAGIC_ANGLE_DEG",
+    "LOCK_WINDOW_DEG",
 ]
 
 #: The inextensible layer's Young's modulus, MPa (Section 4.2, from Polygerinos et al., ref. [40]).
@@ -164,8 +166,12 @@ LAYER_NU = 0.2
 LAYER_THICKNESS = 0.3
 #: The silicone's Poisson's ratio: incompressible rubber (the paper's Eq. 9 conserves its volume).
 SILICONE_NU = 0.5
-#: The largest fibre angle the fibre model takes, degrees (it locks at 35.26 deg, see the module).
-MAX_FIBRE_ANGLE_DEG = 30.0
+#: The fibre angle from the hoop direction at which the fibre model locks the twist, degrees:
+#: tan² rho = 1/2, where a uniaxial incompressible strain leaves the fibre's length unchanged.
+MAGIC_ANGLE_DEG = math.degrees(math.atan(math.sqrt(0.5)))
+#: Fibre angles this close to :data:`MAGIC_ANGLE_DEG` are refused (GJ_fibres would exceed 1000 times
+#: the silicone's: the twist is locked, which a stiffness does not describe).
+LOCK_WINDOW_DEG = 1.0
 #: The Kevlar fibres' angle from the hoop direction, degrees (Table 1).
 FIBRE_ANGLE_DEG = 10.0
 
@@ -656,7 +662,8 @@ def section_stiffness(
     nu : float
         The silicone's Poisson's ratio, 0 <= nu <= 0.5 (default 0.5, incompressible: G = E/3).
     rho_deg : float
-        The fibres' angle from the hoop direction, degrees, 0 to 30 (Table 1: 10).
+        The fibres' angle from the hoop direction, degrees, 0 <= rho < 90 (Table 1: 10), not within
+        1 deg of the locking angle 35.26 deg unless ``fibre_efficiency`` is 0.
     fibre_efficiency : float
         Multiplies the fibres' torsional stiffness of the smeared model, >= 0 (default 1: the
         model as derived; 0: the fibres add nothing).
@@ -693,13 +700,16 @@ def section_stiffness(
     if not -1 < nu_layer <= 0.5:
         raise SectionError(f"nu_layer={nu_layer:g}: expected a Poisson's ratio above -1 and at most 0.5")
     rho = checks.finite("rho_deg", rho_deg, SectionError)
-    if not 0 <= rho <= MAX_FIBRE_ANGLE_DEG:
-        raise SectionError(
-            f"rho_deg={rho:g}: expected a fibre angle from 0 to {MAX_FIBRE_ANGLE_DEG:g} degrees (the fibre model locks the twist at 35.26)"
-        )
+    if not 0 <= rho < 90:
+        raise SectionError(f"rho_deg={rho:g}: expected a fibre angle from the hoop direction, 0 <= rho_deg < 90 degrees")
     eta = checks.finite("fibre_efficiency", fibre_efficiency, SectionError)
     if eta < 0:
         raise SectionError(f"fibre_efficiency={eta:g}: expected a number >= 0 (0: the fibres add nothing)")
+    if eta > 0 and abs(rho - MAGIC_ANGLE_DEG) < LOCK_WINDOW_DEG:
+        raise SectionError(
+            f"rho_deg={rho:g}: within {LOCK_WINDOW_DEG:g} deg of {MAGIC_ANGLE_DEG:.2f}, where the fibre model locks the twist; "
+            "expected another angle, or fibre_efficiency=0"
+        )
     if w / 2 >= r1:
         raise SectionError(f"layer_width={w:g}: expected a layer narrower than the actuator's diameter 2 r1 = {2 * r1:g}")
     depth = checks.finite("layer_depth", layer_depth, SectionError)
@@ -722,7 +732,7 @@ def section_stiffness(
     GJ_s = G * p.torsion_constant
     GJ_l = (G_layer - G) * rectangle_torsion_factor(w / t) * max(w, t) * min(w, t) ** 3
     s, c = math.sin(math.radians(rho)), math.cos(math.radians(rho))
-    GJ_f = eta * E * A * r1**2 * (s * c / (s * s - c * c / 2)) ** 2
+    GJ_f = eta * E * A * r1**2 * (s * c / (s * s - c * c / 2)) ** 2 if eta > 0 else 0.0
     return SectionStiffness(
         EI_bend=EI_bend,
         EI_side=EI_side,

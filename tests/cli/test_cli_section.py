@@ -45,7 +45,7 @@ def test_section_table_and_flags(capsys, tmp_path):
         (["--d", "nan"], "actuator.d=nan: expected a finite number"),
         (["--r1", "-8"], "actuator.r1=-8: expected a number > 0"),
         (["--E", "0"], "actuator.E=0: expected a number > 0"),
-        (["--rho", "40"], "--rho (or the scene's rho_deg)=40: expected a fibre angle from 0 to 30 degrees"),
+        (["--rho", "35"], "--rho (or the scene's rho_deg)=35: within 1 deg of 35.26, where the fibre model locks the twist"),
         (["--layer-width", "20"], "--layer-width=20: expected a layer narrower than the actuator's diameter"),
         (["--layer-thickness", "-1"], "--layer-thickness=-1: expected a number > 0"),
         (["--nu", "0.7"], "--nu=0.7: expected a Poisson's ratio from 0 to 0.5"),

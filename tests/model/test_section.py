@@ -171,8 +171,11 @@ def test_the_torsion_parts():
     # the fibres: zero for hoop windings, linear in the efficiency, growing toward the locking angle
     assert section_stiffness(R1, R2, D, E, rho_deg=0.0).GJ_fibres == 0.0
     assert section_stiffness(R1, R2, D, E, fibre_efficiency=0.5).GJ_fibres == pytest.approx(k.GJ_fibres / 2, rel=EXACT_RTOL)
-    f = [section_stiffness(R1, R2, D, E, rho_deg=r).GJ_fibres for r in (5, 10, 15, 20, 25, 30)]
+    f = [section_stiffness(R1, R2, D, E, rho_deg=r).GJ_fibres for r in (5, 10, 15, 20, 25, 30, 34)]
     assert all(a < b for a, b in zip(f, f[1:]))
+    # the locking angle: refused with fibres, taken without them
+    assert section_stiffness(R1, R2, D, E, rho_deg=sec.MAGIC_ANGLE_DEG, fibre_efficiency=0.0).GJ_fibres == 0.0
+    assert math.tan(math.radians(sec.MAGIC_ANGLE_DEG)) ** 2 == pytest.approx(0.5, rel=EXACT_RTOL)
 
 
 def test_rectangle_torsion_factor():
@@ -220,7 +223,8 @@ BAD_STIFFNESS = [
     ({"layer_depth": 8.9}, "the layer reaches the chamber"),
     ({"nu": 0.6}, "nu=0.6: expected a Poisson's ratio from 0 to 0.5"),
     ({"nu_layer": -1.0}, "nu_layer=-1"),
-    ({"rho_deg": 35.26}, "rho_deg=35.26: expected a fibre angle from 0 to 30 degrees"),
+    ({"rho_deg": 35.26}, "rho_deg=35.26: within 1 deg of 35.26, where the fibre model locks the twist"),
+    ({"rho_deg": 90.0}, "rho_deg=90: expected a fibre angle from the hoop direction, 0 <= rho_deg < 90 degrees"),
     ({"rho_deg": -1.0}, "rho_deg=-1"),
     ({"fibre_efficiency": -0.5}, "fibre_efficiency=-0.5: expected a number >= 0"),
     ({"fibre_efficiency": inf}, "fibre_efficiency=inf: expected a finite number"),
