@@ -156,6 +156,8 @@ __all__ = [
     "SILICONE_NU",
     "MAGIC_ANGLE_DEG",
     "LOCK_WINDOW_DEG",
+    "MIN_R1",
+    "MAX_R1",
 ]
 
 #: The inextensible layer's Young's modulus, MPa (Section 4.2, from Polygerinos et al., ref. [40]).
@@ -174,6 +176,9 @@ MAGIC_ANGLE_DEG = math.degrees(math.atan(math.sqrt(0.5)))
 LOCK_WINDOW_DEG = 1.0
 #: The Kevlar fibres' angle from the hoop direction, degrees (Table 1).
 FIBRE_ANGLE_DEG = 10.0
+
+#: The external radii the section takes, mm (the second moments go with r1⁴ and stay finite doubles).
+MIN_R1, MAX_R1 = 1e-6, 1e6
 
 #: Terms of :func:`series_torsion`: J to round-off down to walls of 0.5 mm at r1 = 8 (r2 = 1, d = 6.5).
 SERIES_TERMS = 160
@@ -292,8 +297,12 @@ def _geometry(r1: Any, r2: Any, d: Any) -> tuple[float, float, float]:
     d = checks.finite("d", d, SectionError)
     if d < 0:
         raise SectionError(f"d={d:g}: expected a number >= 0")
+    if not MIN_R1 <= r1 <= MAX_R1:
+        raise SectionError(f"r1={r1:g}: expected a radius from {MIN_R1:g} to {MAX_R1:g} mm (the section's J goes with r1⁴)")
     if not r2 + d < r1:
         raise SectionError(f"r2={r2:g} with d={d:g}, r1={r1:g}: the chamber must lie inside the actuator, r2 + d < r1")
+    if r2 < 1e-6 * r1:
+        raise SectionError(f"r2={r2:g} with r1={r1:g}: a chamber smaller than 1e-6 r1; expected a chamber the mesh can resolve")
     # the thinnest wall, r1 - r2 - d, is meshed by the radial layers: below 1e-6 r1 it is no longer a section
     if r1 - r2 - d < 1e-6 * r1:
         raise SectionError(f"r2={r2:g} with d={d:g}, r1={r1:g}: the wall r1 - r2 - d is thinner than 1e-6 r1; expected a wall the mesh can resolve")
@@ -438,8 +447,27 @@ def finite_elements(r1: float, r2: float, d: float, *, mesh: int = DEFAULT_MESH)
     return _finite_elements(r1, r2, d, _mesh_level(mesh))
 
 
-@lru_cache(maxsize=64)
 def _finite_elements(r1: float, r2: float, d: float, level: int) -> FESection:
+    """The section of radius r1 from the one of radius 1 (cached by the ratios r2/r1, d/r1)."""
+    u = _unit_section(r2 / r1, d / r1, level)
+    return FESection(
+        area=u.area * r1**2,
+        centroid=(u.centroid[0] * r1, u.centroid[1] * r1),
+        I_yy=u.I_yy * r1**4,
+        I_zz=u.I_zz * r1**4,
+        I_yz=u.I_yz * r1**4,
+        J_lower=u.J_lower * r1**4,
+        J_upper=u.J_upper * r1**4,
+        hole_constant=u.hole_constant * r1**2,
+        shear_centre=(u.shear_centre[0] * r1, u.shear_centre[1] * r1),
+        mesh=level,
+    )
+
+
+@lru_cache(maxsize=64)
+def _unit_section(r2: float, d: float, level: int) -> FESection:
+    """The finite elements on the section of r1 = 1."""
+    r1 = 1.0
     import numpy as np
     import scipy.sparse as sp
     from scipy.sparse.linalg import spsolve

@@ -62,6 +62,14 @@ def test_finite_element_area_and_second_moments_match_the_closed_forms(d):
     assert abs(fe.I_yz) < 1e-12 * ex["I_yy"]
 
 
+def test_the_section_scales_with_r1():
+    small, large = finite_elements(1.0, R2 / R1, D / R1), finite_elements(R1, R2, D)
+    assert large.J_lower == pytest.approx(small.J_lower * R1**4, rel=EXACT_RTOL)
+    assert large.shear_centre[0] == pytest.approx(small.shear_centre[0] * R1, rel=EXACT_RTOL)
+    huge = finite_elements(1e6, 3.75e5, 5e5)
+    assert huge.J_upper == pytest.approx(large.J_upper * (1e6 / R1) ** 4, rel=EXACT_RTOL)
+
+
 def test_the_api_uses_the_closed_forms():
     p, ex = section_properties(R1, R2, D), exact_properties(R1, R2, D)
     assert (p.area, p.centroid, p.I_yy, p.I_zz, p.I_yz) == (ex["area"], (ex["y_c"], 0.0), ex["I_yy"], ex["I_zz"], 0.0)
@@ -201,6 +209,9 @@ BAD = [
     ((8.0, 3.0, 1.0), {"mesh": 9}, "mesh=9: expected a whole number from 0 to 5"),
     ((8.0, 3.0, 1.0), {"mesh": 1.5}, "mesh=1.5: expected a whole number"),
     ((8.0, 3.0, 4.99999999999), {}, "the wall r1 - r2 - d is thinner than 1e-6 r1"),
+    ((8.0, 1e-300, 1.0), {}, "r2=1e-300 with r1=8: a chamber smaller than 1e-6 r1"),
+    ((1e80, 3e79, 4e79), {}, "r1=1e+80: expected a radius from 1e-06 to 1e+06 mm"),
+    ((1e-9, 3e-10, 4e-10), {}, "r1=1e-09: expected a radius from 1e-06 to 1e+06 mm"),
 ]
 
 
