@@ -180,6 +180,9 @@ FIBRE_ANGLE_DEG = 10.0
 #: The external radii the section takes, mm (the second moments go with r1⁴ and stay finite doubles).
 MIN_R1, MAX_R1 = 1e-6, 1e6
 
+#: The largest modulus the composite takes, MPa (diamond's is about 1e6).
+MAX_MODULUS = 1e9
+
 #: Terms of :func:`series_torsion`: J to round-off down to walls of 0.5 mm at r1 = 8 (r2 = 1, d = 6.5).
 SERIES_TERMS = 160
 
@@ -717,6 +720,8 @@ def section_stiffness(
     r1, r2, d = _geometry(r1, r2, d)
     E = _positive("E", E)
     E_layer = _positive("E_layer", E_layer)
+    if E_layer > MAX_MODULUS:
+        raise SectionError(f"E_layer={E_layer:g}: expected a modulus up to {MAX_MODULUS:g} MPa (a thousand times diamond's)")
     if E_layer < E:
         raise SectionError(f"E_layer={E_layer:g} below E={E:g}: expected an inextensible layer stiffer than the silicone")
     t = _positive("layer_thickness", layer_thickness)

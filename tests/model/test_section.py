@@ -227,6 +227,7 @@ BAD_STIFFNESS = [
     ({"E": nan}, "E=nan: expected a finite number"),
     ({"E": -1.0}, "E=-1: expected a number > 0"),
     ({"E_layer": 0.1}, "E_layer=0.1 below E=0.54"),
+    ({"E_layer": 1e308}, "E_layer=1e+308: expected a modulus up to 1e+09 MPa"),
     ({"layer_width": 0.0}, "layer_width=0: expected a number > 0"),
     ({"layer_width": 16.0}, "layer_width=16: expected a layer narrower than the actuator's diameter"),
     ({"layer_thickness": nan}, "layer_thickness=nan"),
