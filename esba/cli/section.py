@@ -16,7 +16,8 @@ MAX_CLI_MESH = 4
 
 #: The flag of each parameter of :func:`esba.model.section.section_stiffness`, for the messages.
 _FLAGS = {"E_layer": "--E-layer", "layer_width": "--layer-width", "layer_thickness": "--layer-thickness", "layer_depth": "--layer-depth",
-          "nu": "--nu", "fibre_efficiency": "--fibre-efficiency", "rho_deg": "--rho (or the scene's rho_deg)"}
+          "nu": "--nu", "fibre_efficiency": "--fibre-efficiency", "E_fibre": "--E-fibre", "fibre_diameter": "--fibre-diameter",
+          "fibres_per_helix": "--fibres-per-helix", "rho_deg": "--rho (or the scene's rho_deg)"}
 
 
 def _section_data(args: argparse.Namespace) -> dict:
@@ -35,7 +36,11 @@ def _section_data(args: argparse.Namespace) -> dict:
         "layer_thickness": args.layer_thickness,
         "layer_depth": args.layer_depth,
         "nu": args.nu,
+        "fibres": args.fibres,
         "fibre_efficiency": args.fibre_efficiency,
+        "E_fibre": args.E_fibre,
+        "fibre_diameter": args.fibre_diameter,
+        "fibres_per_helix": args.fibres_per_helix,
         "mesh": args.mesh,
     }
     options = {k: v for k, v in options.items() if v is not None}
@@ -92,7 +97,7 @@ def _table(d: dict) -> str:
         "composite (silicone + layer + fibres)",
         f"  EI_bend                 {k['EI_bend']:12.2f} N·mm²  (about the neutral axis y = {k['neutral_axis'][0]:.4f} mm)",
         f"  EI_side                 {k['EI_side']:12.2f} N·mm²",
-        f"  GJ                      {k['GJ']:12.2f} N·mm²  (silicone {k['GJ_silicone']:.2f} + layer {k['GJ_layer']:.2f} + fibres {k['GJ_fibres']:.2f})",
+        f"  GJ                      {k['GJ']:12.2f} N·mm²  (silicone {k['GJ_silicone']:.2f} + layer {k['GJ_layer']:.2f} + fibres {k['GJ_fibres']:.2f}, {i.get('fibres', 'slack')})",
         f"  EA                      {k['EA']:12.2f} N",
     ]
     return "\n".join(rows)
@@ -125,7 +130,11 @@ def add_section(sub) -> None:
     p.add_argument("--layer-thickness", type=float_arg, metavar="MM", help="layer thickness (default 0.3; not in the paper)")
     p.add_argument("--layer-depth", type=float_arg, metavar="MM", help="layer mid-plane below the inextensible line (default 0, the paper's)")
     p.add_argument("--nu", type=float_arg, help="silicone's Poisson's ratio, 0 to 0.5 (default 0.5: G = E/3)")
+    p.add_argument("--fibres", choices=("slack", "taut", "none"), help="the fibres' state: slack (default, unpressurised), taut (pressurised), none")
     p.add_argument("--fibre-efficiency", type=float_arg, metavar="X", help="factor on the fibres' torsional stiffness (default 1; 0: none)")
+    p.add_argument("--E-fibre", dest="E_fibre", type=float_arg, metavar="MPA", help="Kevlar's modulus, for --fibres taut (default 31067, Section 4.2)")
+    p.add_argument("--fibre-diameter", type=float_arg, metavar="MM", help="fibre diameter, for --fibres taut (default 0.2; not in the paper)")
+    p.add_argument("--fibres-per-helix", type=count_arg("--fibres-per-helix", 1, 1000), metavar="N", help="fibres per helix, for --fibres taut (default 1)")
     p.add_argument("--mesh", type=count_arg("--mesh", 0, MAX_CLI_MESH, "each level doubles the mesh"), help=f"mesh level 0 to {MAX_CLI_MESH} (default 2)")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_section)

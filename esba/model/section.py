@@ -89,25 +89,40 @@ Torsion, three parts::
   1/3 for a thin strip), G_layer = E_layer / (2 (1 + nu_layer)), nu_layer = 0.2 (Section 4.2).
   Assumed: the mesh adds no in-plane shear constraint on the silicone's warping (a woven mesh
   trellises freely in shear), so it acts as a strip of its own;
-* the fibres (a stated first-order model). A twist theta' shears the surface by
+* the fibres (a stated first-order model, in two states). A twist theta' shears the surface by
   gamma = r1 theta'; a fibre at angle rho from the hoop direction strains by
-  eps_f = eps_a sin² rho + eps_h cos² rho + gamma sin rho cos rho (axial, hoop, shear strains).
-  Kevlar is taken inextensible in tension and slack in compression: one helix of the double
-  helix goes slack, the other keeps its length, which the incompressible silicone allows only by
-  contracting: with a uniaxial contraction (eps_h = -eps_a / 2, the axial extension left free),
-  eps_a (sin² rho - cos² rho / 2) = -gamma sin rho cos rho, whose strain energy
-  1/2 E A eps_a² per length gives::
+  eps_f = eps_a sin² rho + eps_h cos² rho ± gamma sin rho cos rho (axial and hoop strains of the
+  surface; + for one helix of the double helix, - for the other). Smeared over the surface (many
+  turns over the section's size), with n fibres per helix of modulus E_f and area A_f, each
+  fibre having 1/sin rho of length per length of actuator:
 
-      GJ_fibres = fibre_efficiency * E A r1² (sin rho cos rho / (sin² rho - cos² rho / 2))²
+  - ``fibres="slack"`` (the default; unpressurised, no pre-tension): Kevlar is inextensible in
+    tension and slack in compression. One helix goes slack, the other keeps its length, which
+    the incompressible silicone allows only by contracting: with a uniaxial contraction
+    (eps_h = -eps_a / 2, the axial extension left free), eps_a (sin² rho - cos² rho / 2) =
+    -gamma sin rho cos rho, whose strain energy 1/2 E A eps_a² per length gives::
 
-  (zero for hoop windings, rho = 0; it grows without bound toward the "magic" angle
-  rho = 35.26 deg, where the uniaxial contraction leaves the fibre's length unchanged and the
-  fibres lock the twist: rho_deg within 1 deg of it is refused unless fibre_efficiency = 0;
-  beyond it the same fibre keeps its length by an axial shortening). Neglected: the layer's restraint of
-  the axial extension (which couples twist to bending), the chamber's collapse as an alternative
-  mode, and the fibres' discreteness (the smeared model assumes many turns over the section's
-  size). ``fibre_efficiency`` (default 1: the smeared model as derived; 0: the fibres add
-  nothing) is the parameter a fit can adjust.
+        GJ_fibres = fibre_efficiency * E A r1² (sin rho cos rho / (sin² rho - cos² rho / 2))²
+
+    zero for hoop windings (rho = 0), without bound toward the "magic" angle rho = 35.26 deg
+    (tan² rho = 1/2), where a uniaxial contraction leaves the fibre's length unchanged and the
+    fibres lock the twist: rho_deg within 1 deg of it is refused (unless fibre_efficiency = 0).
+    Neglected: other ways for the silicone to contract (the chamber's collapse, which in
+    series with this mode makes the true value lower: this is an upper estimate within the
+    model) and the layer's restraint of the axial extension (which couples twist to bending);
+  - ``fibres="taut"`` (pressurised: Eq. 16's tension holds both helices taut): both keep their
+    length only if gamma = 0, so the twist stretches them, eps_f = ± gamma sin rho cos rho with
+    eps_a = eps_h = 0, and::
+
+        GJ_fibres = fibre_efficiency * 2 n E_f A_f r1² sin rho cos² rho
+
+    valid while the twist's change of tension, E_f A_f gamma sin rho cos rho, stays below the
+    pre-tension (Eq. 16: eta_r = 2 pi² r1 r2 P tan rho per fibre). E_f = 31067 MPa (Section 4.2);
+    the fibre's diameter is not in the paper (0.2 mm assumed, a Kevlar thread) nor their number
+    (n = 1 per helix: Eq. 16 balances 2N turns, one fibre each way);
+  - ``fibres="none"``: zero.
+
+  ``fibre_efficiency`` (default 1: the smeared model as derived) is the parameter a fit can adjust.
 
 Every number the paper does not give is a named parameter of :func:`section_stiffness` with its
 default and the reason for it (see there).
@@ -155,6 +170,8 @@ __all__ = [
     "LAYER_THICKNESS",
     "SILICONE_NU",
     "MAGIC_ANGLE_DEG",
+    "FIBRE_STATES",
+    "fibre_torsion",
     "LOCK_WINDOW_DEG",
     "MIN_R1",
     "MAX_R1",
@@ -176,6 +193,14 @@ MAGIC_ANGLE_DEG = math.degrees(math.atan(math.sqrt(0.5)))
 LOCK_WINDOW_DEG = 1.0
 #: The Kevlar fibres' angle from the hoop direction, degrees (Table 1).
 FIBRE_ANGLE_DEG = 10.0
+#: The Kevlar fibres' Young's modulus, MPa (Section 4.2).
+FIBRE_E = 31067.0
+#: The fibres' diameter, mm: not in the paper; a Kevlar sewing thread, about 0.2 mm.
+FIBRE_DIAMETER = 0.2
+#: Fibres per helix: Eq. 16 balances the chamber's pressure with 2N turns, one fibre each way.
+FIBRES_PER_HELIX = 1
+#: The fibres' states (see the module): unpressurised, pressurised (pre-tensioned), left out.
+FIBRE_STATES = ("slack", "taut", "none")
 
 #: The external radii the section takes, mm (the second moments go with r1⁴ and stay finite doubles).
 MIN_R1, MAX_R1 = 1e-6, 1e6
@@ -651,6 +676,58 @@ def section_properties(r1: float, r2: float, d: float, *, mesh: int = DEFAULT_ME
     )
 
 
+def _fibre_inputs(rho: float, state: Any, efficiency: Any, E_fibre: Any, diameter: Any, count: Any) -> dict[str, Any]:
+    if state not in FIBRE_STATES:
+        raise SectionError(f"fibres={checks.quote(state)}: allowed are {', '.join(FIBRE_STATES)}")
+    eta = checks.finite("fibre_efficiency", efficiency, SectionError)
+    if eta < 0:
+        raise SectionError(f"fibre_efficiency={eta:g}: expected a number >= 0 (0: the fibres add nothing)")
+    if state == "slack" and eta > 0 and abs(rho - MAGIC_ANGLE_DEG) < LOCK_WINDOW_DEG:
+        raise SectionError(
+            f"rho_deg={rho:g}: within {LOCK_WINDOW_DEG:g} deg of {MAGIC_ANGLE_DEG:.2f}, where the slack fibres lock the twist; "
+            "expected another angle, fibres='taut' or fibre_efficiency=0"
+        )
+    E_f = _positive("E_fibre", E_fibre)
+    if E_f > MAX_MODULUS:
+        raise SectionError(f"E_fibre={E_f:g}: expected a modulus up to {MAX_MODULUS:g} MPa (a thousand times diamond's)")
+    return {
+        "rho_deg": rho,
+        "state": state,
+        "efficiency": eta,
+        "E_fibre": E_f,
+        "diameter": _positive("fibre_diameter", diameter),
+        "count": checks.whole("fibres_per_helix", count, 1, SectionError, high=1000, why="fibres wound side by side on one helix"),
+    }
+
+
+def fibre_torsion(
+    E: float,
+    A: float,
+    r1: float,
+    *,
+    rho_deg: float = FIBRE_ANGLE_DEG,
+    state: str = "slack",
+    efficiency: float = 1.0,
+    E_fibre: float = FIBRE_E,
+    diameter: float = FIBRE_DIAMETER,
+    count: int = FIBRES_PER_HELIX,
+) -> float:
+    """What the double helix adds to GJ, N·mm² (the smeared model of the module, by ``state``).
+
+    ``E`` and ``A`` are the silicone's modulus (MPa) and area (mm²), ``r1`` the winding radius;
+    the inputs are taken as checked (:func:`section_stiffness` checks them).
+
+    >>> round(fibre_torsion(0.54, 172.79, 8.0, rho_deg=0.0), 12), round(fibre_torsion(0.54, 172.79, 8.0, state="taut"))
+    (0.0, 21039)
+    """
+    s, c = math.sin(math.radians(rho_deg)), math.cos(math.radians(rho_deg))
+    if state == "none" or efficiency == 0:
+        return 0.0
+    if state == "taut":
+        return efficiency * 2 * count * E_fibre * math.pi * diameter**2 / 4 * r1**2 * s * c * c
+    return efficiency * E * A * r1**2 * (s * c / (s * s - c * c / 2)) ** 2
+
+
 def section_stiffness(
     r1: float,
     r2: float,
@@ -664,7 +741,11 @@ def section_stiffness(
     layer_depth: float = 0.0,
     nu: float = SILICONE_NU,
     rho_deg: float = FIBRE_ANGLE_DEG,
+    fibres: str = "slack",
     fibre_efficiency: float = 1.0,
+    E_fibre: float = FIBRE_E,
+    fibre_diameter: float = FIBRE_DIAMETER,
+    fibres_per_helix: int = FIBRES_PER_HELIX,
     mesh: int = DEFAULT_MESH,
 ) -> SectionStiffness:
     """The composite section's bending, torsion and axial stiffnesses (see the module for the formulas).
@@ -693,11 +774,18 @@ def section_stiffness(
     nu : float
         The silicone's Poisson's ratio, 0 <= nu <= 0.5 (default 0.5, incompressible: G = E/3).
     rho_deg : float
-        The fibres' angle from the hoop direction, degrees, 0 <= rho < 90 (Table 1: 10), not within
-        1 deg of the locking angle 35.26 deg unless ``fibre_efficiency`` is 0.
+        The fibres' angle from the hoop direction, degrees, 0 <= rho < 90 (Table 1: 10); with
+        ``fibres="slack"`` not within 1 deg of the locking angle 35.26 deg.
+    fibres : str
+        The fibres' state (see the module): ``"slack"`` (default: unpressurised, the silicone
+        accommodates the one taut helix), ``"taut"`` (pressurised: both helices pre-tensioned,
+        their stretch resists), ``"none"``.
     fibre_efficiency : float
         Multiplies the fibres' torsional stiffness of the smeared model, >= 0 (default 1: the
         model as derived; 0: the fibres add nothing).
+    E_fibre, fibre_diameter, fibres_per_helix
+        The Kevlar's modulus, MPa (Section 4.2: 31067), the fibre's diameter, mm (not in the
+        paper: 0.2), and the fibres per helix (1); used by ``fibres="taut"``.
     mesh : int
         Mesh level of the torsion constant (:func:`section_properties`).
 
@@ -735,14 +823,6 @@ def section_stiffness(
     rho = checks.finite("rho_deg", rho_deg, SectionError)
     if not 0 <= rho < 90:
         raise SectionError(f"rho_deg={rho:g}: expected a fibre angle from the hoop direction, 0 <= rho_deg < 90 degrees")
-    eta = checks.finite("fibre_efficiency", fibre_efficiency, SectionError)
-    if eta < 0:
-        raise SectionError(f"fibre_efficiency={eta:g}: expected a number >= 0 (0: the fibres add nothing)")
-    if eta > 0 and abs(rho - MAGIC_ANGLE_DEG) < LOCK_WINDOW_DEG:
-        raise SectionError(
-            f"rho_deg={rho:g}: within {LOCK_WINDOW_DEG:g} deg of {MAGIC_ANGLE_DEG:.2f}, where the fibre model locks the twist; "
-            "expected another angle, or fibre_efficiency=0"
-        )
     if w / 2 >= r1:
         raise SectionError(f"layer_width={w:g}: expected a layer narrower than the actuator's diameter 2 r1 = {2 * r1:g}")
     depth = checks.finite("layer_depth", layer_depth, SectionError)
@@ -752,6 +832,7 @@ def section_stiffness(
     if depth + t / 2 >= chamber_low:
         raise SectionError(f"layer_depth={depth:g}: the layer reaches the chamber (at depth {chamber_low:g} mm); expected a shallower layer")
 
+    fibre = _fibre_inputs(rho, fibres, fibre_efficiency, E_fibre, fibre_diameter, fibres_per_helix)
     p = section_properties(r1, r2, d, mesh=mesh)
     A, (yc, _zc) = p.area, p.centroid
     A_l, y_l = w * t, -depth
@@ -764,8 +845,7 @@ def section_stiffness(
     G_layer = E_layer / (2 * (1 + nu_layer))
     GJ_s = G * p.torsion_constant
     GJ_l = (G_layer - G) * rectangle_torsion_factor(w / t) * max(w, t) * min(w, t) ** 3
-    s, c = math.sin(math.radians(rho)), math.cos(math.radians(rho))
-    GJ_f = eta * E * A * r1**2 * (s * c / (s * s - c * c / 2)) ** 2 if eta > 0 else 0.0
+    GJ_f = fibre_torsion(E, A, r1, **fibre)
     return SectionStiffness(
         EI_bend=EI_bend,
         EI_side=EI_side,
