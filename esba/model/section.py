@@ -80,6 +80,11 @@ at y = -``layer_depth``, default 0 as in the paper, replacing the silicone where
     EI_bend = E (I_zz + A (y_c - y_N)²) + (E_layer - E) (w t³/12 + A_l (y_l - y_N)²)
     EI_side = E I_yy + (E_layer - E) t w³ / 12
 
+The layer's in-plane bending, E_layer t w³/12, dominates EI_side (98 % at Table 1 with the default
+width r1): the sideways stiffness goes with the cube of the width the paper does not give. Left
+out of both: the fibres' axial share (a fibre resists an axial strain by E_f A_f sin³ rho per
+helix, about 5 % of EI_bend when taut, nothing when slack in compression).
+
 Torsion, three parts::
 
     GJ = G J + (G_layer - G) beta(w/t) w t³ + GJ_fibres
@@ -175,6 +180,11 @@ __all__ = [
     "LOCK_WINDOW_DEG",
     "MIN_R1",
     "MAX_R1",
+    "MAX_MODULUS",
+    "FIBRE_ANGLE_DEG",
+    "FIBRE_E",
+    "FIBRE_DIAMETER",
+    "FIBRES_PER_HELIX",
 ]
 
 #: The inextensible layer's Young's modulus, MPa (Section 4.2, from Polygerinos et al., ref. [40]).
