@@ -82,8 +82,10 @@ at y = -``layer_depth``, default 0 as in the paper, replacing the silicone where
 
 The layer's in-plane bending, E_layer t w³/12, dominates EI_side (98 % at Table 1 with the default
 width r1): the sideways stiffness goes with the cube of the width the paper does not give. Left
-out of both: the fibres' axial share (a fibre resists an axial strain by E_f A_f sin³ rho per
-helix, about 5 % of EI_bend when taut, nothing when slack in compression).
+out of both: the fibres' axial share. Smeared, a helix of n fibres resists an axial strain with
+n E_f A_f sin³ rho (5 N for the default fibre at rho = 10 deg), spread round the circle of r1:
+taut, the two helices would add 2 n E_f A_f sin³ rho (r1²/2 + (r1 + y_N)²), about 15 % of EI_bend,
+and 2 n E_f A_f sin³ rho r1²/2, 0.4 % of EI_side; slack, they carry no compression.
 
 Torsion, three parts::
 
