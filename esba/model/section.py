@@ -95,7 +95,10 @@ Torsion, three parts::
 * the layer's own Saint-Venant torsion (a w x t rectangle, beta from the classical series,
   1/3 for a thin strip), G_layer = E_layer / (2 (1 + nu_layer)), nu_layer = 0.2 (Section 4.2).
   Assumed: the mesh adds no in-plane shear constraint on the silicone's warping (a woven mesh
-  trellises freely in shear), so it acts as a strip of its own;
+  trellises freely in shear), so it acts as a strip of its own. A bonded isotropic strip (the
+  paper's Abaqus idealisation) would also hold the silicone's warping along it: meshed as a
+  region of G_layer inside the disc (w = r1 at the depth where it fits), that adds about as much
+  again as the strip's own torsion at Table 1, some 20 % of the silicone's and layer's GJ;
 * the fibres (a stated first-order model, in two states). A twist theta' shears the surface by
   gamma = r1 theta'; a fibre at angle rho from the hoop direction strains by
   eps_f = eps_a sin² rho + eps_h cos² rho ± gamma sin rho cos rho (axial and hoop strains of the
