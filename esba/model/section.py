@@ -159,6 +159,7 @@ from typing import Any
 
 from esba.infra import checks
 from esba.infra.errors import InputError, RunError
+from esba.infra.threads import blas_one_thread
 
 __all__ = [
     "SectionError",
@@ -509,7 +510,12 @@ def _finite_elements(r1: float, r2: float, d: float, level: int) -> FESection:
 
 @lru_cache(maxsize=64)
 def _unit_section(r2: float, d: float, level: int) -> FESection:
-    """The finite elements on the section of r1 = 1."""
+    """The finite elements on the section of r1 = 1 (one BLAS thread: the work is sparse)."""
+    with blas_one_thread():
+        return _unit_fe(r2, d, level)
+
+
+def _unit_fe(r2: float, d: float, level: int) -> FESection:
     r1 = 1.0
     import numpy as np
     import scipy.sparse as sp
@@ -630,7 +636,8 @@ def series_torsion(r1: float, r2: float, d: float, *, terms: int = SERIES_TERMS)
     (ao, bo), (ai, bi) = columns(outer), columns(inner)
     G = np.vstack([np.hstack([ao.real, bo.real, np.zeros((M, 1))]), np.hstack([ai.real, bi.real, -np.ones((M, 1))])])
     rhs = np.concatenate([np.full(M, r1**2 / 2), np.abs(inner) ** 2 / 2])
-    coef = np.linalg.lstsq(G, rhs, rcond=None)[0]
+    with blas_one_thread():  # a small dense problem: BLAS threads only wait on a busy machine
+        coef = np.linalg.lstsq(G, rhs, rcond=None)[0]
     misfit = float(np.max(np.abs(G @ coef - rhs)))
     if not misfit < 1e-9 * r1**2:
         raise SeriesError(f"the series of {K} terms did not fit the boundary values (misfit {misfit:.2g} mm²): give more terms")
