@@ -51,7 +51,7 @@ def _section_data(args: argparse.Namespace) -> dict:
         raise UsageError(f"{_FLAGS.get(field, field)}={rest}" if rest else str(exc)) from None
     p = k.section
     return {
-        "inputs": {"r1": a.r1, "r2": a.r2, "d": a.d, "E": a.E, "rho_deg": a.rho_deg, **{k: v for k, v in options.items() if k != "mesh"}},
+        "inputs": {"r1": a.r1, "r2": a.r2, "d": a.d, "E": a.E, **{name: v for name, v in k.parameters if name != "mesh"}},
         "section": {
             "area": p.area,
             "centroid": list(p.centroid),
@@ -97,8 +97,11 @@ def _table(d: dict) -> str:
         "composite (silicone + layer + fibres)",
         f"  EI_bend                 {k['EI_bend']:12.2f} N·mm²  (about the neutral axis y = {k['neutral_axis'][0]:.4f} mm)",
         f"  EI_side                 {k['EI_side']:12.2f} N·mm²",
-        f"  GJ                      {k['GJ']:12.2f} N·mm²  (silicone {k['GJ_silicone']:.2f} + layer {k['GJ_layer']:.2f} + fibres {k['GJ_fibres']:.2f}, {i.get('fibres', 'slack')})",
+        f"  GJ                      {k['GJ']:12.2f} N·mm²  (silicone {k['GJ_silicone']:.2f} + layer {k['GJ_layer']:.2f} + fibres {k['GJ_fibres']:.2f})",
         f"  EA                      {k['EA']:12.2f} N",
+        f"parameters: layer {i['layer_width']:g} x {i['layer_thickness']:g} mm at depth {i['layer_depth']:g} mm, E_layer={i['E_layer']:g} MPa, "
+        f"nu_layer={i['nu_layer']:g}, nu={i['nu']:g}; fibres {i['fibres']} (efficiency {i['fibre_efficiency']:g}, "
+        f"E_fibre={i['E_fibre']:g} MPa, {i['fibres_per_helix']} x {i['fibre_diameter']:g} mm per helix)",
     ]
     return "\n".join(rows)
 

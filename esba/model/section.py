@@ -191,6 +191,7 @@ __all__ = [
     "FIBRE_E",
     "FIBRE_DIAMETER",
     "FIBRES_PER_HELIX",
+    "SECTION_PARAMETERS",
 ]
 
 #: The inextensible layer's Young's modulus, MPa (Section 4.2, from Polygerinos et al., ref. [40]).
@@ -217,6 +218,22 @@ FIBRE_DIAMETER = 0.2
 FIBRES_PER_HELIX = 1
 #: The fibres' states (see the module): unpressurised, pressurised (pre-tensioned), left out.
 FIBRE_STATES = ("slack", "taut", "none")
+
+#: Every parameter of :func:`section_stiffness` beyond the scene's (r1, r2, d, E, rho): its
+#: default, unit and source. ``layer_width`` None means r1.
+SECTION_PARAMETERS: dict[str, tuple[Any, str, str]] = {
+    "E_layer": (LAYER_E, "MPa", "Section 4.2"),
+    "nu_layer": (LAYER_NU, "", "Section 4.2"),
+    "layer_width": (None, "mm", "not in the paper: r1, a flat mesh half as wide as the actuator"),
+    "layer_thickness": (LAYER_THICKNESS, "mm", "not in the paper: a woven nylon mesh, 0.2-0.4 mm"),
+    "layer_depth": (0.0, "mm", "the paper's inextensible line (Eq. 6-8)"),
+    "nu": (SILICONE_NU, "", "incompressible silicone (Eq. 9)"),
+    "fibres": ("slack", "", "unpressurised; 'taut' when pressurised (Eq. 16's tension)"),
+    "fibre_efficiency": (1.0, "", "the smeared fibre model as derived"),
+    "E_fibre": (FIBRE_E, "MPa", "Section 4.2"),
+    "fibre_diameter": (FIBRE_DIAMETER, "mm", "not in the paper: a Kevlar thread"),
+    "fibres_per_helix": (FIBRES_PER_HELIX, "", "Eq. 16: one fibre each way"),
+}
 
 #: The external radii the section takes, mm (the second moments go with r1⁴ and stay finite doubles).
 MIN_R1, MAX_R1 = 1e-6, 1e6
@@ -313,6 +330,8 @@ class SectionStiffness:
         (y_N, z_N), mm: the modulus-weighted centroid, where the bending axes pass.
     section : SectionProperties
         The silicone section it was built on.
+    parameters : tuple of (name, value)
+        Every parameter it was built with, defaults resolved (``layer_width`` as a number).
     """
 
     EI_bend: float
@@ -324,6 +343,11 @@ class SectionStiffness:
     EA: float
     neutral_axis: tuple[float, float]
     section: SectionProperties
+    parameters: tuple[tuple[str, Any], ...] = ()
+
+    def parameter(self, name: str) -> Any:
+        """The value of a parameter of :data:`SECTION_PARAMETERS` (or rho_deg, mesh) this was built with."""
+        return dict(self.parameters)[name]
 
 
 # --- inputs -----------------------------------------------------------------------------------
@@ -878,4 +902,19 @@ def section_stiffness(
         EA=EA,
         neutral_axis=(yN, 0.0),
         section=p,
+        parameters=(
+            ("E_layer", E_layer),
+            ("nu_layer", nu_layer),
+            ("layer_width", w),
+            ("layer_thickness", t),
+            ("layer_depth", depth),
+            ("nu", nu),
+            ("rho_deg", rho),
+            ("fibres", fibre["state"]),
+            ("fibre_efficiency", fibre["efficiency"]),
+            ("E_fibre", fibre["E_fibre"]),
+            ("fibre_diameter", fibre["diameter"]),
+            ("fibres_per_helix", fibre["count"]),
+            ("mesh", p.mesh),
+        ),
     )

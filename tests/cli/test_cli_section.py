@@ -7,7 +7,7 @@ import json
 import pytest
 
 from esba.cli import EXIT_OK, EXIT_USAGE, main
-from esba.model.section import section_stiffness
+from esba.model.section import SECTION_PARAMETERS, section_stiffness
 
 
 def run(capsys, *args: str) -> tuple[int, str, str]:
@@ -21,7 +21,9 @@ def test_section_json_is_the_api_for_table1(capsys):
     assert code == EXIT_OK and err == ""
     data = json.loads(out)
     k = section_stiffness(8.0, 3.0, 4.0, 0.54)
-    assert data["inputs"] == {"r1": 8.0, "r2": 3.0, "d": 4.0, "E": 0.54, "rho_deg": 10.0}
+    assert {key: data["inputs"][key] for key in ("r1", "r2", "d", "E", "rho_deg", "layer_width")} == {
+        "r1": 8.0, "r2": 3.0, "d": 4.0, "E": 0.54, "rho_deg": 10.0, "layer_width": 8.0}
+    assert set(data["inputs"]) == {"r1", "r2", "d", "E", "rho_deg", *SECTION_PARAMETERS}
     assert data["section"]["torsion_constant"] == k.section.torsion_constant
     assert data["section"]["shear_centre"] == list(k.section.shear_centre)
     assert data["stiffness"]["GJ"] == k.GJ and data["stiffness"]["EI_side"] == k.EI_side

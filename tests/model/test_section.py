@@ -201,6 +201,16 @@ def test_taut_fibres_resist_by_their_stretch():
     assert section_stiffness(R1, R2, D, 5.0, fibres="taut", rho_deg=rho, fibre_diameter=df, fibres_per_helix=n).GJ_fibres == k.GJ_fibres
 
 
+def test_the_parameter_table_is_the_signature():
+    import inspect
+
+    keyword = {n: q.default for n, q in inspect.signature(section_stiffness).parameters.items() if q.kind is q.KEYWORD_ONLY}
+    assert set(keyword) - {"rho_deg", "mesh"} == set(sec.SECTION_PARAMETERS)
+    assert all(keyword[n] == default for n, (default, _, _) in sec.SECTION_PARAMETERS.items())
+    k = section_stiffness(R1, R2, D, 0.54)
+    assert {n for n, _ in k.parameters} == set(keyword) and k.parameter("layer_width") == R1
+
+
 def test_rectangle_torsion_factor():
     assert sec.rectangle_torsion_factor(1.0) == pytest.approx(0.140577, abs=1e-6)  # the square, 0.1406 a⁴
     assert sec.rectangle_torsion_factor(2.0) == pytest.approx(0.228682, abs=1e-6)
