@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from esba.model import section as sec
+from esba.model.section.fe import annulus_mesh
 from esba.model.section import SectionError, exact_properties, finite_elements, section_properties, section_stiffness, series_torsion
 from tests.tolerances import KERNEL_RTOL
 
@@ -29,7 +30,7 @@ def flexural_centre(r1: float, r2: float, d: float, level: int) -> float:
     from skfem import Basis, BilinearForm, ElementTriP2, LinearForm
     from skfem.helpers import dot, grad
 
-    mesh, _, _ = sec._annulus_mesh(r1, r2, d, level)
+    mesh, _, _ = annulus_mesh(r1, r2, d, level)
     basis = Basis(mesh, ElementTriP2(), intorder=4)
     ex = exact_properties(r1, r2, d)
     K = BilinearForm(lambda u, v, w: dot(grad(u), grad(v))).assemble(basis).tocsr()
