@@ -19,13 +19,12 @@ __all__ = ["MESH_LEVELS", "DEFAULT_MESH", "FESection", "finite_elements", "annul
 
 #: Mesh levels: (radial layers, divisions around). Level k doubles both of level k - 1.
 MESH_LEVELS = {k: (3 * 2**k, 24 * 2**k) for k in range(0, 6)}
-
-
 #: The default level: J within 1e-5 relative (its bracket by the warping function) at the Table 1 section, in about 0.1 s.
 DEFAULT_MESH = 2
 
 
 def check_mesh(mesh: Any) -> int:
+    """A mesh level of :data:`MESH_LEVELS` (a :class:`SectionError` naming it otherwise)."""
     return checks.whole("mesh", mesh, 0, SectionError, high=max(MESH_LEVELS), why="each level doubles the mesh both ways; level 5 takes minutes and resolves J to 1e-9")
 
 
