@@ -46,12 +46,13 @@ from .models import add_audit, add_generate
 from .path import add_path
 from .results import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 from .scenes import add_pressure, add_solve, add_stiffness, add_validate
+from .section import add_section
 from .sweep import add_sweep
 
 __all__ = ["main", "build_parser", "COMMANDS", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [add_generate, add_audit, add_solve, add_equilibria, add_path, add_stiffness, add_pressure, add_validate, add_sweep, add_bench, add_figures, add_design, add_fit, add_experiments, add_estimate, add_map, add_export, add_docs, add_example, add_cache]
+COMMANDS: list[Callable] = [add_generate, add_audit, add_solve, add_equilibria, add_path, add_stiffness, add_pressure, add_validate, add_sweep, add_bench, add_figures, add_design, add_fit, add_experiments, add_estimate, add_map, add_section, add_export, add_docs, add_example, add_cache]
 
 
 def build_parser() -> argparse.ArgumentParser:
