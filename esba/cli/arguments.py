@@ -20,8 +20,25 @@ class UsageError(InputError):
     """Bad input from the command line: reported in one line with exit code 2."""
 
 
+#: A token that starts like a negative number (``-3.95,6.25``, ``-.5``, ``-1:2:5``) is a value,
+#: never a flag: no esba flag starts with a digit. argparse's own rule takes only one plain number
+#: (``-3.95``), so a list that starts negative would be "expected one argument".
+NEGATIVE_VALUE = re.compile(r"^-\.?\d")
+
+
 class Parser(argparse.ArgumentParser):
-    """An argparse parser whose errors are :class:`UsageError` (one line, exit code 2)."""
+    """An argparse parser whose errors are :class:`UsageError` (one line, exit code 2), and whose
+    flags take values that start with a minus sign (:data:`NEGATIVE_VALUE`)::
+
+        >>> p = Parser(prog="x")
+        >>> _ = p.add_argument("--theta")
+        >>> p.parse_args(["--theta", "-3.95,6.25,20.24"]).theta
+        '-3.95,6.25,20.24'
+    """
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_VALUE  # argparse's hook (all supported Pythons)
 
     def error(self, message: str) -> None:  # one line, exit 2 (argparse prints usage too)
         raise UsageError(message)

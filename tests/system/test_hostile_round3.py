@@ -1,0 +1,74 @@
+"""Hostile input, third round (issue 30, the Python half): list flags that start with a minus
+sign, numbers in map axes, contradictory flags, files the estimate reads, output paths that loop,
+a full disk under a map, the façade's arguments, states outside the model's domain, periodic
+directions in maps, estimates that explain nothing, and the cost of a pose set in its rows.
+
+Each case fails on the main branch before the round; the command-line cases run in a temporary
+current folder (the ``places`` fixture of test_hostile.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+import pytest
+
+from esba.cli import EXIT_FAILED, EXIT_OK, EXIT_USAGE, build_parser, main
+
+from .test_hostile import one_line_error, places, strict_json  # noqa: F401  (a fixture)
+
+
+# ---------------------------------------------------------------------------------------------
+# list-valued flags take a leading negative number
+
+
+def _flags():
+    """Every (command, option string, action) of the command line that takes one value."""
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for command, p in sub.choices.items():
+        for action in p._actions:
+            if action.option_strings and action.nargs is None and not isinstance(action, (argparse._StoreConstAction, argparse._HelpAction, argparse._VersionAction)):
+                yield command, action.option_strings[-1], action
+
+
+@pytest.mark.parametrize("command,flag", [(c, f) for c, f, _ in _flags()])
+def test_every_flag_takes_a_value_that_starts_with_a_minus(command, flag):
+    """argparse took ``-3.95,6.25`` for a flag ("expected one argument"): now the flag's own type
+    judges it (accepts it, or refuses it naming the flag's rule)."""
+    parser = build_parser()
+    for value in ("-3.95,6.25,20.24", "-1", "-.5,2", "-1:2:5"):
+        try:
+            parser.parse_args([command, flag, value])
+        except Exception as exc:  # noqa: BLE001 - the message is what is checked
+            assert "expected one argument" not in str(exc), (command, flag, value, exc)
+
+
+LIST_FLAGS = [
+    (["estimate", "--pressure", "0.15", "--theta", "-3.95,6.25,20.24"], "theta", [-3.95, 6.25, 20.24]),
+    (["estimate", "--pressure", "0.15", "--tip", "-10,50"], "tip", [-10.0, 50.0]),
+    (["estimate", "--pressure", "0.15", "--total-angle", "-20"], "total_angle", [-20.0]),
+    (["estimate", "--pressure", "0.15", "--marker", "0.5:-10,3"], "marker", [(0.5, -10.0, 3.0)]),
+    (["sweep", "--payload-angle", "-90,0,90"], "payload_angle", [-90.0, 0.0, 90.0]),
+    (["sweep", "--payload", "-1:1:3"], "payload", [-1.0, 0.0, 1.0]),
+    (["sweep", "--pressure", "-0.1,0.1"], "pressure", [-0.1, 0.1]),
+    (["sweep", "--r2", "-1,3"], "r2", [-1.0, 3.0]),
+    (["sweep", "--d", "-1,3"], "d", [-1.0, 3.0]),
+]
+
+
+@pytest.mark.parametrize("argv,dest,expected", LIST_FLAGS, ids=[" ".join(a[-2:]) for a, _, _ in LIST_FLAGS])
+def test_list_flags_parse_a_leading_negative_number(argv, dest, expected):
+    args = build_parser().parse_args(argv)
+    assert list(getattr(args, dest)) == expected
+
+
+def test_estimate_with_negative_angles_runs(capsys):
+    """The angles ``solve`` prints (negative ones included) go back into ``estimate``."""
+    got = main(["estimate", "--pressure", "0.15", "--theta", "-3.95,6.25,20.24", "--sigma-theta", "0.5", "--json"])
+    out, err = capsys.readouterr()
+    assert "expected one argument" not in err
+    assert got in (EXIT_OK, EXIT_FAILED), err
+    strict_json(out)
