@@ -81,6 +81,21 @@ def refuse(args: argparse.Namespace, dests: Sequence[str], why: str) -> None:
         raise UsageError(f"{', '.join(given)} {'is' if len(given) == 1 else 'are'} not used {why}")
 
 
+def one_of(args: argparse.Namespace, *pairs: tuple[str, str]) -> None:
+    """A usage error when both flags of a pair were given (``--out`` and ``--no-out``): the
+    command cannot do both, and silently obeying one would surprise."""
+    for a, b in pairs:
+        if len(given_flags(args, a, b)) == 2:
+            raise UsageError(f"--{a.replace('_', '-')} and --{b.replace('_', '-')}: give one of the two")
+
+
+def with_json(args: argparse.Namespace, *dests: str) -> None:
+    """A usage error when a flag that only shapes the JSON output is given without ``--json``."""
+    given = given_flags(args, *dests)
+    if given and not getattr(args, "json", False):
+        raise UsageError(f"{', '.join(given)} only shapes the JSON output: give {'it' if len(given) == 1 else 'them'} with --json")
+
+
 def float_arg(text: str) -> float:
     """A number as people write it; Python's ``float()`` would also read ``0_1`` as 1."""
     try:

@@ -8,7 +8,7 @@ import sys
 
 from esba.infra import outputs
 
-from .arguments import UsageError, add_scene_flags, count_arg, scene_from_args, write_page
+from .arguments import UsageError, add_scene_flags, count_arg, float_arg, one_of, scene_from_args, with_json, write_page
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 #: Where ``esba map`` writes its fold curves and figure unless told otherwise (the current folder).
@@ -32,10 +32,10 @@ def axis_arg(flag: str):
         base = name.rstrip("0123456789")
         if name not in _MAP_PARAMETERS and not (base in ("payload", "omega", "at") and base != name):
             raise argparse.ArgumentTypeError(f"{flag}={text!r}: unknown parameter {name!r}; expected {allowed}")
-        try:
-            lo, hi = float(parts[1]), float(parts[2])
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{flag}={text!r}: FROM and TO must be numbers; expected {allowed}") from None
+        try:  # the number rule of every other flag (float_arg): no 1_10, no other scripts' digits, no subnormals
+            lo, hi = float_arg(parts[1]), float_arg(parts[2])
+        except argparse.ArgumentTypeError as exc:
+            raise argparse.ArgumentTypeError(f"{flag}={text!r}: FROM and TO must be numbers ({exc}); expected {allowed}") from None
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise argparse.ArgumentTypeError(f"{flag}={text!r}: expected finite FROM < TO")
         return name, lo, hi
@@ -95,6 +95,8 @@ def _cmd_map(args: argparse.Namespace) -> int:
     for flag, v in (("--x", args.x), ("--y", args.y)):
         if v is None:
             raise UsageError(f"the following arguments are required: {flag} PARAM:FROM:TO")
+    one_of(args, ("out", "no_out"), ("plot", "no_plot"))
+    with_json(args, "points")
     out = None if args.no_out else outputs.check_file(DEFAULT_MAP_OUT if args.out is None else args.out, "--out", (".csv", ".json"))
     plot = None if args.no_plot else outputs.figure_file(DEFAULT_MAP_FIGURE if args.plot is None else args.plot, "--plot", DEFAULT_MAP_FIGURE)
     (xname, x0, x1), (yname, y0, y1) = args.x, args.y

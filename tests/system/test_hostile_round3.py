@@ -72,3 +72,23 @@ def test_estimate_with_negative_angles_runs(capsys):
     assert "expected one argument" not in err
     assert got in (EXIT_OK, EXIT_FAILED), err
     strict_json(out)
+
+
+# ---------------------------------------------------------------------------------------------
+# the map's axes read numbers by the rule of every other flag; contradictory flags are refused
+
+ROUND3_CLI = [
+    (["map", "--x", "omega:1_10:120", "--y", "payload:0:4"], "--x='omega:1_10:120': FROM and TO must be numbers"),
+    (["map", "--x", "omega:\u0661\u0660:120", "--y", "payload:0:4"], "FROM and TO must be numbers"),
+    (["map", "--x", "omega:100:120", "--y", "payload:1e-320:4"], "below the smallest normal double"),
+    (["map", "--x", "omega:100:120", "--y", "payload:0:4", "--out", "m.csv", "--no-out"], "--out and --no-out: give one of the two"),
+    (["map", "--x", "omega:100:120", "--y", "payload:0:4", "--plot", "m.png", "--no-plot"], "--plot and --no-plot: give one of the two"),
+    (["map", "--x", "omega:100:120", "--y", "payload:0:4", "--points"], "--points only shapes the JSON output: give it with --json"),
+    (["path", "--param", "pressure", "--to", "0.2", "--points"], "--points only shapes the JSON output: give it with --json"),
+]
+
+
+@pytest.mark.parametrize("argv,needle", ROUND3_CLI, ids=[" ".join(a[1:]) for a, _ in ROUND3_CLI])
+def test_cli_round3_refused(capsys, places, argv, needle):
+    line = one_line_error(capsys, argv, places)
+    assert needle in line, line
