@@ -92,3 +92,43 @@ ROUND3_CLI = [
 def test_cli_round3_refused(capsys, places, argv, needle):
     line = one_line_error(capsys, argv, places)
     assert needle in line, line
+
+
+# ---------------------------------------------------------------------------------------------
+# output paths: a symlink that loops, a full disk under a map
+
+
+@pytest.mark.parametrize("argv", [
+    ["map", "--x", "omega:100:130", "--y", "payload:0:4", "--out", "loop.csv"],
+    ["path", "--param", "pressure", "--to", "0.1", "--out", "loop.csv"],
+    ["solve", "--plot", "loop.csv"],
+    ["export", "c", "-n", "3", "--out", "loop.csv"],
+    ["solve", "--plot", "d/sub/x.png"],
+], ids=["map --out", "path --out", "solve --plot", "export c --out", "a loop further up"])
+def test_an_output_that_is_a_symlink_loop_is_refused_up_front(capsys, places, argv):
+    tmp = Path(places["tmp"])
+    (tmp / "loop.csv").symlink_to("loop.csv")
+    (tmp / "d").mkdir()
+    (tmp / "d" / "sub").symlink_to("../loop.csv")
+    line = one_line_error(capsys, argv, places)
+    assert "a symlink that loops" in line and argv[-1] in line, line
+
+
+def test_check_folder_and_check_file_refuse_a_loop(tmp_path):
+    from esba.infra import outputs
+
+    (tmp_path / "loop").symlink_to("loop")
+    for check in (outputs.check_folder, outputs.check_file):
+        with pytest.raises(outputs.OutputError, match="a symlink that loops"):
+            check(tmp_path / "loop", "--out")
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (a device whose writes fail: disk full)")
+@pytest.mark.parametrize("name", ["m.csv", "m.json"])
+def test_a_full_disk_under_a_map_names_the_file(capsys, places, name):
+    (Path(places["tmp"]) / name).symlink_to("/dev/full")
+    argv = ["map", "--x", "omega:100:130", "--y", "payload:0:4", "--out", name, "--no-plot", "--resolution", "11", "--history-lines", "0", "--json"]
+    got = main(argv)
+    out, err = capsys.readouterr()
+    assert got == EXIT_FAILED, err
+    assert err.strip().splitlines()[-1] == f"esba: error: {name}: cannot write (No space left on device)", err
