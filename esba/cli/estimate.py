@@ -98,12 +98,12 @@ def _fit_file(path: str, scene):
     """Actuator values and their covariance from ``esba fit --json`` output."""
     from esba.calibration.sensing import ACTUATOR
 
+    from esba.infra.inputs import read_text
+
+    text = read_text(path, "--fit", UsageError)  # the guards of a scene file: a regular file, bounded, UTF-8
     try:
-        with open(path, encoding="utf-8") as fh:
-            data = json.load(fh)
-    except OSError as exc:
-        raise UsageError(f"--fit {path!r}: cannot read: {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        data = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as exc:
         raise UsageError(f"--fit {path!r}: not the JSON of `esba fit --json`: {str(exc)[:80]}") from None
     params = data.get("parameters") if isinstance(data, dict) else None
     cov = data.get("covariance") if isinstance(data, dict) else None

@@ -132,3 +132,32 @@ def test_a_full_disk_under_a_map_names_the_file(capsys, places, name):
     out, err = capsys.readouterr()
     assert got == EXIT_FAILED, err
     assert err.strip().splitlines()[-1] == f"esba: error: {name}: cannot write (No space left on device)", err
+
+
+# ---------------------------------------------------------------------------------------------
+# every file the estimate reads goes through the guards of a scene file
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not os.path.exists("/dev/zero"), reason="needs FIFOs and /dev/zero")
+@pytest.mark.parametrize("kind", ["fifo", "zero", "folder", "big", "binary"])
+@pytest.mark.parametrize("flag", ["--fit", "--poses"])
+def test_the_estimates_files_are_guarded_like_a_scene_file(capsys, places, kind, flag):
+    """``--fit FIFO`` waited forever, ``--fit`` a symlink to /dev/zero said "out of memory"."""
+    tmp = Path(places["tmp"])
+    name = "f.json" if flag == "--fit" else "f.csv"
+    path = tmp / name
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "zero":
+        path.symlink_to("/dev/zero")
+    elif kind == "folder":
+        path.mkdir()
+    elif kind == "big":
+        with open(path, "wb") as fh:
+            fh.truncate(17 * 2**20)
+    else:
+        path.write_bytes(b"\xff\xfe\x00garbage")
+    argv = ["estimate", flag, name] if flag == "--poses" else ["estimate", "--pressure", "0.15", "--total-angle", "90", "--sigma-total-angle", "1", flag, name]
+    line = one_line_error(capsys, argv, places)
+    assert repr(name) in line, line
+    assert {"fifo": "FIFO", "zero": "character device", "folder": "folder", "big": "MiB", "binary": "not UTF-8"}[kind] in line, line
