@@ -85,6 +85,7 @@ from esba.statics.equilibrium import DEFAULT_OPTIONS, STEP_OPTIONS, EquilibriumE
 
 __all__ = [
     "SensingError",
+    "MISFIT_P",
     "Measured",
     "Pose",
     "SensingOptions",
@@ -116,6 +117,11 @@ MAX_TARGET_DEG = 720.0
 
 #: Carried actuator parameters that may have a covariance.
 ACTUATOR = ("L", "r1", "r2", "d", "rho", "E", "M")
+
+
+#: A fit whose chi-square has a p-value below this explains nothing: no load reproduces the data
+#: within the stated standard deviations (status ``misfit``, not ``ok``).
+MISFIT_P = 1e-3
 
 
 class SensingError(InputError):
@@ -364,7 +370,9 @@ class LoadEstimate:
     states : tuple of dict
         Per pose: theta (deg), total angle, tip, stable, smallest eigenvalue, on the load history, validity.
     status : str
-        ``ok``; ``unstable`` (a pose's state is not stable); ``failed`` (no start converged).
+        ``ok``; ``unstable`` (a pose's state is not stable); ``misfit`` (no load explains the data:
+        the chi-square's p-value is below :data:`MISFIT_P`, or with no degrees of freedom left, the
+        chi-square is above its 1 - MISFIT_P quantile on one); ``failed`` (no start converged).
     warnings : tuple of str
     """
 
@@ -987,12 +995,13 @@ def estimate_load(
     warnings: list[str] = []
     undetermined = _undetermined_words(prob, unknown, direction, poses)
     warnings += [f"not identifiable: {u}" for u in undetermined]
-    if dof > 0 and p_value < 1e-3:
-        warnings.append(f"the residuals are larger than the stated standard deviations allow (chi-square {cost:.3g} on {dof} degrees "
-                        f"of freedom, p = {p_value:.2g}): the model, the pressure or the deviations are off, and the intervals are too narrow")
-    elif dof <= 0 and cost > float(stats.chi2.ppf(0.999, 1)):
-        warnings.append(f"no load explains the data within the stated standard deviations (chi-square {cost:.3g} with no degrees of freedom "
-                        "left): the model, the pressure or the deviations are off")
+    misfit = ""
+    if dof > 0 and p_value < MISFIT_P:
+        misfit = (f"no load explains the data: chi-square {cost:.3g} on {dof} degrees of freedom (p = {p_value:.2g} < {MISFIT_P:g}); "
+                  "the model, the pressure or the standard deviations are off, and the estimate and its interval mean nothing")
+    elif dof <= 0 and cost > float(stats.chi2.ppf(1.0 - MISFIT_P, 1)):
+        misfit = (f"no load explains the data within the stated standard deviations: chi-square {cost:.3g} with no degrees of freedom "
+                  "left; the model, the pressure or the standard deviations are off")
     if len(candidates) > 1:
         warnings.append(f"not unique: {len(candidates)} loads explain the data equally well within the noise (listed under alternatives)")
     if undetermined:
@@ -1029,6 +1038,8 @@ def estimate_load(
         warnings += [f"{label}: outside the model's range: {f.message}" for f in findings]
     if any(not all(c.stable) for c in candidates[1:]):
         warnings.append("some alternatives hold an unstable state (marked): the actuator could not hold those")
+    if misfit:  # an estimate that explains nothing is no estimate, whatever else holds
+        status, message = "misfit", misfit
     return LoadEstimate(
         labels=prob.labels, units=prob.units, level=options.level, estimate=x, std_error=se, interval=interval, covariance=cov_x,
         correlation=corr, fisher=F, identifiable=ident, undetermined=tuple(undetermined), unique=len(candidates) == 1 and ident,

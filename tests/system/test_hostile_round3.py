@@ -161,3 +161,24 @@ def test_the_estimates_files_are_guarded_like_a_scene_file(capsys, places, kind,
     line = one_line_error(capsys, argv, places)
     assert repr(name) in line, line
     assert {"fifo": "FIFO", "zero": "character device", "folder": "folder", "big": "MiB", "binary": "not UTF-8"}[kind] in line, line
+
+
+# ---------------------------------------------------------------------------------------------
+# an estimate that explains nothing is not "ok"
+
+
+def test_an_estimate_that_explains_nothing_is_a_misfit_exit_1(capsys):
+    """No load bends three segments to 300, -300 and 300 deg: it said "load estimate: ok"."""
+    got = main(["estimate", "--pressure", "0.15", "--theta", "300,-300,300", "--sigma-theta", "0.05", "--starts", "2"])
+    out, err = capsys.readouterr()
+    assert got == EXIT_FAILED, err
+    assert out.startswith("load estimate: misfit: no load explains the data: chi-square "), out
+    misfit = [line for line in err.splitlines() if line.startswith("esba: estimate misfit: ")]
+    assert len(misfit) == 1 and "p = " in misfit[0], err
+
+
+def test_a_good_estimate_stays_ok(capsys):
+    got = main(["estimate", "--pressure", "0.15", "--theta", "11.88,21.31,33.05", "--sigma-theta", "0.05", "--starts", "2", "--json"])
+    out, err = capsys.readouterr()
+    assert got == EXIT_OK, err
+    assert strict_json(out)["status"] == "ok"
