@@ -24,6 +24,13 @@ check                quantity                                                   
 "Far outside" the paper's range is five times its largest value: a factor chosen to flag
 extrapolation that is clearly beyond the experiments, not to police every design.
 
+This is the one rule of the model's domain. Every tool that reports a state judges it with
+:func:`assess` (or :func:`assess_angles`, a function of the scene and the angles, the tip from
+the scene's kinematics): ``solve``, ``equilibria`` (each state's ``validity``; ``outside_domain``
+counts them), paths, sweeps, ``estimate``, ``fit`` and ``design``; the exported C mirrors the
+constants below (:data:`STRAIN_LIMIT`, :data:`MAX_BEND_DEG`, the tip's x < 0,
+:data:`PAPER_MAX_PRESSURE` and :data:`PAPER_MAX_PAYLOAD` times :data:`FAR_FACTOR`).
+
 Examples
 --------
 >>> from esba.model.scene import MAIN_JOB

@@ -182,3 +182,28 @@ def test_a_good_estimate_stays_ok(capsys):
     out, err = capsys.readouterr()
     assert got == EXIT_OK, err
     assert strict_json(out)["status"] == "ok"
+
+
+# ---------------------------------------------------------------------------------------------
+# one rule of the model's domain: equilibria judges its states as solve does
+
+
+def test_equilibria_judges_the_domain_as_solve_does(capsys):
+    """``solve --pressure 0.17 --payload 2`` warns that the tip is 26 mm behind the base;
+    ``equilibria`` listed the same state as stable with ``outside_domain: 0``."""
+    from esba.model.scene import Payload, Scene
+    from esba.statics.equilibria import EquilibriaOptions, equilibria
+    from esba.statics.equilibrium import solve
+
+    scene = Scene(pressure=0.17, payloads=(Payload(2.0, 90.0),))
+    solved = solve(scene)
+    res = equilibria(scene, EquilibriaOptions(check=False, connect=False))
+    same = res.states[res.index(solved.theta)]
+    assert [f.check for f in same.validity] == [f.check for f in solved.validity] == ["tip_behind_base"]
+    assert not same.in_domain and res.outside_domain >= 1
+    assert all(s.in_domain for s in res.states if s is not same)
+    assert main(["equilibria", "--pressure", "0.17", "--payload", "2", "--no-plot", "--no-check", "--json"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    d = strict_json(out)
+    assert d["outside_domain"] == 1 and [s["in_domain"] for s in d["states"]].count(False) == 1
+    assert "esba: warning: state #1 (212.84 deg): the tip is 26.18 mm behind the base" in err
