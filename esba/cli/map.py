@@ -14,6 +14,8 @@ from .results import EXIT_FAILED, EXIT_OK, print_result
 #: Where ``esba map`` writes its fold curves and figure unless told otherwise (the current folder).
 DEFAULT_MAP_OUT = "esba-map.csv"
 DEFAULT_MAP_FIGURE = "esba-map.png"
+#: The most fold curves the table lists (a periodic axis over many turns repeats them).
+MAX_LISTED = 20
 
 #: The parameters of a map (``esba.paths.problem.PARAMETERS``, written out so that building the
 #: parser does not import CasADi; a test checks they agree). A payload's take its number (payload2).
@@ -54,12 +56,18 @@ def _map_table(d: dict) -> str:
         f"fold curves: {s['curves']} ({s['points']} points); cusps: {s['cusp']}; "
         f"fold/branch-point meetings: {s['branch point of the x-path'] + s['branch point of the y-path']}",
     ]
-    for c in d["fold_curves"]:
+    if d.get("periodic"):
+        lines.append(d["periodic"]["text"] + f" ({d['periodic']['curves_per_period']} curves a period)")
+    for c in d["fold_curves"][:MAX_LISTED]:
         lines.append(f"  curve {c['index']}: {c['points']} points, {x['parameter']} {c['x_range'][0]:.6g}..{c['x_range'][1]:.6g}{ux}, "
                      f"{y['parameter']} {c['y_range'][0]:.6g}..{c['y_range'][1]:.6g}{uy}; {c['stop_reason']}")
-    for p in d["special_points"]:
+    if len(d["fold_curves"]) > MAX_LISTED:
+        lines.append(f"  ... {len(d['fold_curves']) - MAX_LISTED} more curves (--out FILE lists them)")
+    for p in d["special_points"][:2 * MAX_LISTED]:
         lines.append(f"  {p['label']:3} {p['kind']:<27} {x['parameter']} = {p[x['parameter']]:.10g}{ux}, {y['parameter']} = {p[y['parameter']]:.10g}{uy}, "
                      f"total angle {p['total_angle_deg']:.3f} deg  {p['status']}")
+    if len(d["special_points"]) > 2 * MAX_LISTED:
+        lines.append(f"  ... {len(d['special_points']) - 2 * MAX_LISTED} more special points (--out FILE.json lists them)")
     st = d["stable_states"]
     lines.append(f"stable states: {st['min']} to {st['max']}; more than one on {100 * st['fraction_multistable']:.1f}% of the map "
                  f"(anchored by brute force at {x['parameter']} = {d['reference'][x['parameter']]:g}, {y['parameter']} = {d['reference'][y['parameter']]:g}: "

@@ -13,6 +13,7 @@ import argparse
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from esba.cli import EXIT_FAILED, EXIT_OK, EXIT_USAGE, build_parser, main
@@ -207,3 +208,65 @@ def test_equilibria_judges_the_domain_as_solve_does(capsys):
     d = strict_json(out)
     assert d["outside_domain"] == 1 and [s["in_domain"] for s in d["states"]].count(False) == 1
     assert "esba: warning: state #1 (212.84 deg): the tip is 26.18 mm behind the base" in err
+
+
+# ---------------------------------------------------------------------------------------------
+# a periodic axis (a payload direction) past one turn
+
+
+@pytest.fixture(scope="module")
+def omega_plane():
+    from esba.analysis.folds import Plane
+    from esba.model.scene import Payload, Scene
+
+    return Plane.from_scene(Scene(payloads=(Payload(2.0, 90.0),)), "omega", "payload")
+
+
+def test_a_map_past_one_turn_finds_every_window(omega_plane):
+    """``--x omega:0:720`` found the bistable window at 77.7-144.2 deg and missed the one at
+    437.7-504.2 deg."""
+    from esba.analysis.maps import stability_map
+
+    one = stability_map(omega_plane, (0.0, 360.0), (0.0, 4.0), resolution=41, history_lines=0)
+    two = stability_map(omega_plane, (0.0, 720.0), (0.0, 4.0), resolution=41, history_lines=0)
+    assert len(one.curves) >= 1 and len(two.curves) == 2 * len(one.curves)
+    lo = min(float(c.xs.min()) for c in one.curves)
+    assert sorted(round(float(c.xs.min()) - lo, 6) for c in two.curves) == sorted([0.0, 360.0] * len(one.curves))
+    # the counts one period on are the counts of the first period
+    assert np.array_equal(two.count([100.0, 460.0, 300.0, 660.0], [3.0] * 4), [2, 2, 1, 1])
+    assert two.to_dict()["stable_states"] == one.to_dict()["stable_states"]
+    assert two.to_dict()["stable_states"]["max"] == 2
+
+
+def test_a_map_of_a_hundred_turns_costs_one_turn(omega_plane, monkeypatch):
+    """``--x omega:-36000:36000`` said "stable states: 1 to 1"; its work is that of one period:
+    the fold curves are traced once and copied (the number of traces does not grow with the turns)."""
+    from esba.analysis import folds, maps
+
+    traced = []
+    real = folds.trace_fold_curve
+
+    def counted(*args, **kwargs):
+        traced.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(folds, "trace_fold_curve", counted)
+    one = maps.stability_map(omega_plane, (-36000.0, -35640.0), (0.0, 4.0), resolution=41, history_lines=0)
+    once = len(traced)
+    many = maps.stability_map(omega_plane, (-36000.0, 36000.0), (0.0, 4.0), resolution=41, history_lines=0)
+    assert len(traced) == 2 * once  # one period each
+    assert len(many.curves) == 200 * len(one.curves)
+    st = many.to_dict()["stable_states"]
+    assert (st["min"], st["max"]) == (1, 2) and st["fraction_multistable"] > 0.01
+
+
+def test_a_map_past_too_many_turns_is_refused(capsys, places):
+    line = one_line_error(capsys, ["map", "--x", "omega:0:400000", "--y", "payload:0:4"], places)
+    assert "1111 periods of 360 deg; expected at most 1000" in line
+
+
+def test_an_envelopes_directions_are_periodic():
+    """A design's envelope over directions: 450 deg and -270 deg are 90 deg, checked once."""
+    from esba.design.envelope import Envelope
+
+    assert Envelope(max_pressure=0.2, max_payload=2.0, directions_deg=(90.0, 450.0, -270.0, 0.0)).directions_deg == (90.0, 0.0)
