@@ -215,7 +215,8 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
             cov = [[s.sigma * s.sigma if i == j else 0.0 for j in range(len(sigmas))] for i, s in enumerate(sigmas)]
         poses = load_poses(args.poses, scene.segments) if args.poses is not None else _flag_poses(args, scene)
         options = SensingOptions(level=args.level, starts=args.starts)
-        result = estimate_load(poses, args.free, scene, options, carried=carried, carried_covariance=cov)
+        result = estimate_load(poses, args.free, scene, options, carried=carried, carried_covariance=cov,
+                               progress=None if args.json else "esba estimate")  # a bar with its forecast, on a terminal
     except (SensingError, MeasurementError, SceneError, UncertaintyError) as exc:
         raise UsageError(str(exc)) from None
     print_result(args, result.to_dict(), _estimate_table)
