@@ -32,7 +32,7 @@ from typing import Sequence
 import casadi as ca
 import numpy as np
 
-from esba.infra import checks
+from esba.infra import checks, jsonsafe
 from esba.infra.threads import single_threaded
 from esba.model.generated import Model
 from esba.model.scene import MAX_PAYLOAD, MAX_TARGET_ANGLE_DEG, Payload, Scene, SceneError, check_pressure
@@ -211,8 +211,11 @@ class SecantStiffness:
         return self.initial.ok and all(r.ok for r in self.loaded)
 
     def to_dict(self) -> dict:
-        """JSON-ready form (the keys ``esba stiffness --json`` prints)."""
-        return {
+        """JSON-ready form (the keys ``esba stiffness --json`` prints); a payload that does not move
+        the tip (along a straight actuator's axis) has no finite secant stiffness: null, with the reason."""
+        infinite = [f"{f:g} N" for f, k in zip(self.forces, self.stiffness_n_per_m) if not math.isfinite(k)]
+        reason = {"stiffness_n_per_m_reason": f"infinite at {', '.join(infinite)}: the payload does not move the tip (displacement 0)"} if infinite else {}
+        return jsonsafe.clean({**{
             "ok": self.ok,
             "pressure_mpa": self.pressure,
             "payload_angle_deg": self.angle_deg,
@@ -227,7 +230,7 @@ class SecantStiffness:
             "variant": self.initial.scene.variant,
             "messages": [r.message for r in (self.initial, *self.loaded) if r.message],
             "validity": self.validity(),
-        }
+        }, **reason})
 
     def validity(self) -> list[dict]:
         """The validity findings of every solve (:mod:`esba.model.validity`), each with its payload in N."""

@@ -30,20 +30,23 @@ def _start(pressure: float) -> Scene:
 @pytest.mark.ci
 def test_intervals_cover_the_true_load_in_95_percent_of_200_random_cases():
     rng = np.random.default_rng(17)
-    covered_f = covered_o = 0
+    covered_f = covered_o = misfits = 0
     for _ in range(200):
         p, f, om = rng.uniform(0.08, 0.2), rng.uniform(0.5, 2.5), rng.uniform(-180.0, 180.0)
         noisy = tuple(_shape(p, f, om) + rng.normal(0.0, 0.1, 3))
         # the starts all round, without the equilibria search (it only adds loads on other branches,
         # tested below): the intervals are what is tested here
         e = estimate_load(Pose(p, (Measured("theta", noisy, 0.1),)), ("F1", "Omega1"), _start(p), SensingOptions(branches=False))
-        assert e.ok and e.identifiable
+        # under the stated noise a fit is called a misfit (chi-square p < MISFIT_P) about once in 1/MISFIT_P
+        assert e.status in ("ok", "misfit") and e.identifiable
+        misfits += e.status == "misfit"
         lo, hi = e.interval[0]
         covered_f += lo <= f <= hi
         d_omega = (e.estimate[1] - om + 180.0) % 360.0 - 180.0
         covered_o += abs(d_omega) <= Z95 * e.std_error[1]
     assert 0.93 <= covered_f / 200 <= 0.97
     assert 0.93 <= covered_o / 200 <= 0.97
+    assert misfits <= 3  # 200 MISFIT_P = 0.2 expected
 
 
 def test_noise_free_segment_angles_give_the_load_back_from_far_starts():

@@ -342,3 +342,19 @@ def test_the_estimates_work_is_linear_in_the_poses(monkeypatch, one_load):
     assert large_size == small_size == 1  # one unknown a problem: separate loads are estimated one at a time
     if one_load:
         assert large["lm"] == small["lm"]  # the runs do not multiply with the poses
+
+
+def test_stiffness_results_are_strict_json():
+    """``to_dict()`` held ``inf``: a direction along which the tip does not move (a straight
+    actuator loaded along its axis) has no finite stiffness; null now, with the reason beside it."""
+    import json
+
+    from esba import Payload, Scene, secant_stiffness, solve, tangent_stiffness
+
+    for d in (secant_stiffness(Scene(pressure=0.0), angle_deg=0.0).to_dict(),
+              tangent_stiffness(solve(Scene(pressure=0.0, payloads=(Payload(1.0, 0.0),)))).to_dict()):
+        json.dumps(d, allow_nan=False)
+    d = secant_stiffness(Scene(pressure=0.0), angle_deg=0.0).to_dict()
+    assert d["stiffness_n_per_m"] == [None, None, None] and "does not move the tip" in d["stiffness_n_per_m_reason"]
+    t = tangent_stiffness(solve(Scene(pressure=0.0))).to_dict()
+    assert t["vertical_n_per_m"] is None and "does not move along this direction" in t["vertical_n_per_m_reason"]
