@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -25,24 +26,32 @@ from .test_hostile import one_line_error, places, strict_json  # noqa: F401  (a 
 # list-valued flags take a leading negative number
 
 
-def _flags():
-    """Every (command, option string, action) of the command line that takes one value."""
-    parser = build_parser()
-    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    for command, p in sub.choices.items():
-        for action in p._actions:
-            if action.option_strings and action.nargs is None and not isinstance(action, (argparse._StoreConstAction, argparse._HelpAction, argparse._VersionAction)):
-                yield command, action.option_strings[-1], action
+@lru_cache(maxsize=1)
+def _parser():
+    return build_parser()
+
+
+def _flags(parser=None, prefix=()):
+    """Every (command words, option string, action) of the command line that takes one value, in
+    subcommands of subcommands too (``bench accuracy``, ``export c``)."""
+    parser = build_parser() if parser is None else parser
+    for sub in (a for a in parser._actions if isinstance(a, argparse._SubParsersAction)):
+        for command, p in sub.choices.items():
+            words = (*prefix, command)
+            for action in p._actions:
+                if action.option_strings and action.nargs is None and not isinstance(action, (argparse._StoreConstAction, argparse._HelpAction, argparse._VersionAction)):
+                    yield " ".join(words), action.option_strings[-1], action
+            yield from _flags(p, words)
 
 
 @pytest.mark.parametrize("command,flag", [(c, f) for c, f, _ in _flags()])
 def test_every_flag_takes_a_value_that_starts_with_a_minus(command, flag):
     """argparse took ``-3.95,6.25`` for a flag ("expected one argument"): now the flag's own type
     judges it (accepts it, or refuses it naming the flag's rule)."""
-    parser = build_parser()
+    parser = _parser()
     for value in ("-3.95,6.25,20.24", "-1", "-.5,2", "-1:2:5"):
         try:
-            parser.parse_args([command, flag, value])
+            parser.parse_args([*command.split(), flag, value])
         except Exception as exc:  # noqa: BLE001 - the message is what is checked
             assert "expected one argument" not in str(exc), (command, flag, value, exc)
 
