@@ -1132,7 +1132,7 @@ def _separate(prob: _Problem, base: Scene, options: SensingOptions, carried: tup
     m = sum(p.count() for p in poses)
     dof = m - prob.size
     p_value = float(stats.chi2.sf(chi2, dof)) if dof > 0 and math.isfinite(chi2) else math.nan
-    warnings = [f"load {ld}: {w}" for ld, s in zip(prob.loads, subs) for w in s.warnings]
+    warnings = [w if w.startswith(f"{ld}: ") else f"load {ld}: {w}" for ld, s in zip(prob.loads, subs) for w in s.warnings]  # a row that is its own load names itself
     best = [s.alternatives[0] if s.alternatives else None for s in subs]
     candidates: list[Candidate] = []
     if all(b is not None for b in best):
