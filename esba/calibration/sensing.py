@@ -1122,7 +1122,7 @@ def _separate(prob: _Problem, base: Scene, options: SensingOptions, carried: tup
     subs = []
     for ld in prob.loads:
         subs.append(estimate_load(tuple(p for p in prob.poses if p.load == ld), prob.free, base, options, carried=carried,
-                                  carried_covariance=None if cov is None else cov))
+                                  carried_covariance=cov))
         bar.update(1)
     bar.close()
     poses = tuple(p for ld in prob.loads for p in prob.poses if p.load == ld)
