@@ -53,7 +53,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from esba.infra import jsonsafe
+from esba.infra import jsonsafe, outputs
 from esba.model.scene import Scene
 from esba.model.stability import CRITICAL_TOL
 from esba.paths import extended
@@ -283,9 +283,9 @@ def write_fold_curves(curves: Sequence[FoldCurve], path: str | Path, extra: Mapp
     if path.suffix.lower() == ".json":
         data = dict(extra or {})
         data["fold_curves"] = [c.to_dict() for c in curves]
-        path.write_text(json.dumps(jsonsafe.clean(data), indent=1) + "\n")
+        outputs.write_text(path, json.dumps(jsonsafe.clean(data), indent=1) + "\n")  # WriteFailed naming the file on a full disk
     else:
-        path.write_text(fold_curves_csv(curves))
+        outputs.write_text(path, fold_curves_csv(curves))
     return path
 
 

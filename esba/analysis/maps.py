@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
 
 import casadi as ca
@@ -35,11 +35,11 @@ from esba.infra.errors import RunError
 from esba.model.generated import Model
 from esba.model.stability import CRITICAL_TOL
 from esba.paths.loading import history
-from esba.paths.problem import PathError
+from esba.paths.problem import PathError, PathProblem
 
 from .folds import FoldCurve, FoldOptions, Plane, fold_curves, fold_summary
 
-__all__ = ["StabilityMap", "stability_map", "stable_states", "check_grid", "GridCheck", "count_at", "jump_lines"]
+__all__ = ["StabilityMap", "stability_map", "periodic_map", "periodic_jumps", "MAX_PERIODS", "stable_states", "check_grid", "GridCheck", "count_at", "jump_lines"]
 
 #: Starts per segment of the multistart search (their product, at most MAX_STARTS, is used).
 STARTS_PER_SEGMENT = 5
@@ -55,6 +55,9 @@ CROSSING_BLOCK = 1_000_000
 SAME_STATE = 1e-5
 #: The most points of one count whose crossings give an impossible count (below 0) recounted by brute force.
 MAX_RECOUNTS = 200
+#: The most periods a periodic axis (a payload direction) may span: one period is mapped and its
+#: fold curves repeated, so the work is that of one period; the curves written grow with the count.
+MAX_PERIODS = 1000
 
 
 # ---------------------------------------------------------------------------------------------
@@ -311,6 +314,10 @@ class StabilityMap:
     jumps: dict[str, list[list[float]]]
     seconds: dict[str, float]
     recounted: tuple[tuple[float, float, int, int], ...] = ()
+    #: For an axis that spans more than its period (a direction past a turn): the map of one period
+    #: (its fold curves traced once, :attr:`curves` its copies over the range) and the periods (x, y).
+    base: StabilityMap | None = None
+    periods: tuple[float | None, float | None] = (None, None)
 
     @property
     def spans(self) -> tuple[float, float]:
@@ -329,28 +336,54 @@ class StabilityMap:
         crossings give an impossible count, below 0)."""
         x = np.asarray(x, dtype=float).ravel()
         y = np.asarray(y, dtype=float).ravel()
+        if self.base is not None:  # the same state count one period on
+            return self.base.count(*self._fold(x, y))
         counts = count_at(self.curves, self.spans, self.reference, x, y)
         _recount(self.plane, x, y, counts)
         return counts
 
     def distance(self, x: float, y: float) -> float:
-        """Distance from (x, y) to the nearest fold curve point, in spans."""
+        """Distance from (x, y) to the nearest fold curve point, in spans (of one period, on a periodic axis)."""
+        if self.base is not None:
+            fx, fy = self._fold(np.array([x]), np.array([y]))
+            return self.base.distance(float(fx[0]), float(fy[0]))
         return _distance_to_curves(self.curves, self.spans, x, y)
+
+    def stable_summary(self) -> dict[str, Any]:
+        """The fewest and most stable states on the raster and the fraction with more than one; on a
+        periodic axis past its period, those of one period's raster (the same over the whole range:
+        a coarse raster of many periods would sample each at the same few phases)."""
+        counts = self.counts if self.base is None else self.base.counts
+        return {
+            "max": int(np.max(counts)) if counts.size else 0,
+            "min": int(np.min(counts)) if counts.size else 0,
+            "fraction_multistable": float(np.mean(counts > 1)) if counts.size else 0.0,
+        }
+
+    def _fold(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(x, y) taken into the base period's window (the axes that are not periodic as they are)."""
+        assert self.base is not None
+        out = []
+        for v, period, lo in ((x, self.periods[0], self.base.xrange[0]), (y, self.periods[1], self.base.yrange[0])):
+            out.append(v if period is None else lo + np.mod(v - lo, period))
+        return out[0], out[1]
 
     def to_dict(self, points: bool = False) -> dict[str, Any]:
         nx, ny = self.names
         return {
-            "x": {"parameter": nx, "unit": self.plane.units[0], "from": self.xrange[0], "to": self.xrange[1]},
-            "y": {"parameter": ny, "unit": self.plane.units[1], "from": self.yrange[0], "to": self.yrange[1]},
+            "x": {"parameter": nx, "unit": self.plane.units[0], "from": self.xrange[0], "to": self.xrange[1], "period": self.periods[0]},
+            "y": {"parameter": ny, "unit": self.plane.units[1], "from": self.yrange[0], "to": self.yrange[1], "period": self.periods[1]},
+            "periodic": None if self.base is None else {
+                "mapped": {nx: list(self.base.xrange), ny: list(self.base.yrange)},
+                "curves_per_period": len(self.base.curves),
+                "text": "; ".join(f"{name} is periodic ({period:g} {unit}): one period mapped, its fold curves repeated over {span / period:.4g} periods"
+                                  for name, unit, period, span in zip(self.names, self.plane.units, self.periods, self.spans) if period is not None),
+            },
             "summary": fold_summary(self.curves),
             "special_points": [p.to_dict(self.names) for p in self.special],
             "fold_curves": [c.to_dict(points) for c in self.curves],
             "reference": {nx: self.reference[0], ny: self.reference[1], "stable_states": self.reference[2]},
-            "stable_states": {
-                "max": int(np.max(self.counts)) if self.counts.size else 0,
-                "min": int(np.min(self.counts)) if self.counts.size else 0,
-                "fraction_multistable": float(np.mean(self.counts > 1)) if self.counts.size else 0.0,
-            },
+            "stable_states": self.stable_summary(),
             "recounted": [{nx: r[0], ny: r[1], "crossings": r[2], "brute_force": r[3]} for r in self.recounted],
             "jumps": self.jumps,
             "seconds": self.seconds,
@@ -367,10 +400,18 @@ def stability_map(
     options: FoldOptions | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> StabilityMap:
-    """The stability map of ``plane`` over xrange x yrange (see the module)."""
+    """The stability map of ``plane`` over xrange x yrange (see the module).
+
+    A periodic axis (a payload direction, 360 deg) that spans more than its period is mapped over
+    one period from its low end, and the map repeated: the fold curves are traced once and copied
+    a period on, the counts taken modulo the period (:func:`periodic_map`).
+    """
     say = progress or (lambda msg: None)
     xrange = (float(xrange[0]), float(xrange[1]))
     yrange = (float(yrange[0]), float(yrange[1]))
+    periods = tuple(_period(prob, r) for prob, r in ((plane.px, xrange), (plane.py, yrange)))
+    if any(p is not None for p in periods):
+        return periodic_map(plane, xrange, yrange, periods, resolution=resolution, history_lines=history_lines, options=options, progress=say)
     seconds = {}
     t = time.perf_counter()
     say("fold curves")
@@ -399,6 +440,100 @@ def stability_map(
     jumps = jump_lines(plane, xrange, yrange, history_lines) if history_lines else {"loading": [], "unloading": []}
     seconds["jumps"] = time.perf_counter() - t
     return StabilityMap(plane, xrange, yrange, curves, reference, gx, gy, counts, jumps, seconds, tuple(tuple(r) for r in recounted))
+
+
+def _period(prob: PathProblem, span: tuple[float, float]) -> float | None:
+    """The period of the axis when the range spans more than one (else None); refused past :data:`MAX_PERIODS`."""
+    period = prob.period
+    if period is None or span[1] - span[0] <= period:
+        return None
+    periods = (span[1] - span[0]) / period
+    if periods > MAX_PERIODS:
+        raise PathError(
+            f"{prob.name} range {span[0]:g}..{span[1]:g}{prob.unit_short}: {periods:.4g} periods of {period:g}{prob.unit_short}; "
+            f"expected at most {MAX_PERIODS} (the map repeats every {period:g}{prob.unit_short}: map one period)"
+        )
+    return float(period)
+
+
+def _shifted(c: FoldCurve, dx: float, dy: float, index: int) -> FoldCurve:
+    special = tuple(replace(p, x=p.x + dx, y=p.y + dy, curve=index) for p in c.special)
+    return replace(c, xs=c.xs + dx, ys=c.ys + dy, special=special, index=index)
+
+
+def _copies(lo: float, hi: float, period: float | None, base_lo: float) -> list[float]:
+    """The shifts k * period of the copies of one period's window [base_lo, base_lo + period] that meet [lo, hi]."""
+    if period is None:
+        return [0.0]
+    return [k * period for k in range(int(math.ceil((hi - base_lo) / period)))]
+
+
+def periodic_jumps(plane: Plane, xrange, yrange, period: float | None, lines: int) -> dict[str, list[list[float]]]:
+    """:func:`jump_lines` when x is periodic and spans more than two periods: the history is
+    followed over two periods (up from the low end, then back down). Rising, its jumps in the first
+    period are kept as they are and those of the second, where the history repeats itself each
+    turn, are copied a period on up to the high end; falling, those of the second period down (the
+    lower one) are copied over the range."""
+    lo, hi = xrange
+    if period is None or hi - lo <= 2 * period:
+        return jump_lines(plane, xrange, yrange, lines)
+    raw = jump_lines(plane, (lo, lo + 2 * period), yrange, lines)
+
+    def repeat(jumps: list[list[float]]) -> list[list[float]]:
+        out = []
+        for x, y in jumps:
+            out += [[x + k * period, y] for k in range(int((hi - x) // period) + 1)]
+        return out
+
+    loading = [j for j in raw["loading"] if j[0] < lo + period] + repeat([j for j in raw["loading"] if j[0] >= lo + period])
+    unloading = repeat([j for j in raw["unloading"] if j[0] < lo + period])
+    return {"loading": sorted(loading), "unloading": sorted(unloading, reverse=True)}
+
+
+def periodic_map(
+    plane: Plane,
+    xrange: tuple[float, float],
+    yrange: tuple[float, float],
+    periods: tuple[float | None, float | None],
+    *,
+    resolution: int = 101,
+    history_lines: int = 21,
+    options: FoldOptions | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> StabilityMap:
+    """The map over a range of a periodic axis longer than its period: :func:`stability_map` of one
+    period from the low end (fold curves, reference, counts), its curves copied a period on over the
+    range, the raster's counts those of the same point one period back, the jump lines from
+    :func:`periodic_jumps`. The work is that of one period (and two of history), whatever the range."""
+    say = progress or (lambda msg: None)
+    px, py = periods
+    bx = xrange if px is None else (xrange[0], xrange[0] + px)
+    by = yrange if py is None else (yrange[0], yrange[0] + py)
+    for name, unit, period, r in zip(plane.names, plane.units, periods, (xrange, yrange)):
+        if period is not None:
+            say(f"{name} is periodic ({period:g} {unit}): one period mapped, repeated over {(r[1] - r[0]) / period:.4g} periods")
+    t = time.perf_counter()
+    base = stability_map(plane, bx, by, resolution=resolution, history_lines=0, options=options, progress=progress)
+    curves = []
+    for dx in _copies(*xrange, px, bx[0]):
+        for dy in _copies(*yrange, py, by[0]):
+            for c in base.curves:
+                xs, ys = c.xs + dx, c.ys + dy
+                if np.any((xs >= xrange[0]) & (xs <= xrange[1]) & (ys >= yrange[0]) & (ys <= yrange[1])):
+                    curves.append(_shifted(c, dx, dy, len(curves)))
+    gx = np.linspace(xrange[0], xrange[1], resolution)
+    gy = np.linspace(yrange[0], yrange[1], resolution)
+    mx, my = np.meshgrid(gx, gy)
+    smap = StabilityMap(plane, xrange, yrange, tuple(curves), base.reference, gx, gy, np.zeros(mx.shape, dtype=int), {}, {}, base.recounted,
+                        base=base, periods=(px, py))
+    counts = smap.count(mx.ravel(), my.ravel()).reshape(mx.shape)
+    seconds = dict(base.seconds)
+    say("loading and unloading")
+    tj = time.perf_counter()
+    jumps = periodic_jumps(plane, xrange, yrange, px, history_lines) if history_lines else {"loading": [], "unloading": []}
+    seconds["jumps"] = time.perf_counter() - tj
+    seconds["total"] = time.perf_counter() - t
+    return replace(smap, counts=counts, jumps=jumps, seconds=seconds, recounted=base.recounted)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -32,10 +32,10 @@ from typing import Sequence
 import casadi as ca
 import numpy as np
 
-from esba.infra import checks
+from esba.infra import checks, jsonsafe
 from esba.infra.threads import single_threaded
 from esba.model.generated import Model
-from esba.model.scene import Payload, Scene, SceneError, check_pressure
+from esba.model.scene import MAX_PAYLOAD, MAX_TARGET_ANGLE_DEG, Payload, Scene, SceneError, check_pressure
 from esba.solvers.eqnlp import EquilibriumNLP, model_gradient
 from esba.statics.equilibrium import (
     STEP_OPTIONS,
@@ -127,13 +127,18 @@ class TangentStiffness:
         return 1.0 / c if c > 0 else math.inf  # the tip does not move along u to first order (straight, along its axis)
 
     def to_dict(self) -> dict:
-        """JSON-ready form (N/m and m/N)."""
-        return {
+        """JSON-ready form (N/m and m/N); a direction the tip does not move along to first order
+        has no finite stiffness: null, with the reason beside it (strict JSON, :mod:`esba.infra.jsonsafe`)."""
+        out: dict = {
             "matrix_n_per_m": None if self.matrix is None else self.matrix.tolist(),
             "compliance_m_per_n": self.compliance.tolist(),
-            "horizontal_n_per_m": self.along(90.0),
-            "vertical_n_per_m": self.along(0.0),
         }
+        for key, angle in (("horizontal_n_per_m", 90.0), ("vertical_n_per_m", 0.0)):
+            k = self.along(angle)
+            out[key] = k if math.isfinite(k) else None
+            if not math.isfinite(k):
+                out[f"{key}_reason"] = "infinite: the tip does not move along this direction to first order"
+        return out
 
 
 @single_threaded
@@ -148,6 +153,8 @@ def tangent_stiffness(result: Equilibrium) -> TangentStiffness:
     >>> round(t.along(90.0), 1)
     55.8
     """
+    if not isinstance(result, Equilibrium):
+        raise SceneError(f"result={checks.quote(result)}: expected an Equilibrium (from esba.statics.equilibrium.solve)")
     if not result.ok:
         raise EquilibriumError(f"tangent stiffness needs a stable equilibrium: {result.message or result.status}")
     model = result.model
@@ -204,8 +211,11 @@ class SecantStiffness:
         return self.initial.ok and all(r.ok for r in self.loaded)
 
     def to_dict(self) -> dict:
-        """JSON-ready form (the keys ``esba stiffness --json`` prints)."""
-        return {
+        """JSON-ready form (the keys ``esba stiffness --json`` prints); a payload that does not move
+        the tip (along a straight actuator's axis) has no finite secant stiffness: null, with the reason."""
+        infinite = [f"{f:g} N" for f, k in zip(self.forces, self.stiffness_n_per_m) if not math.isfinite(k)]
+        reason = {"stiffness_n_per_m_reason": f"infinite at {', '.join(infinite)}: the payload does not move the tip (displacement 0)"} if infinite else {}
+        return jsonsafe.clean({**{
             "ok": self.ok,
             "pressure_mpa": self.pressure,
             "payload_angle_deg": self.angle_deg,
@@ -220,7 +230,7 @@ class SecantStiffness:
             "variant": self.initial.scene.variant,
             "messages": [r.message for r in (self.initial, *self.loaded) if r.message],
             "validity": self.validity(),
-        }
+        }, **reason})
 
     def validity(self) -> list[dict]:
         """The validity findings of every solve (:mod:`esba.model.validity`), each with its payload in N."""
@@ -262,6 +272,8 @@ def secant_stiffness(
     """
     if not isinstance(scene, Scene):
         raise SceneError(f"scene={scene!r}: expected an esba.model.scene.Scene")
+    if isinstance(forces, (str, bytes)):
+        raise SceneError(f"forces={checks.quote(forces)}: expected a list of payloads in N")
     try:
         forces = tuple(checks.finite("forces", f, SceneError) for f in forces)
     except TypeError:
@@ -270,6 +282,8 @@ def secant_stiffness(
         raise SceneError(f"forces={list(forces)!r}: expected one or more finite payloads > 0 N") from None
     if not forces or any(f <= 0 for f in forces):
         raise SceneError(f"forces={list(forces)!r}: expected one or more payloads > 0 N")
+    if max(forces) > MAX_PAYLOAD:
+        raise SceneError(f"forces={list(forces)!r}: expected payloads of at most {MAX_PAYLOAD:g} N (a scene's bound: the model means nothing beyond)")
     small = [f for f in forces if f < MIN_FORCE]
     if small:
         raise SceneError(
@@ -397,7 +411,9 @@ def pressure_for_target(
     if (total_angle_deg is None) == (tip_mm is None):
         raise SceneError("pressure_for_target: give one of total_angle_deg or tip_mm")
     if total_angle_deg is not None:
-        checks.finite("total_angle_deg", total_angle_deg, SceneError)
+        total = checks.finite("total_angle_deg", total_angle_deg, SceneError)
+        if abs(total) > MAX_TARGET_ANGLE_DEG:
+            raise SceneError(f"total_angle_deg={total:g}: expected an angle of at most {MAX_TARGET_ANGLE_DEG:g} degrees in magnitude (as a scene's target angle)")
     if tip_mm is not None and (not isinstance(tip_mm, (list, tuple, np.ndarray)) or len(tip_mm) != 2):
         raise SceneError(f"tip_mm={tip_mm!r}: expected [x, y] in mm (one may be None, not both)")
     for name, value in (("tolerance", tolerance), ("max_pressure", max_pressure)):

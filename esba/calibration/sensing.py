@@ -81,10 +81,12 @@ from esba.model import resolution
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import assess
+from esba.statics.equilibria import EquilibriaOptions, equilibria
 from esba.statics.equilibrium import DEFAULT_OPTIONS, STEP_OPTIONS, EquilibriumError, solve
 
 __all__ = [
     "SensingError",
+    "MISFIT_P",
     "Measured",
     "Pose",
     "SensingOptions",
@@ -116,6 +118,11 @@ MAX_TARGET_DEG = 720.0
 
 #: Carried actuator parameters that may have a covariance.
 ACTUATOR = ("L", "r1", "r2", "d", "rho", "E", "M")
+
+
+#: A fit whose chi-square has a p-value below this explains nothing: no load reproduces the data
+#: within the stated standard deviations (status ``misfit``, not ``ok``).
+MISFIT_P = 1e-3
 
 
 class SensingError(InputError):
@@ -364,7 +371,9 @@ class LoadEstimate:
     states : tuple of dict
         Per pose: theta (deg), total angle, tip, stable, smallest eigenvalue, on the load history, validity.
     status : str
-        ``ok``; ``unstable`` (a pose's state is not stable); ``failed`` (no start converged).
+        ``ok``; ``unstable`` (a pose's state is not stable); ``misfit`` (no load explains the data:
+        the chi-square's p-value is below :data:`MISFIT_P`, or with no degrees of freedom left, the
+        chi-square is above its 1 - MISFIT_P quantile on one); ``failed`` (no start converged).
     warnings : tuple of str
     """
 
@@ -579,6 +588,11 @@ class _PoseModel:
         G = self.call(theta, p)[0]
         return theta if float(np.max(np.abs(G))) < 1e-7 else None
 
+    def misfit(self, theta: np.ndarray, p: np.ndarray) -> float:
+        """The whitened residual sum of squares of this pose alone at the state ``theta`` (its own deviations)."""
+        y = self.call(theta, p)[3]
+        return float(np.sum(((y - self.measured) / self.sd) ** 2))
+
     def history_state(self, p: np.ndarray) -> np.ndarray | None:
         """The state the inflate-then-load history reaches at ``p`` (None where it fails)."""
         try:
@@ -737,12 +751,14 @@ def _start_loads(prob: _Problem, base_z: np.ndarray, options: SensingOptions) ->
     return out
 
 
+#: The equilibria search for a pose's other stable states.
+OTHER_STATES = EquilibriaOptions(check=False, connect=False, history=False)
+
+
 def _other_states(pm: _PoseModel, p: np.ndarray, theta: np.ndarray) -> list[np.ndarray]:
     """The other stable states of the load ``p`` (the equilibria search)."""
-    from esba.statics.equilibria import equilibria
-
-    try:
-        res = equilibria(with_parameters(pm.scene, dict(zip(pm.names, p))))
+    try:  # the stable states only: no completeness check, barriers or history of its own (the run has one)
+        res = equilibria(with_parameters(pm.scene, dict(zip(pm.names, p))), OTHER_STATES)
     except (SceneError, EquilibriumError):
         return []
     return [np.asarray(s.theta, float) for s in res.stable if float(np.max(np.abs(np.asarray(s.theta) - theta))) > 1e-6]
@@ -862,6 +878,7 @@ def estimate_load(
     *,
     carried: Sequence[str] = (),
     carried_covariance: Any = None,
+    progress: str | None = None,
 ) -> LoadEstimate:
     """Estimate the payload(s) that explain the measured poses (see the module docstring).
 
@@ -878,6 +895,14 @@ def estimate_load(
     carried, carried_covariance :
         Actuator parameters (scene-file units: rho in deg) whose uncertainty is carried into the
         load's, with their covariance (e.g. from ``esba fit --json``).
+    progress : str, optional
+        The label of a tqdm bar on stderr (only on a terminal), with its forecast: over the loads
+        (poses of separate loads), or over the starts and the loads searched for other states.
+
+    The work is about linear in the poses: poses of separate loads share no unknown and are
+    estimated one load at a time (:func:`_separate`); for one load, each start's run evaluates
+    every pose once an iteration, and the search for other stable states runs once per rank of
+    the poses' states (not once per pose and state).
 
     Raises
     ------
@@ -900,11 +925,14 @@ def estimate_load(
             resolution.check_resolvable(pm.scene, pm.pressure, DEFAULT_OPTIONS.stationarity_tol)
         except SceneError as exc:
             raise SensingError(f"{pm.pose.label or 'pose'}: {exc}") from None
+    if len(prob.loads) > 1:  # separate loads share no unknown: one estimate each, the work linear in the loads
+        return _separate(prob, base, options, carried, cov, progress, t0)
     m = sum(p.count() for p in poses)
     base_z = prob.pm[0].p0[prob.pm[0].free_idx]
     starts = [(why, np.tile(z, len(prob.loads))) for why, z in _start_loads(prob, base_z, options)]
     runs: list[tuple[float, np.ndarray, list, np.ndarray, list, str]] = []
     iterations = 0
+    bar = _bar(progress, len(starts), "start")
 
     def run(x0: np.ndarray, thetas0: list[np.ndarray] | None, why: str) -> None:
         nonlocal iterations
@@ -926,7 +954,9 @@ def estimate_load(
 
     for why, x0 in starts:
         run(x0, None, why)
+        bar.update(1)
     if not runs:
+        bar.close()
         return _failed(prob, poses, options, len(starts), iterations, time.perf_counter() - t0,
                        "no start converged: no load found whose equilibrium the iteration could follow")
     chi_k = float(stats.chi2.ppf(options.level, prob.size))
@@ -942,19 +972,28 @@ def estimate_load(
                 loads.append((x, thetas))
         if best > float(stats.chi2.ppf(options.level, max(m - prob.size, 1))):
             loads += [(prob.project(x0), None) for _, x0 in starts]
+        bar.total += len(loads)
+        bar.refresh()
         for x, thetas in loads:
+            bar.update(1)
+            # each pose's stable states at this load (its own first), ranked by how well each alone
+            # explains the pose; run r starts every pose from its r-th best: one run per rank, not
+            # per pose and state, so the runs do not multiply with the poses
+            own = list(thetas) if thetas is not None else [pm.history_state(pm.params(prob.z_of(x, i))) for i, pm in enumerate(prob.pm)]
+            if any(t is None for t in own):
+                continue
+            ranked = []
             for i, pm in enumerate(prob.pm):
                 p = pm.params(prob.z_of(x, i))
-                own = thetas[i] if thetas is not None else pm.history_state(p)
-                if own is None:
-                    continue
-                for other in _other_states(pm, p, own):
-                    t0s = list(thetas) if thetas is not None else [q.history_state(q.params(prob.z_of(x, j))) for j, q in enumerate(prob.pm)]
-                    if any(t is None for t in t0s):
-                        continue
-                    t0s[i] = other
-                    run(x, t0s, f"another stable state of {pm.pose.label or f'pose {i + 1}'} at the load " + ", ".join(
-                        f"{lab}={v:.4g}" for lab, v in zip(prob.labels, x)))
+                ranked.append(sorted([own[i], *_other_states(pm, p, own[i])], key=lambda t, pm=pm, p=p: pm.misfit(t, p)))
+            for r in range(max(len(states) for states in ranked)):
+                t0s = [states[min(r, len(states) - 1)] for states in ranked]
+                if all(np.array_equal(a, b) for a, b in zip(t0s, own)):
+                    continue  # the states the load's own run started from
+                moved = [pm.pose.label or f"pose {i + 1}" for i, (pm, a, b) in enumerate(zip(prob.pm, t0s, own)) if not np.array_equal(a, b)]
+                run(x, t0s, f"another stable state of {', '.join(moved[:3])}{' and more' if len(moved) > 3 else ''} at the load " + ", ".join(
+                    f"{lab}={v:.4g}" for lab, v in zip(prob.labels, x)))
+    bar.close()
     runs.sort(key=lambda r: r[0])
     # among the loads that explain the data equally well, one whose states the actuator can hold comes first
     stable_runs = [r for r in runs if r[0] <= runs[0][0] + chi_k and all(np.linalg.eigvalsh(part[0])[0] > 0 for part in r[4])]
@@ -987,12 +1026,13 @@ def estimate_load(
     warnings: list[str] = []
     undetermined = _undetermined_words(prob, unknown, direction, poses)
     warnings += [f"not identifiable: {u}" for u in undetermined]
-    if dof > 0 and p_value < 1e-3:
-        warnings.append(f"the residuals are larger than the stated standard deviations allow (chi-square {cost:.3g} on {dof} degrees "
-                        f"of freedom, p = {p_value:.2g}): the model, the pressure or the deviations are off, and the intervals are too narrow")
-    elif dof <= 0 and cost > float(stats.chi2.ppf(0.999, 1)):
-        warnings.append(f"no load explains the data within the stated standard deviations (chi-square {cost:.3g} with no degrees of freedom "
-                        "left): the model, the pressure or the deviations are off")
+    misfit = ""
+    if dof > 0 and p_value < MISFIT_P:
+        misfit = (f"no load explains the data: chi-square {cost:.3g} on {dof} degrees of freedom (p = {p_value:.2g} < {MISFIT_P:g}); "
+                  "the model, the pressure or the standard deviations are off, and the estimate and its interval mean nothing")
+    elif dof <= 0 and cost > float(stats.chi2.ppf(1.0 - MISFIT_P, 1)):
+        misfit = (f"no load explains the data within the stated standard deviations: chi-square {cost:.3g} with no degrees of freedom "
+                  "left; the model, the pressure or the standard deviations are off")
     if len(candidates) > 1:
         warnings.append(f"not unique: {len(candidates)} loads explain the data equally well within the noise (listed under alternatives)")
     if undetermined:
@@ -1029,11 +1069,96 @@ def estimate_load(
         warnings += [f"{label}: outside the model's range: {f.message}" for f in findings]
     if any(not all(c.stable) for c in candidates[1:]):
         warnings.append("some alternatives hold an unstable state (marked): the actuator could not hold those")
+    if misfit:  # an estimate that explains nothing is no estimate, whatever else holds
+        status, message = "misfit", misfit
     return LoadEstimate(
         labels=prob.labels, units=prob.units, level=options.level, estimate=x, std_error=se, interval=interval, covariance=cov_x,
         correlation=corr, fisher=F, identifiable=ident, undetermined=tuple(undetermined), unique=len(candidates) == 1 and ident,
         alternatives=tuple(candidates), chi2=cost, dof=dof, p_value=p_value, residuals=tuple(residuals), states=tuple(states),
         poses=poses, status=status, message=message, warnings=tuple(warnings), starts=len(starts), iterations=iterations,
+        solve_time_s=time.perf_counter() - t0)
+
+
+class _NoBar:
+    total = 0
+
+    def update(self, k: int) -> None:
+        pass
+
+    def refresh(self) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def _bar(label: str | None, total: int, unit: str):
+    """A tqdm bar on stderr named ``label`` (only on a terminal), or one that shows nothing."""
+    if not label:
+        return _NoBar()
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, unit=unit, desc=label, leave=False, disable=None)  # None: only on a terminal
+
+
+def _block_diagonal(blocks: Sequence[np.ndarray]) -> np.ndarray:
+    size = sum(len(b) for b in blocks)
+    out = np.zeros((size, size))
+    at = 0
+    for b in blocks:
+        out[at:at + len(b), at:at + len(b)] = b
+        at += len(b)
+    return out
+
+
+def _separate(prob: _Problem, base: Scene, options: SensingOptions, carried: tuple[str, ...], cov: np.ndarray | None,
+              progress: str | None, t0: float) -> LoadEstimate:
+    """The estimate of poses of several loads: the loads share no unknown (each pose's residual
+    depends on its own load only, and the actuator's carried uncertainty enters each pose's own
+    covariance), so the least-squares problem is block-diagonal and each load is estimated on its
+    own; their results are put together (estimates, block-diagonal covariance and Fisher matrix,
+    chi-square summed). An alternative is one load's alternative with the others at their estimate."""
+    bar = _bar(progress, len(prob.loads), "load")
+    subs = []
+    for ld in prob.loads:
+        subs.append(estimate_load(tuple(p for p in prob.poses if p.load == ld), prob.free, base, options, carried=carried,
+                                  carried_covariance=cov))
+        bar.update(1)
+    bar.close()
+    poses = tuple(p for ld in prob.loads for p in prob.poses if p.load == ld)
+    estimate = np.concatenate([s.estimate for s in subs])
+    std_error = np.concatenate([s.std_error for s in subs])
+    chi2 = float(sum(s.chi2 for s in subs))
+    m = sum(p.count() for p in poses)
+    dof = m - prob.size
+    p_value = float(stats.chi2.sf(chi2, dof)) if dof > 0 and math.isfinite(chi2) else math.nan
+    warnings = [w if w.startswith(f"{ld}: ") else f"load {ld}: {w}" for ld, s in zip(prob.loads, subs) for w in s.warnings]  # a row that is its own load names itself
+    best = [s.alternatives[0] if s.alternatives else None for s in subs]
+    candidates: list[Candidate] = []
+    if all(b is not None for b in best):
+        def joined(parts: Sequence[Candidate], start: str) -> Candidate:
+            return Candidate(np.concatenate([c.estimate for c in parts]), float(sum(c.chi2 for c in parts)),
+                             tuple(t for c in parts for t in c.states), tuple(v for c in parts for v in c.stable),
+                             tuple(e for c in parts for e in c.min_eigenvalue), start)
+
+        candidates.append(joined(best, "each load's estimate"))
+        for j, s in enumerate(subs):
+            for alt in s.alternatives[1:]:
+                candidates.append(joined([alt if k == j else b for k, b in enumerate(best)], f"load {prob.loads[j]}: {alt.start}"))
+    status, message = "ok", ""
+    for rank in ("unstable", "misfit", "failed"):  # the worst of the loads' statuses, named
+        bad = [ld for ld, s in zip(prob.loads, subs) if s.status == rank]
+        if bad:
+            status = rank
+            message = "; ".join(f"load {ld}: {s.message}" for ld, s in zip(prob.loads, subs) if s.status == rank)
+    return LoadEstimate(
+        labels=prob.labels, units=prob.units, level=options.level, estimate=estimate, std_error=std_error,
+        interval=np.vstack([s.interval for s in subs]), covariance=_block_diagonal([s.covariance for s in subs]),
+        correlation=_block_diagonal([s.correlation for s in subs]), fisher=_block_diagonal([s.fisher for s in subs]),
+        identifiable=all(s.identifiable for s in subs), undetermined=tuple(f"load {ld}: {u}" for ld, s in zip(prob.loads, subs) for u in s.undetermined),
+        unique=all(s.unique for s in subs), alternatives=tuple(candidates), chi2=chi2, dof=dof, p_value=p_value,
+        residuals=tuple(r for s in subs for r in s.residuals), states=tuple(st for s in subs for st in s.states), poses=poses,
+        status=status, message=message, warnings=tuple(warnings), starts=subs[0].starts, iterations=sum(s.iterations for s in subs),
         solve_time_s=time.perf_counter() - t0)
 
 

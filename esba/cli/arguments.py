@@ -20,8 +20,25 @@ class UsageError(InputError):
     """Bad input from the command line: reported in one line with exit code 2."""
 
 
+#: A token that starts like a negative number (``-3.95,6.25``, ``-.5``, ``-1:2:5``) is a value,
+#: never a flag: no esba flag starts with a digit. argparse's own rule takes only one plain number
+#: (``-3.95``), so a list that starts negative would be "expected one argument".
+NEGATIVE_VALUE = re.compile(r"^-\.?\d")
+
+
 class Parser(argparse.ArgumentParser):
-    """An argparse parser whose errors are :class:`UsageError` (one line, exit code 2)."""
+    """An argparse parser whose errors are :class:`UsageError` (one line, exit code 2), and whose
+    flags take values that start with a minus sign (:data:`NEGATIVE_VALUE`)::
+
+        >>> p = Parser(prog="x")
+        >>> _ = p.add_argument("--theta")
+        >>> p.parse_args(["--theta", "-3.95,6.25,20.24"]).theta
+        '-3.95,6.25,20.24'
+    """
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_VALUE  # argparse's hook (all supported Pythons)
 
     def error(self, message: str) -> None:  # one line, exit 2 (argparse prints usage too)
         raise UsageError(message)
@@ -62,6 +79,21 @@ def refuse(args: argparse.Namespace, dests: Sequence[str], why: str) -> None:
     given = given_flags(args, *dests)
     if given:
         raise UsageError(f"{', '.join(given)} {'is' if len(given) == 1 else 'are'} not used {why}")
+
+
+def one_of(args: argparse.Namespace, *pairs: tuple[str, str]) -> None:
+    """A usage error when both flags of a pair were given (``--out`` and ``--no-out``): the
+    command cannot do both, and silently obeying one would surprise."""
+    for a, b in pairs:
+        if len(given_flags(args, a, b)) == 2:
+            raise UsageError(f"--{a.replace('_', '-')} and --{b.replace('_', '-')}: give one of the two")
+
+
+def with_json(args: argparse.Namespace, *dests: str) -> None:
+    """A usage error when a flag that only shapes the JSON output is given without ``--json``."""
+    given = given_flags(args, *dests)
+    if given and not getattr(args, "json", False):
+        raise UsageError(f"{', '.join(given)} only shapes the JSON output: give {'it' if len(given) == 1 else 'them'} with --json")
 
 
 def float_arg(text: str) -> float:

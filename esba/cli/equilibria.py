@@ -22,7 +22,8 @@ def _equilibria_table(d: dict) -> str:
     for k, s in enumerate(d["states"], start=1):
         tip = f"{s['tip_mm'][0]:7.2f}, {s['tip_mm'][1]:7.2f}"
         theta = ", ".join(f"{t:.2f}" for t in s["theta_deg"][:8]) + (", ..." if len(s["theta_deg"]) > 8 else "")
-        lines.append(f"  {k:>2}  {s['stability']:<9} {s['morse_index']:>5} {s['total_angle_deg']:>10.3f} {tip:>17} {s['energy_nmm']:>12.4f} {s['min_eigenvalue']:>15.4g}  ({theta})")
+        lines.append(f"  {k:>2}  {s['stability']:<9} {s['morse_index']:>5} {s['total_angle_deg']:>10.3f} {tip:>17} {s['energy_nmm']:>12.4f} {s['min_eigenvalue']:>15.4g}  ({theta})"
+                     + ("" if s["in_domain"] else "  OUTSIDE the model's domain"))
     stable = d["stable"]
     if d["least_energy_stable"] is not None:
         least = d["least_energy_stable"] + 1
@@ -40,8 +41,11 @@ def _equilibria_table(d: dict) -> str:
         lines.append("completeness: not checked (--no-check)")
     else:
         lines.append("completeness: " + ("a second search from fresh starts found nothing new" if d["complete"] else f"the second search from fresh starts found {d['check_found']} more (listed above): the search may be incomplete"))
-    if d["outside_domain"]:
-        lines.append(f"outside the domain: {d['outside_domain']} equilibria beyond it, not listed")
+    listed = d["outside_domain"] - d["not_listed"]
+    if listed:
+        lines.append(f"outside the model's domain: {listed} of the states listed (the warnings say how, as solve's do)")
+    if d["not_listed"]:
+        lines.append(f"beyond the domain searched: {d['not_listed']} equilibria, not listed")
     lines.append(f"search: {d['starts']} starts, {d['rounds']} deflation rounds, {d['newton_runs']} Newton runs, {d['newton_iterations']} iterations, {d['time_s']:.3f} s")
     if d.get("figure"):
         lines.append(f"figure: wrote {d['figure']}")
@@ -68,6 +72,9 @@ def _cmd_equilibria(args: argparse.Namespace) -> int:
 
         data["figure"] = str(save_figure(equilibria_figure(res), figure).resolve())
     print_result(args, data, _equilibria_table)
+    for k, s in enumerate(res.states, start=1):
+        for f in s.validity:
+            print(f"esba: warning: state #{k} ({s.total_angle_deg:.2f} deg): {f.message}", file=sys.stderr)
     if res.complete is False:
         print(f"esba: warning: the completeness check found {res.check_found} equilibria the first search had not: raise --starts", file=sys.stderr)
     if not res.states:

@@ -98,12 +98,12 @@ def _fit_file(path: str, scene):
     """Actuator values and their covariance from ``esba fit --json`` output."""
     from esba.calibration.sensing import ACTUATOR
 
+    from esba.infra.inputs import read_text
+
+    text = read_text(path, "--fit", UsageError)  # the guards of a scene file: a regular file, bounded, UTF-8
     try:
-        with open(path, encoding="utf-8") as fh:
-            data = json.load(fh)
-    except OSError as exc:
-        raise UsageError(f"--fit {path!r}: cannot read: {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        data = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as exc:
         raise UsageError(f"--fit {path!r}: not the JSON of `esba fit --json`: {str(exc)[:80]}") from None
     params = data.get("parameters") if isinstance(data, dict) else None
     cov = data.get("covariance") if isinstance(data, dict) else None
@@ -215,7 +215,8 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
             cov = [[s.sigma * s.sigma if i == j else 0.0 for j in range(len(sigmas))] for i, s in enumerate(sigmas)]
         poses = load_poses(args.poses, scene.segments) if args.poses is not None else _flag_poses(args, scene)
         options = SensingOptions(level=args.level, starts=args.starts)
-        result = estimate_load(poses, args.free, scene, options, carried=carried, carried_covariance=cov)
+        result = estimate_load(poses, args.free, scene, options, carried=carried, carried_covariance=cov,
+                               progress=None if args.json else "esba estimate")  # a bar with its forecast, on a terminal
     except (SensingError, MeasurementError, SceneError, UncertaintyError) as exc:
         raise UsageError(str(exc)) from None
     print_result(args, result.to_dict(), _estimate_table)

@@ -8,12 +8,14 @@ import sys
 
 from esba.infra import outputs
 
-from .arguments import UsageError, add_scene_flags, count_arg, scene_from_args, write_page
+from .arguments import UsageError, add_scene_flags, count_arg, float_arg, one_of, scene_from_args, with_json, write_page
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 #: Where ``esba map`` writes its fold curves and figure unless told otherwise (the current folder).
 DEFAULT_MAP_OUT = "esba-map.csv"
 DEFAULT_MAP_FIGURE = "esba-map.png"
+#: The most fold curves the table lists (a periodic axis over many turns repeats them).
+MAX_LISTED = 20
 
 #: The parameters of a map (``esba.paths.problem.PARAMETERS``, written out so that building the
 #: parser does not import CasADi; a test checks they agree). A payload's take its number (payload2).
@@ -32,10 +34,10 @@ def axis_arg(flag: str):
         base = name.rstrip("0123456789")
         if name not in _MAP_PARAMETERS and not (base in ("payload", "omega", "at") and base != name):
             raise argparse.ArgumentTypeError(f"{flag}={text!r}: unknown parameter {name!r}; expected {allowed}")
-        try:
-            lo, hi = float(parts[1]), float(parts[2])
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{flag}={text!r}: FROM and TO must be numbers; expected {allowed}") from None
+        try:  # the number rule of every other flag (float_arg): no 1_10, no other scripts' digits, no subnormals
+            lo, hi = float_arg(parts[1]), float_arg(parts[2])
+        except argparse.ArgumentTypeError as exc:
+            raise argparse.ArgumentTypeError(f"{flag}={text!r}: FROM and TO must be numbers ({exc}); expected {allowed}") from None
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise argparse.ArgumentTypeError(f"{flag}={text!r}: expected finite FROM < TO")
         return name, lo, hi
@@ -54,12 +56,18 @@ def _map_table(d: dict) -> str:
         f"fold curves: {s['curves']} ({s['points']} points); cusps: {s['cusp']}; "
         f"fold/branch-point meetings: {s['branch point of the x-path'] + s['branch point of the y-path']}",
     ]
-    for c in d["fold_curves"]:
+    if d.get("periodic"):
+        lines.append(d["periodic"]["text"] + f" ({d['periodic']['curves_per_period']} curves a period)")
+    for c in d["fold_curves"][:MAX_LISTED]:
         lines.append(f"  curve {c['index']}: {c['points']} points, {x['parameter']} {c['x_range'][0]:.6g}..{c['x_range'][1]:.6g}{ux}, "
                      f"{y['parameter']} {c['y_range'][0]:.6g}..{c['y_range'][1]:.6g}{uy}; {c['stop_reason']}")
-    for p in d["special_points"]:
+    if len(d["fold_curves"]) > MAX_LISTED:
+        lines.append(f"  ... {len(d['fold_curves']) - MAX_LISTED} more curves (--out FILE lists them)")
+    for p in d["special_points"][:2 * MAX_LISTED]:
         lines.append(f"  {p['label']:3} {p['kind']:<27} {x['parameter']} = {p[x['parameter']]:.10g}{ux}, {y['parameter']} = {p[y['parameter']]:.10g}{uy}, "
                      f"total angle {p['total_angle_deg']:.3f} deg  {p['status']}")
+    if len(d["special_points"]) > 2 * MAX_LISTED:
+        lines.append(f"  ... {len(d['special_points']) - 2 * MAX_LISTED} more special points (--out FILE.json lists them)")
     st = d["stable_states"]
     lines.append(f"stable states: {st['min']} to {st['max']}; more than one on {100 * st['fraction_multistable']:.1f}% of the map "
                  f"(anchored by brute force at {x['parameter']} = {d['reference'][x['parameter']]:g}, {y['parameter']} = {d['reference'][y['parameter']]:g}: "
@@ -95,6 +103,8 @@ def _cmd_map(args: argparse.Namespace) -> int:
     for flag, v in (("--x", args.x), ("--y", args.y)):
         if v is None:
             raise UsageError(f"the following arguments are required: {flag} PARAM:FROM:TO")
+    one_of(args, ("out", "no_out"), ("plot", "no_plot"))
+    with_json(args, "points")
     out = None if args.no_out else outputs.check_file(DEFAULT_MAP_OUT if args.out is None else args.out, "--out", (".csv", ".json"))
     plot = None if args.no_plot else outputs.figure_file(DEFAULT_MAP_FIGURE if args.plot is None else args.plot, "--plot", DEFAULT_MAP_FIGURE)
     (xname, x0, x1), (yname, y0, y1) = args.x, args.y

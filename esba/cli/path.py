@@ -13,7 +13,9 @@ from .arguments import (
     add_scene_flags,
     count_arg,
     float_arg,
+    one_of,
     scene_from_args,
+    with_json,
     write_page,
 )
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
@@ -113,10 +115,8 @@ def _cmd_path(args: argparse.Namespace) -> int:
         raise UsageError("the following arguments are required: --to")
     if not math.isfinite(args.to):
         raise UsageError(f"--to {args.to!r}: expected the finite value of --param to trace to")
-    if args.no_out and args.out is not None:
-        raise UsageError("--out and --no-out: give one of the two")
-    if args.no_plot and args.plot is not None:
-        raise UsageError("--plot and --no-plot: give one of the two")
+    one_of(args, ("out", "no_out"), ("plot", "no_plot"))
+    with_json(args, "points")
     out = None if args.no_out else outputs.check_file(DEFAULT_PATH_OUT if args.out is None else args.out, "--out", (".csv", ".json"))
     plot = None if args.no_plot else outputs.figure_file(DEFAULT_PATH_FIGURE if args.plot is None else args.plot, "--plot", DEFAULT_PATH_FIGURE)
     from esba.analysis.path_analysis import analyse

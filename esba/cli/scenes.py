@@ -329,7 +329,7 @@ def _stiffness_table(d: dict) -> str:
         f"{'F (N)':>8} {'delta (mm)':>11} {'K (N/m)':>9} {'tip x, y (mm)':>18}",
     ]
     for f, dl, k, tip in zip(d["payloads_n"], d["displacement_mm"], d["stiffness_n_per_m"], d["tip_mm"]):
-        lines.append(f"{f:8.3f} {dl:11.3f} {k:9.3f} {tip[0]:8.2f}, {tip[1]:7.2f}")
+        lines.append(f"{f:8.3f} {dl:11.3f} {'unbounded' if k is None else format(k, '9.3f'):>9} {tip[0]:8.2f}, {tip[1]:7.2f}")
     t = d["tangent"]
     def k(v):
         return "unbounded (the tip does not move that way to first order)" if v is None or not math.isfinite(v) else f"{v:.3f} N/m"

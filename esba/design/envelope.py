@@ -100,8 +100,12 @@ class Envelope:
             raise DesignError(f"margin={m:g}: expected a number >= 0")
         if not isinstance(self.directions_deg, tuple) or not self.directions_deg:
             raise DesignError(f"directions_deg={self.directions_deg!r}: expected a tuple of at least one direction (degrees)")
+        unique: list[float] = []
         for a in self.directions_deg:
-            checks.finite("direction", a, DesignError)
+            a = checks.finite("direction", a, DesignError)
+            if not any(math.isclose((a - u + 180.0) % 360.0 - 180.0, 0.0, abs_tol=1e-9) for u in unique):
+                unique.append(a)  # a direction is periodic: 450 deg is 90 deg, checked once
+        object.__setattr__(self, "directions_deg", tuple(unique))
         at = checks.finite("at", self.at, DesignError)
         if not 0 < at <= 1:
             raise DesignError(f"at={at:g}: expected a fraction of L in (0, 1]")

@@ -20,7 +20,7 @@ from derive.effects import DEFAULT_VARIANT, VARIANTS
 from esba.infra import checks
 from esba.infra.errors import InputError
 from esba.model import resolution
-from esba.model.scene import MAX_TARGET_ANGLE_DEG, Actuator, Payload, Scene
+from esba.model.scene import MAX_PAYLOAD, MAX_TARGET_ANGLE_DEG, Actuator, Payload, Scene
 from esba.statics.equilibrium import DEFAULT_OPTIONS
 
 __all__ = ["OBJECTIVES", "METHODS", "GEOMETRY_EPS", "DesignError", "DesignProblem", "DesignOptions", "DEFAULT_DESIGN_OPTIONS"]
@@ -121,6 +121,8 @@ class DesignProblem:
         if not isinstance(self.actuator, Actuator):
             raise DesignError(f"actuator={self.actuator!r}: expected an Actuator")
         object.__setattr__(self, "payload_n", _finite("payload_n", self.payload_n, 0.0, open_low=True))
+        if self.payload_n > MAX_PAYLOAD:
+            raise DesignError(f"payload_n={self.payload_n:g} N: expected at most {MAX_PAYLOAD:g} N (a scene's bound: the model means nothing beyond)")
         object.__setattr__(self, "payload_angle_deg", _finite("payload_angle_deg", self.payload_angle_deg))
         object.__setattr__(self, "start_angle_deg", _finite("start_angle_deg", self.start_angle_deg, 0.0, open_low=True))
         for name in ("min_stiffness", "max_pressure", "target_angle_deg"):

@@ -51,13 +51,17 @@ def draw_map(ax: Axes, smap: StabilityMap) -> None:
     ax.pcolormesh(smap.grid_x, smap.grid_y, counts, cmap=cmap, norm=norm, shading="nearest", rasterized=True)
     for k in sorted(set(int(c) for c in np.unique(counts))):
         ax.fill_between([], [], color=COUNT_COLOURS[k], label=f"{k} stable state{'s' if k != 1 else ''}")
+    per_period = None if smap.base is None else len(smap.base.curves)  # a periodic axis: the copies of one period's curves
     for c in smap.curves:
         x, y = np.asarray(c.xs, dtype=float), np.asarray(c.ys, dtype=float)
         stable = np.asarray(c.stable, dtype=bool)
         xs, ys = np.where(stable, x, np.nan), np.where(stable, y, np.nan)
-        ax.plot(xs, ys, "-", color="k", lw=1.6, label=f"fold curve {c.index}")
+        copy = per_period is not None and c.index >= per_period
+        name = "_nolegend_" if copy else f"fold curve {c.index}" + (" (and its copies a period on)" if per_period is not None else "")
+        ax.plot(xs, ys, "-", color="k", lw=1.6, label=name)
         if not stable.all():
-            ax.plot(np.where(stable, np.nan, x), np.where(stable, np.nan, y), ":", color="k", lw=1.2, label=f"fold curve {c.index} (unstable pair)")
+            ax.plot(np.where(stable, np.nan, x), np.where(stable, np.nan, y), ":", color="k", lw=1.2,
+                    label="_nolegend_" if copy else f"fold curve {c.index} (unstable pair)")
     cusps = [p for p in smap.special if p.kind == "cusp"]
     bps = [p for p in smap.special if p.kind != "cusp"]
     if cusps:

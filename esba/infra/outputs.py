@@ -44,6 +44,7 @@ esba.infra.outputs.OutputError: --out '...page.md': the folder '...missing' does
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
 import tempfile
@@ -196,6 +197,19 @@ def _no_trailing_separator(path: str | Path, flag: str) -> None:
         raise OutputError(f"{flag} {_show(text)}: ends in '/' but is not an existing folder; expected a file name (or an existing folder)")
 
 
+def _no_symlink_loop(path: str | Path, flag: str) -> None:
+    """A symlink that loops (``ln -s loop loop``), on its own or further up, names nothing that
+    can be written: refused in one line (``Path.resolve`` would raise a bare RuntimeError, a
+    write "Too many levels of symbolic links" after the work)."""
+    try:
+        os.stat(path)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise OutputError(f"{flag} {_show(path)}: a symlink that loops (it points, through links, back at itself); expected a file or folder") from None
+    except ValueError:  # a NUL in the name: the checks below say so
+        pass
+
+
 def check_folder(path: str | Path, flag: str, create: bool = True) -> Path:
     """An output folder that exists (or, with ``create``, whose parent does) and can be written.
 
@@ -204,6 +218,7 @@ def check_folder(path: str | Path, flag: str, create: bool = True) -> Path:
     folder = Path(path)
     if str(path) == "":
         raise OutputError(f"{flag} '': expected a folder")
+    _no_symlink_loop(folder, flag)
     if folder.exists() and not folder.is_dir():
         raise OutputError(f"{flag} {_show(folder)}: a file is in the way, expected a folder")
     if not folder.exists():
@@ -244,6 +259,7 @@ def check_file(path: str | Path, flag: str, suffixes: tuple[str, ...] | None = N
     if str(path) == "":
         raise OutputError(f"{flag} '': expected a file name")
     _no_trailing_separator(path, flag)
+    _no_symlink_loop(path, flag)
     file = Path(path)
     if suffixes is not None and file.suffix.lower() not in suffixes:
         got = f"'{file.suffix}'" if file.suffix else "no suffix"
@@ -286,6 +302,7 @@ def figure_file(path: str | Path, flag: str, default_name: str) -> Path:
     if str(path) == "":
         raise OutputError(f"{flag} '': expected a figure file (e.g. shape.png) or a folder")
     _no_trailing_separator(path, flag)
+    _no_symlink_loop(path, flag)
     file = Path(path)
     if file.is_dir():
         file = file / default_name

@@ -30,7 +30,7 @@ from esba.infra import checks
 from esba.infra.errors import EquilibriumError
 
 from .generated import Model
-from .scene import Scene, SceneError
+from .scene import Scene, SceneError, check_target_angle
 
 __all__ = ["pressure_for_angle", "unloaded_pressure", "load_parameter", "chain_tip"]
 
@@ -81,8 +81,7 @@ def pressure_for_angle(scene: Scene, angle_deg: float | None = None) -> float:
         angle_deg = scene.target_angle_deg
     if angle_deg is None:
         raise EquilibriumError("pressure_for_angle needs angle_deg (the scene gives a pressure, not a target angle)")
-    checks.finite("target_angle_deg", angle_deg, SceneError)
-    return _pressure_for_angle(scene, float(angle_deg))
+    return _pressure_for_angle(scene, check_target_angle(angle_deg))  # the bounds a Scene's target angle has
 
 
 @lru_cache(maxsize=1024)

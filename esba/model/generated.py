@@ -29,6 +29,7 @@ and generated again into the cache.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import importlib.util
 import json
@@ -43,16 +44,64 @@ from typing import Any, Callable, Mapping, Sequence
 import casadi as ca
 import numpy as np
 
+from derive import effects as _effects
 from derive.effects import (
     DEFAULT_EFFECTS,
     DEFAULT_VARIANT,
-    EffectError,
-    EffectSet,
     check_variant,
     model_filename,
 )
 from derive.provenance import GENERATED_DIR, source_hash
 from esba.infra import cache, checks, fncache
+from esba.infra.errors import InputError
+
+
+class EffectError(InputError, _effects.EffectError):
+    """An effect list, variant or segment count that esba does not know: esba's input error (an
+    :class:`~esba.infra.errors.EsbaError`) and derive's :class:`derive.effects.EffectError` alike
+    (derive, below esba, cannot know esba's errors)."""
+
+
+#: The switches of an effect set (True or False each).
+_SWITCHES = ("air", "axial", "radial", "fibres", "gravity")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class EffectSet(_effects.EffectSet):
+    """Which energy terms a model contains (:class:`derive.effects.EffectSet`, which it equals
+    field by field), checked as esba checks input: a switch is True or False (``air='yes'`` is
+    refused), every refusal an :class:`EffectError`.
+
+    >>> EffectSet(payloads=2) == _effects.EffectSet(payloads=2)
+    True
+    >>> EffectSet(air="yes")
+    Traceback (most recent call last):
+    ...
+    esba.model.generated.EffectError: air='yes': expected True or False
+    """
+
+    def __post_init__(self) -> None:
+        for name in _SWITCHES:
+            if not isinstance(getattr(self, name), bool):
+                raise EffectError(f"{name}={checks.quote(getattr(self, name))}: expected True or False")
+        try:
+            super().__post_init__()
+        except _effects.EffectError as exc:
+            raise EffectError(str(exc)) from None
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, _effects.EffectSet):
+            return NotImplemented
+        return dataclasses.astuple(self) == dataclasses.astuple(other)
+
+    __hash__ = _effects.EffectSet.__hash__
+
+    @classmethod
+    def parse(cls, text: str | list[str] | tuple[str, ...]) -> _effects.EffectSet:
+        try:
+            return _effects.EffectSet.parse(text)
+        except _effects.EffectError as exc:
+            raise EffectError(str(exc)) from None
 
 __all__ = [
     "Model",
@@ -447,8 +496,11 @@ def load_model(n: int = 3, effects: EffectSet | str = DEFAULT_EFFECTS, variant: 
         when the model must be generated and the cache folder cannot be used.
     """
     n = checks.segments(n, EffectError)
-    check_variant(variant)
+    try:
+        check_variant(variant)
+    except _effects.EffectError as exc:
+        raise EffectError(str(exc)) from None
     eff = EffectSet.parse(effects) if isinstance(effects, (str, list, tuple)) else effects
-    if not isinstance(eff, EffectSet):
+    if not isinstance(eff, _effects.EffectSet):
         raise EffectError(f"effects={effects!r}: expected a string such as {DEFAULT_EFFECTS!r} or an EffectSet")
     return _load(n, eff, variant)

@@ -68,11 +68,18 @@ from esba.infra.errors import InputError
 
 from .generated import Model, load_model
 
-__all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure"]
+__all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "MAX_PRESSURE", "MAX_PAYLOAD"]
 
 #: The largest target angle (the unloaded bend a pressure is sought for), degrees: ten turns, as a
 #: measurement file allows (:data:`esba.calibration.measurements.MAX_ANGLE_DEG`); 1e6 deg is a typo.
 MAX_TARGET_ANGLE_DEG = 3600.0
+
+#: The largest pressure a scene takes, MPa: ten times the range :mod:`esba.model.validity` calls
+#: far outside the paper's (FAR_FACTOR = 5 times its 0.2 MPa), where the linear-elastic model
+#: means nothing (strains of hundreds); up to it a result is computed and warned of.
+MAX_PRESSURE = 10.0
+#: The largest payload a scene takes, N: ten times validity's far range (5 times the paper's 2 N).
+MAX_PAYLOAD = 100.0
 
 #: Standard gravity, m/s^2.
 STANDARD_GRAVITY = 9.81
@@ -104,7 +111,29 @@ def check_pressure(value: Any, where: str = "pressure") -> float:
     p = _number(where, value)
     if p < 0:
         raise SceneError(f"{where}={p:g}: expected a pressure >= 0 MPa")
+    if p > MAX_PRESSURE:
+        raise SceneError(f"{where}={p:g} MPa: expected at most {MAX_PRESSURE:g} MPa (50 times the paper's largest, 0.2 MPa: "
+                         "the linear-elastic model means nothing there)")
     return p
+
+
+def check_target_angle(value: Any, where: str = "target_angle_deg") -> float:
+    """A target total angle in degrees: finite, > 0 and at most :data:`MAX_TARGET_ANGLE_DEG` (the
+    check of :attr:`Scene.target_angle_deg`, for every entry point).
+
+    >>> check_target_angle(3601)
+    Traceback (most recent call last):
+    ...
+    esba.model.scene.SceneError: target_angle_deg=3601: expected an angle <= 3600 degrees (ten turns; past one the actuator already passes through itself)
+    """
+    target = _number(where, value)
+    if target <= 0:
+        raise SceneError(f"{where}={target:g}: expected an angle > 0 degrees")
+    if target > MAX_TARGET_ANGLE_DEG:
+        raise SceneError(
+            f"{where}={target:g}: expected an angle <= {MAX_TARGET_ANGLE_DEG:g} degrees (ten turns; past one the actuator already passes through itself)"
+        )
+    return target
 
 
 def _flag(where: str, value: Any) -> bool:
@@ -214,6 +243,9 @@ class Payload:
         force = _number("payload.force", self.force)
         if force < 0:
             raise SceneError(f"payload.force={force:g}: expected a magnitude >= 0 N (turn angle_deg by 180 to reverse it)")
+        if force > MAX_PAYLOAD:
+            raise SceneError(f"payload.force={force:g} N: expected at most {MAX_PAYLOAD:g} N (50 times the paper's largest, 2 N: "
+                             "the linear-elastic model means nothing there)")
         object.__setattr__(self, "force", force)
         object.__setattr__(self, "angle_deg", _number("payload.angle_deg", self.angle_deg))
         at = _number("payload.at", self.at)
@@ -274,14 +306,7 @@ class Scene:
         if self.pressure is not None:
             object.__setattr__(self, "pressure", check_pressure(self.pressure))
         else:
-            target = 90.0 if self.target_angle_deg is None else self.target_angle_deg
-            target = _number("target_angle_deg", target)
-            if target <= 0:
-                raise SceneError(f"target_angle_deg={target:g}: expected an angle > 0 degrees")
-            if target > MAX_TARGET_ANGLE_DEG:
-                raise SceneError(
-                    f"target_angle_deg={target:g}: expected an angle <= {MAX_TARGET_ANGLE_DEG:g} degrees (ten turns; past one the actuator already passes through itself)"
-                )
+            target = check_target_angle(90.0 if self.target_angle_deg is None else self.target_angle_deg)
             object.__setattr__(self, "target_angle_deg", target)
         payloads = self.payloads
         if isinstance(payloads, Payload):

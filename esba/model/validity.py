@@ -24,6 +24,13 @@ check                quantity                                                   
 "Far outside" the paper's range is five times its largest value: a factor chosen to flag
 extrapolation that is clearly beyond the experiments, not to police every design.
 
+This is the one rule of the model's domain. Every tool that reports a state judges it with
+:func:`assess` (or :func:`assess_angles` and :func:`assess_state`, functions of the scene and
+the angles, the tip from the scene's kinematics): ``solve``, ``equilibria`` (each state's ``validity``; ``outside_domain``
+counts them), paths, sweeps, ``estimate``, ``fit`` and ``design``; the exported C mirrors the
+constants below (:data:`STRAIN_LIMIT`, :data:`MAX_BEND_DEG`, the tip's x < 0,
+:data:`PAPER_MAX_PRESSURE` and :data:`PAPER_MAX_PAYLOAD` times :data:`FAR_FACTOR`).
+
 Examples
 --------
 >>> from esba.model.scene import MAIN_JOB
@@ -44,12 +51,14 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .closed_form import pressure_for_angle
 from .scene import Scene
 
 __all__ = [
     "Finding",
     "assess",
     "assess_angles",
+    "assess_state",
     "assess_arrays",
     "outer_fibre_strain",
     "chamber_wall_strain",
@@ -282,3 +291,16 @@ class Tally:
     def lines(self) -> list[str]:
         """One line per check, in the order the checks were first met."""
         return [f"{count} point(s) outside the model's range, e.g. {self.examples[check]}" for check, count in self.counts.items()]
+
+
+def assess_state(scene: Scene, theta: Sequence[float]) -> tuple[Finding, ...]:
+    """The rule of the model's domain as a function of the scene and the angles (rad) alone: the
+    findings of :func:`assess_angles` at the scene's pressure (or its target angle's). The exported
+    C mirrors this rule with the same constants.
+
+    >>> from esba.model.scene import Scene, Payload
+    >>> [f.check for f in assess_state(Scene(pressure=0.17, payloads=(Payload(2.0),)), np.radians([73.73, 80.34, 58.77]))]
+    ['tip_behind_base']
+    """
+    pressure = scene.pressure if scene.pressure is not None else pressure_for_angle(scene)
+    return assess_angles(scene, theta, pressure)

@@ -75,6 +75,7 @@ from esba.model.closed_form import pressure_for_angle
 from esba.model.generated import Model
 from esba.model.scene import Scene, SceneError
 from esba.model.stability import CRITICAL_TOL, stability_verdict
+from esba.model.validity import assess
 from esba.solvers.newton import newton_correction
 
 from .history import load_history
@@ -187,6 +188,10 @@ class State:
         max |dU/dtheta_i| at theta, N mm/rad.
     found : str
         Which search and start found it first.
+    validity : tuple of Finding
+        Where the state leaves the model's domain, by the rule ``solve`` applies
+        (:func:`esba.model.validity.assess`): a strain past 1, a bend past a turn, the tip behind
+        the base, a load far outside the paper's. Empty: inside.
     """
 
     theta: np.ndarray
@@ -198,6 +203,12 @@ class State:
     stability: str
     gradient_norm: float
     found: str = ""
+    validity: tuple = ()
+
+    @property
+    def in_domain(self) -> bool:
+        """Inside the model's domain (no :attr:`validity` finding)."""
+        return not self.validity
 
     @property
     def total_angle_deg(self) -> float:
@@ -230,6 +241,8 @@ class State:
             "stability": self.stability,
             "gradient_norm": self.gradient_norm,
             "found": self.found,
+            "in_domain": self.in_domain,
+            "validity": [f.to_dict() for f in self.validity],
         }
 
 
@@ -274,7 +287,9 @@ class Equilibria:
     starts, rounds, runs, iterations : int
         Starts of the first search; deflation rounds and Newton runs of both searches; Newton iterations.
     outside : int
-        Equilibria Newton converged to beyond the domain (not listed).
+        Equilibria Newton converged to beyond the domain searched (not listed); the listed states
+        outside the model's domain say so themselves (:attr:`State.validity`), and
+        :attr:`outside_domain` counts both.
     time_s : float
         Wall time, s.
     """
@@ -302,6 +317,12 @@ class Equilibria:
     @property
     def multistable(self) -> bool:
         return len(self.stable) > 1
+
+    @property
+    def outside_domain(self) -> int:
+        """Equilibria outside the model's domain: the listed ones that leave it (the rule of
+        ``solve``, :func:`esba.model.validity.assess`) and those beyond the search, not listed."""
+        return self.outside + sum(1 for s in self.states if not s.in_domain)
 
     @property
     def least_energy(self) -> State | None:
@@ -342,7 +363,8 @@ class Equilibria:
             "rounds": self.rounds,
             "newton_runs": self.runs,
             "newton_iterations": self.iterations,
-            "outside_domain": self.outside,
+            "outside_domain": self.outside_domain,
+            "not_listed": self.outside,
             "time_s": self.time_s,
         }
 
@@ -537,14 +559,15 @@ def _polish(kernel, pv, theta: np.ndarray, steps: int = 3) -> np.ndarray:
     return theta
 
 
-def _state(model: Model, pv: np.ndarray, theta: np.ndarray, critical_tol: float, found: str) -> State:
+def _state(model: Model, pv: np.ndarray, theta: np.ndarray, critical_tol: float, found: str, scene: Scene, pressure: float) -> State:
     st = model.state(theta, pv)
     eig = np.sort(np.linalg.eigvalsh(st["hessian"]))
     verdict = stability_verdict(eig, critical_tol)
     scale = max(float(np.max(np.abs(eig))), 1e-300)
     index = int(np.sum(eig < -critical_tol * scale))
     tip = np.asarray(st["tip"], dtype=float)
-    return State(theta, tip[:2].copy(), float(tip[2]), float(st["energy"]), eig, index, verdict, float(np.max(np.abs(st["gradient"]))), found)
+    return State(theta, tip[:2].copy(), float(tip[2]), float(st["energy"]), eig, index, verdict, float(np.max(np.abs(st["gradient"]))), found,
+                 assess(scene, theta, pressure, tip))
 
 
 def _descend(model: Model, pv: np.ndarray, theta: np.ndarray, lb: float, tol: float, max_iter: int = 300) -> np.ndarray | None:
@@ -658,7 +681,7 @@ def search(
         if total > hi_total + 1e-9 or np.any(theta <= lb):
             outside += 1
             continue
-        states.append(_state(model, pv, theta, options.critical_tol, label))
+        states.append(_state(model, pv, theta, options.critical_tol, label, scene, pressure))
     states.sort(key=lambda s: s.energy)
     # polishing may merge two that the search told apart only at its tolerance
     unique: list[State] = []

@@ -45,7 +45,7 @@ from esba.infra import checks, jsonsafe, outputs
 from esba.infra.errors import InputError
 from esba.model import resolution
 from esba.model.closed_form import chain_tip
-from esba.model.scene import Payload, Scene, SceneError
+from esba.model.scene import MAX_PAYLOAD, MAX_PRESSURE, Payload, Scene, SceneError
 from esba.model.validity import Finding, Tally, assess_arrays
 from esba.statics.batch import METHODS, BatchOptions, check_size, decide_backend, solve_arrays
 from esba.statics.batch_options import DEFAULT_BATCH_OPTIONS
@@ -226,6 +226,9 @@ def _axis(name: str, values) -> list[float] | None:
         raise SweepError(f"{name}: {min(vals):g} {AXES[name]} given; expected values >= 0")
     if name == "r2" and min(vals) <= 0:
         raise SweepError(f"r2: {min(vals):g} mm given; expected values > 0")
+    bound = {"pressure": MAX_PRESSURE, "payload": MAX_PAYLOAD}.get(name)
+    if bound is not None and max(vals) > bound:  # a scene's own bounds (esba.model.scene), before any point is solved
+        raise SweepError(f"{name}: {max(vals):g} {AXES[name]} given; expected values <= {bound:g} (the model means nothing beyond)")
     return vals
 
 
@@ -775,6 +778,8 @@ def sweep(
     -------
     SweepResult
     """
+    if options is not None and not isinstance(options, BatchOptions):
+        raise SweepError(f"options={checks.quote(options)}: expected a BatchOptions (esba.statics.batch.BatchOptions) or None")
     plan = plan_sweep(base, pressure=pressure, payload=payload, payload_angle=payload_angle, r2=r2, d=d)
     check_points(plan)
     check_size(plan.size, plan.base.segments, "the sweep", SweepError)

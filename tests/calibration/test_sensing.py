@@ -30,20 +30,23 @@ def _start(pressure: float) -> Scene:
 @pytest.mark.ci
 def test_intervals_cover_the_true_load_in_95_percent_of_200_random_cases():
     rng = np.random.default_rng(17)
-    covered_f = covered_o = 0
+    covered_f = covered_o = misfits = 0
     for _ in range(200):
         p, f, om = rng.uniform(0.08, 0.2), rng.uniform(0.5, 2.5), rng.uniform(-180.0, 180.0)
         noisy = tuple(_shape(p, f, om) + rng.normal(0.0, 0.1, 3))
         # the starts all round, without the equilibria search (it only adds loads on other branches,
         # tested below): the intervals are what is tested here
         e = estimate_load(Pose(p, (Measured("theta", noisy, 0.1),)), ("F1", "Omega1"), _start(p), SensingOptions(branches=False))
-        assert e.ok and e.identifiable
+        # under the stated noise a fit is called a misfit (chi-square p < MISFIT_P) about once in 1/MISFIT_P
+        assert e.status in ("ok", "misfit") and e.identifiable
+        misfits += e.status == "misfit"
         lo, hi = e.interval[0]
         covered_f += lo <= f <= hi
         d_omega = (e.estimate[1] - om + 180.0) % 360.0 - 180.0
         covered_o += abs(d_omega) <= Z95 * e.std_error[1]
     assert 0.93 <= covered_f / 200 <= 0.97
     assert 0.93 <= covered_o / 200 <= 0.97
+    assert misfits <= 3  # 200 MISFIT_P = 0.2 expected
 
 
 def test_noise_free_segment_angles_give_the_load_back_from_far_starts():
@@ -255,7 +258,7 @@ def test_two_payloads_are_separated_where_the_segment_angles_can_tell_them_apart
 def test_a_misfit_with_no_degrees_of_freedom_left_is_said(tmp_path):
     pose = Pose(0.15, (Measured("tip", (-9999.0, 9999.0), 1e-3),))
     e = estimate_load(pose, ("force", "angle"), _start(0.15), SensingOptions(starts=2, branches=False))
-    assert e.dof == 0 and any("no load explains the data" in w for w in e.warnings)
+    assert e.dof == 0 and e.status == "misfit" and not e.ok and "no load explains the data" in e.message
 
 
 def test_a_lone_carried_name_is_one_name():
@@ -289,10 +292,11 @@ def test_cli_a_scene_file_without_a_pressure_is_not_a_measured_pressure(tmp_path
 
 def test_cli_frozen_takes_the_fits_values_without_its_covariance(tmp_path, capsys):
     (tmp_path / "fit.json").write_text(json.dumps({"parameters": {"E": {"estimate": 0.55}}, "covariance": [[0.0004]]}))
-    argv = ["estimate", "--pressure", "0.15", "--theta", "11.88,21.31,33.05", "--sigma-theta", "0.05", "--json", "--fit", str(tmp_path / "fit.json")]
+    # angles of E = 0.54 read at E = 0.55: within 0.5 deg (at 0.05 deg no load explains them, a misfit)
+    argv = ["estimate", "--pressure", "0.15", "--theta", "11.88,21.31,33.05", "--sigma-theta", "0.5", "--json", "--fit", str(tmp_path / "fit.json")]
     assert main([*argv, "--frozen"]) == 0
     frozen = json.loads(capsys.readouterr().out)["unknowns"]["F1"]["std_error"]
-    same = estimate_load(Pose(0.15, (Measured("theta", (11.88, 21.31, 33.05), 0.05),)), ("force", "angle"),
+    same = estimate_load(Pose(0.15, (Measured("theta", (11.88, 21.31, 33.05), 0.5),)), ("force", "angle"),
                          Scene(pressure=0.15, payloads=(Payload(2.0, 90.0),)).replace(E=0.55))
     assert frozen == pytest.approx(same.std_error[0], rel=1e-9)
 
