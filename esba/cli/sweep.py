@@ -136,14 +136,20 @@ def _warn_sweep(tally) -> None:
 
 
 def _rows_held(path: str | None) -> int:
-    """The lines after the column names in the study file ``path`` (0 when there is none): a
-    resumed study that holds every row of its plan solves nothing, so it needs no cluster (its rows
-    are still checked one by one as it is read back)."""
+    """The lines after the column names in the study file ``path`` (0 when there is none, or it is
+    not a regular file: a device or FIFO is refused by the study itself): a resumed study that holds
+    every row of its plan solves nothing, so it needs no cluster (its rows are still checked one by
+    one as they are read back). Counted in blocks: the memory stays bounded whatever the file holds."""
+    if path is None or not os.path.isfile(path):
+        return 0
+    lines = 0
     try:
         with open(path, "rb") as fh:
-            return max(0, sum(1 for _ in fh) - 1)
-    except (OSError, TypeError):
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                lines += block.count(b"\n")
+    except OSError:
         return 0
+    return max(0, lines - 1)
 
 
 def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, figure) -> int:
