@@ -9,7 +9,7 @@ import sys
 from derive.effects import DEFAULT_VARIANT, VARIANTS
 from esba.infra import outputs
 
-from .arguments import UsageError, count_arg, float_arg, refuse, segments_arg
+from .arguments import UsageError, actuator_changes, add_actuator_flags, count_arg, float_arg, refuse, segments_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
 
 
@@ -112,7 +112,7 @@ def _cmd_envelope(args: argparse.Namespace) -> int:
             args.envelope_pressure, args.envelope_payload, tuple(args.envelope_angle or (90.0,)),
             1.0 if args.envelope_at is None else args.envelope_at, 0.1 if args.fold_margin is None else args.fold_margin,
         )
-        problem = DesignProblem(segments=args.segments, variant=args.variant or DEFAULT_VARIANT, max_pressure=args.max_pressure,
+        problem = DesignProblem(segments=args.segments, variant=args.variant or DEFAULT_VARIANT, max_pressure=args.max_pressure, actuator=_design_actuator(args),
                                 min_wall=0.0 if args.min_wall is None else args.min_wall)
         options = DesignOptions(starts=4 if args.starts is None else args.starts)
         pso_options = PSOOptions(particles=12 if args.particles is None else args.particles, iterations=15 if args.iterations is None else args.iterations,
@@ -150,7 +150,8 @@ def _cmd_design(args: argparse.Namespace) -> int:
     from esba.solvers.pso import PSOOptions, PSOOptionsError
 
     if args.write_doc:
-        refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot"], "with --write-doc (the page runs its own design cases)")
+        refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot", *DESIGN_ACTUATOR],
+               "with --write-doc (the page runs its own design cases)")
         page = outputs.check_file(args.write_doc, "--write-doc", (".md",))
     method = args.method or "ipopt"
     if method == "ipopt":
@@ -171,6 +172,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
             return EXIT_OK
         problem = DesignProblem(
             objective=args.objective or "stiffness",
+            actuator=_design_actuator(args),
             segments=args.segments,
             variant=args.variant or DEFAULT_VARIANT,
             min_stiffness=args.min_stiffness,
@@ -225,6 +227,24 @@ def _design_validity(result, d: dict) -> list[dict]:
     return out
 
 
+#: The actuator's fields a design holds fixed (flags as in a scene file's [actuator] table): the chamber
+#: (r2, d) is what it designs, and the mass plays no part without gravity.
+DESIGN_ACTUATOR = ("L", "r1", "rho_deg", "E")
+
+
+def _design_actuator(args: argparse.Namespace):
+    """Table 1's actuator with the flags of :data:`DESIGN_ACTUATOR`; its chamber is a placeholder
+    that the design replaces (inside any r1: a quarter of it, concentric)."""
+    from esba.model.scene import Actuator, SceneError
+
+    fixed = actuator_changes(args, DESIGN_ACTUATOR)
+    chamber = {"r2": fixed["r1"] / 4, "d": 0.0} if "r1" in fixed else {}
+    try:
+        return Actuator(**chamber, **fixed)
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+
+
 #: ``esba.design.optimise.METHODS`` and ``esba.design.optimise.OBJECTIVES`` (written out so that building the parser
 #: does not import CasADi; a test checks they agree).
 _DESIGN_METHODS = ("ipopt", "pso", "both")
@@ -255,4 +275,5 @@ def add_design(sub) -> None:
     p.add_argument("--envelope-at", type=float_arg, metavar="FRACTION", help="the envelope's payload point, a fraction of L (default 1, the tip)")
     p.add_argument("--fold-margin", type=float_arg, metavar="M", help="no fold up to (1 + M) times the envelope (default 0.1)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    add_actuator_flags(p, DESIGN_ACTUATOR, note="; the chamber r2, d is what the design finds")
     p.set_defaults(func=_cmd_design)

@@ -10,7 +10,7 @@ import sys
 from derive.effects import VARIANTS
 from esba.infra import outputs
 
-from .arguments import UsageError, output_file_arg, segments_arg
+from .arguments import UsageError, actuator_changes, add_actuator_flags, output_file_arg, segments_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 
@@ -100,6 +100,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
             raise UsageError(f"--scene {args.scene}: {args.measurements} has a [scene] table of its own; give the actuator in one place")
         data = load_measurements(args.measurements, base)
         changes = {k: v for k, v in (("segments", args.segments), ("variant", args.variant)) if v is not None}
+        changes.update(actuator_changes(args))
         if changes:  # the flags override the scene (the file's [scene], --scene or Table 1)
             data = load_measurements(args.measurements, data.base.replace(**changes))
         result = fit(data, args.free, FitOptions(level=args.level))
@@ -143,6 +144,7 @@ def add_fit(sub) -> None:
     p.add_argument("--free", type=_free_arg, default=["E", "rho"], metavar="NAMES", help="parameters to fit, comma-separated (default E,rho; any of L,r1,r2,d,rho,E,M)")
     p.add_argument("--segments", "-n", type=segments_arg, help="segment count n >= 1 (overrides the scene's)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant (overrides the scene's)")
+    add_actuator_flags(p, note="; a row's own L_mm, E_mpa, ... still win for that row")
     p.add_argument("--level", type=_level_arg, default=0.95, help="confidence level of the intervals (default 0.95)")
     p.add_argument("--plot", type=output_file_arg(".png", ".pdf", ".svg"), metavar="FILE", help="write measured against predicted, with error bars (.png, .pdf, .svg)")
     p.add_argument("--json", action="store_true", help="print JSON")

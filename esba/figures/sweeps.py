@@ -12,13 +12,14 @@ import numpy as np
 
 from esba.model.scene import Scene
 from esba.statics.batch import BatchOptions
-from esba.studies.sweep import AXES, SweepError, SweepResult, sweep
+from esba.studies.sweep import ACTUATOR_AXES, AXES, SweepError, SweepResult, sweep
 
 __all__ = ["sweep_figure", "fig12", "FIG12_D", "FIG12_R2"]
 
 
 #: The sweep axes a path can follow (:data:`esba.paths.problem.PARAMETERS` names).
-_PATH_OF_AXIS = {"pressure": "pressure", "payload": "payload", "payload_angle": "omega", "r2": "r2", "d": "d"}
+_PATH_OF_AXIS = {"pressure": "pressure", "payload": "payload", "payload_angle": "omega", "L": "L", "r1": "r1", "r2": "r2", "d": "d",
+                 "rho_deg": "rho", "E": "E", "M": "M"}
 
 
 def _traced(result: SweepResult, idx: np.ndarray, x_name: str):
@@ -26,7 +27,7 @@ def _traced(result: SweepResult, idx: np.ndarray, x_name: str):
     the curve cannot be one branch (each design at its own pressure) or has no ok point."""
     from esba.paths.continuation import PathOptions, PathProblem, trace
 
-    if x_name in ("r2", "d") and "pressure" not in result.axes and result.base.pressure is None:
+    if x_name in ACTUATOR_AXES and "pressure" not in result.axes and result.base.pressure is None:
         return None  # every design at the pressure of its own target angle: not one path
     ok = [i for i in idx if result.status[i] == "ok"]
     if not ok:
@@ -90,8 +91,11 @@ def sweep_figure(result: SweepResult, max_curves: int = 12, traced: bool = True)
     if (combos and others) or any_traced:
         ax.legend(fontsize=7)
     a, b = result.base.actuator, result.base
-    fixed = [f"L={a.L:g} r1={a.r1:g}" + ("" if "r2" in result.axes else f" r2={a.r2:g}") + ("" if "d" in result.axes else f" d={a.d:g}")]
-    fixed.append(f"rho={a.rho_deg:g} deg E={a.E:g} MPa")
+    held = [f"{k}={getattr(a, k):g}" for k in ("L", "r1", "r2", "d") if k not in result.axes]
+    held += [f"{k.removesuffix('_deg')}={getattr(a, k):g} {AXES[k]}" for k in ("rho_deg", "E") if k not in result.axes]
+    if b.gravity and "M" not in result.axes:
+        held.append(f"M={a.M:g} kg")
+    fixed = [" ".join(held)] if held else []
     if "pressure" not in result.axes:
         fixed.append(f"P={b.pressure:g} MPa" if b.pressure is not None else f"P for an unloaded {b.target_angle_deg:g} deg")
     if b.payloads:
