@@ -108,16 +108,15 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     out = result.to_dict()
     if args.plot:
-        from esba.figures.fit import Series, measured_vs_predicted, save_figure
+        from esba.figures.fit import Series, measured_vs_predicted, parameters_text, save_figure
 
         sds = {(r["row"], r["quantity"]): r["sd"] for r in out["residuals"] if r["sd_given"]}
         start = predict(data)
         cov = result.covariance if all(math.isfinite(v) for v in result.covariance.ravel()) else None
         fitted = predict(data, result.params(), cov)
         fig = measured_vs_predicted([
-            Series("start: " + ", ".join(f"{n} = {v:g}" for n, v in zip(result.free, result.start)), start, sds, "s", "0.5"),
-            Series("fitted: " + ", ".join(f"{n} = {v:.4g}" if math.isfinite(se) else f"{n} not identifiable"
-                                          for n, v, se in zip(result.free, result.estimate, result.std_error)) + " (95 %)",
+            Series("start: " + parameters_text(result.free, result.start, result.units), start, sds, "s", "0.5"),
+            Series("fitted: " + parameters_text(result.free, result.estimate, result.units, result.std_error) + " (bars: 95 %)",
                    fitted, sds, "o", "C0", face="C0"),
         ], title=f"{data.source}: the model's error against each measured value")
         try:
