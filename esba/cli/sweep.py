@@ -37,55 +37,8 @@ def _actuator_axes(args: argparse.Namespace) -> dict[str, list[float]]:
     return {name: getattr(args, name) for name in ACTUATOR_FLAGS if getattr(args, name, None) is not None}
 
 
-def _sweep_table(d: dict) -> str:
-    def axis(k: str, v: dict) -> str:  # a long axis as its range (JSON keeps every value)
-        values = v["values"]
-        return f"{k} {values} {v['unit']}" if len(values) <= 8 else f"{k} {len(values)} values from {min(values):g} to {max(values):g} {v['unit']}"
-
-    lines = [f"base: {d['base']}", "axes: " + "; ".join(axis(k, v) for k, v in d["axes"].items())]
-    lines.append("points: " + ", ".join(f"{count} {status}" for status, count in d["counts"].items()) + f"; {d['backend']}")
-    st = d.get("study")
-    if st:
-        resumed = f", resumed at row {st['resumed_from_row']}" if st["resumed_from_row"] else ""
-        lines.append(f"study: {st['chunks_solved']} chunks of up to {st['chunk']} points {st['runner']} in {st['seconds']:.1f} s{resumed}")
-    rows = d.get("rows")
-
-    def num(v, fmt: str) -> str:
-        return "-" if v is None else format(v, fmt)
-
-    if rows is not None and len(rows) <= 60:
-        from esba.studies.sweep import AXIS_COLUMNS
-
-        extra = [k for k in d["axes"] if k in ACTUATOR_FLAGS and k not in ("r2", "d")]  # other swept actuator fields
-        head = (f"{'P MPa':>9} {'F N':>6} {'Om deg':>7} {'r2':>6} {'d':>6}" + "".join(f" {k.removesuffix('_deg'):>7}" for k in extra)
-                + f" {'angle deg':>10} {'tip x, y mm':>18}  status")
-        lines.append(head)
-        snapped = 0
-        for r in rows:
-            ang = "" if r["total_angle_deg"] is None else f"{r['total_angle_deg']:10.3f}"
-            tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
-            snap = "snap-through" in (r.get("notes") or "")
-            snapped += snap
-            lines.append(f"{num(r['pressure_mpa'], '9.5f'):>9} {num(r['payload_n'], '6.3g'):>6} {num(r['payload_angle_deg'], '7.3g'):>7} "
-                         f"{num(r['r2_mm'], '6.3g'):>6} {num(r['d_mm'], '6.3g'):>6}" + "".join(f" {num(r[AXIS_COLUMNS[k]], '7.4g'):>7}" for k in extra)
-                         + f" {ang:>10} {tip:>18}  {r['status']}"
-                         + (", snapped" if snap else ""))
-        if snapped:
-            lines.append(f"snapped: {snapped} point(s) jumped on their load path (a fold); where and from which state: the notes (--json, --out)")
-    else:
-        total = sum(d["counts"].values())
-        lines.append(f"{total} rows" + (f" in {d['out']}" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
-    nothing = bool(st) and st["chunks_solved"] == 0 and st["resumed_from_row"] == st["rows"]
-    for k in ("out", "figure"):
-        if d.get(k):
-            if k == "out" and nothing:
-                lines.append(f"{d[k]} already holds every row of this study ({st['rows']}): nothing solved, nothing written")
-            else:
-                lines.append(f"wrote {d[k]}")
-    return "\n".join(lines)
-
-
 def _cmd_sweep(args: argparse.Namespace) -> int:
+    from esba.studies.sweep import sweep_table
     from esba.figures.scenes import save_figure
     from esba.figures.sweeps import fig12, sweep_figure
     from esba.model.scene import Scene
@@ -132,7 +85,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         data["out"] = str(result.write(out))
     if figure is not None:
         data["figure"] = str(save_figure(drawn, figure))
-    print_result(args, data, _sweep_table)
+    print_result(args, data, sweep_table)
     _warn_sweep(result.validity)
     if data["counts"]["not ok"]:
         print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
@@ -160,6 +113,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
     from esba.studies.chunks import StudyError, StudyStopped
     from esba.studies.distributed import DistributedError, open_runner
     from esba.studies.sweep import SweepError, plan_sweep
+    from esba.studies.sweep import sweep_table
     from esba.studies.sweep_runner import DEFAULT_CHUNK, check_study, sweep_study
 
     if args.fig12 is not None:
@@ -197,7 +151,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
             data["figure"] = str(save_figure(sweep_figure(study.result), figure))
         except SweepError as exc:
             raise UsageError(str(exc)) from None
-    print_result(args, data, _sweep_table)
+    print_result(args, data, sweep_table)
     _warn_sweep(study.result.validity if study.result is not None else (), study.outside, out)
     if data["counts"]["not ok"]:
         print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
