@@ -32,6 +32,7 @@ import casadi as ca
 import numpy as np
 
 from esba.infra.errors import RunError
+from esba.infra.report import Report
 from esba.model.generated import Model
 from esba.model.stability import CRITICAL_TOL
 from esba.paths.loading import history
@@ -289,8 +290,8 @@ def jump_lines(plane: Plane, xrange, yrange, lines: int = 21) -> dict[str, list[
 # the map
 
 
-@dataclass(frozen=True, eq=False)
-class StabilityMap:
+@dataclass(frozen=True, eq=False, repr=False)
+class StabilityMap(Report):
     """A stability map: the fold curves of the plane, the number of stable states on a raster, the jump lines.
 
     ``reference`` (x, y, count): where the count was anchored by brute force; ``grid_x``, ``grid_y``
@@ -311,6 +312,20 @@ class StabilityMap:
     jumps: dict[str, list[list[float]]]
     seconds: dict[str, float]
     recounted: tuple[tuple[float, float, int, int], ...] = ()
+
+    _plotter = "esba.figures.results:draw_stability_map"
+
+    def headline(self) -> str:
+        """One line: the two parameters, their ranges, the fold curves and cusps."""
+        (x, y), (ux, uy) = self.names, self.plane.units
+        cusps = sum(1 for p in self.special if p.kind == "cusp")
+        return (f"{x} {self.xrange[0]:g}..{self.xrange[1]:g} {ux} by {y} {self.yrange[0]:g}..{self.yrange[1]:g} {uy}: "
+                f"{len(self.curves)} fold curve{'s' if len(self.curves) != 1 else ''}, {cusps} cusp{'s' if cusps != 1 else ''}, "
+                f"{int(self.counts.min())} to {int(self.counts.max())} stable states")
+
+    def summary(self) -> str:
+        """The text ``esba map`` prints for this map (without its files)."""
+        return map_table({**self.to_dict(points=False), "scene": self.plane.scene.describe()})
 
     @property
     def spans(self) -> tuple[float, float]:

@@ -28,9 +28,10 @@ from typing import Any
 import numpy as np
 
 from esba.infra import checks
+from esba.infra.report import Report
 from esba.model.scene import Actuator, Scene, SceneError
 from esba.model.validity import assess
-from esba.paths.branch import Branch
+from esba.paths.branch import Branch, branch_lines, special_counts
 from esba.paths.continuation import PathOptions, bifurcating_branches, trace
 from esba.paths.loading import Ramp, history
 from esba.paths.problem import PathError, PathProblem
@@ -66,8 +67,8 @@ def column_buckling_load(actuator: Actuator | None = None, segments: int = 3) ->
     return (k_axial + k_radial) / float(np.max(np.linalg.eigvalsh(L / (2 * n) * quad)))
 
 
-@dataclass(frozen=True, eq=False)
-class PathAnalysis:
+@dataclass(frozen=True, eq=False, repr=False)
+class PathAnalysis(Report):
     """What :func:`analyse` found.
 
     Attributes
@@ -93,6 +94,19 @@ class PathAnalysis:
     loading: tuple[Ramp, ...]
     lam_from: float
     lam_to: float
+
+    _plotter = "esba.figures.results:draw_path"
+
+    def headline(self) -> str:
+        """One line: the parameter's range, the branches and their special points."""
+        special = [s for b in (self.main, *self.crossing) for s in b.special]
+        kinds = special_counts(special)
+        count = 1 + len(self.crossing)
+        return f"{self.main.name} {self.lam_from:g} to {self.lam_to:g}: {count} branch{'es' if count > 1 else ''}" + (f"; {kinds}" if kinds else "")
+
+    def summary(self) -> str:
+        """The text ``esba path`` prints (without its files)."""
+        return path_table(self.to_dict(points=False))
 
     @property
     def branches(self) -> tuple[Branch, ...]:
@@ -218,18 +232,8 @@ def path_table(d: dict) -> str:
     unit = d["unit"].split(" ")[0]
     unit = "" if unit == "1" else f" {unit}"
     lines = [f"scene: {d['scene']}", f"path in {d['parameter']} from {d['from']:g} to {d['to']:g}{unit}"]
-    head = f"  {'':2} {'point':<13} {d['parameter'] + unit:>16} {'angle deg':>10} {'tip x, y mm':>17}  {'Morse':>5}  status"
     for b in d["branches"]:
-        lines.append(f"{b['label'] or 'branch'}: {b['points']} points; {b['stop_reason']}")
-        if b["special_points"]:
-            lines.append(head)
-        for sp in b["special_points"]:
-            tip = f"{sp['tip_mm'][0]:7.2f}, {sp['tip_mm'][1]:7.2f}"
-            kind = f"; {sp['bifurcation']}" if sp.get("bifurcation") else ""
-            lines.append(
-                f"  {sp['label']:2} {sp['kind']:<13} {sp['lambda']:16.9g} {sp['total_angle_deg']:10.3f} {tip:>17}  "
-                f"{sp['morse_before']} -> {sp['morse_after']}  {sp['status']}{kind}"
-            )
+        lines += branch_lines(b)
     if any(b["label"].endswith(("away from chamber", "towards chamber")) for b in d["branches"]):
         lines.append("the branches off a branch point are named by the way they bend: away from the chamber (the total angle rises), towards it (falls)")
     for r in d["loading"]:

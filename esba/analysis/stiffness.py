@@ -33,6 +33,7 @@ import casadi as ca
 import numpy as np
 
 from esba.infra import checks
+from esba.infra.report import Report
 from esba.infra.threads import single_threaded
 from esba.model.generated import Model
 from esba.model.scene import Payload, Scene, SceneError, check_pressure
@@ -161,8 +162,8 @@ def tangent_stiffness(result: Equilibrium) -> TangentStiffness:
     return TangentStiffness(compliance=c, matrix=k)
 
 
-@dataclass(frozen=True, eq=False)
-class SecantStiffness:
+@dataclass(frozen=True, eq=False, repr=False)
+class SecantStiffness(Report):
     """The paper's secant stiffness for each payload (Section 4.4.3).
 
     Attributes
@@ -192,6 +193,18 @@ class SecantStiffness:
     stiffness_n_per_m: tuple[float, ...]
     initial: Equilibrium = field(repr=False)
     loaded: tuple[Equilibrium, ...] = field(repr=False)
+
+    _plotter = "esba.figures.results:draw_stiffness"
+
+    def headline(self) -> str:
+        """One line: the secant stiffness at each payload."""
+        ks = ", ".join(f"{k:.2f}" for k in self.stiffness_n_per_m)
+        fs = ", ".join(f"{f:g}" for f in self.forces)
+        return f"K = {ks} N/m at F = {fs} N ({self.angle_deg:g} deg), P = {self.pressure:.5g} MPa" + ("" if self.ok else "; NOT OK")
+
+    def summary(self) -> str:
+        """The text ``esba stiffness`` prints."""
+        return stiffness_table(self.to_dict())
 
     @cached_property
     def tangent(self) -> TangentStiffness:

@@ -69,6 +69,7 @@ from esba.analysis.sensitivity import (
 )
 from esba.infra import checks, jsonsafe
 from esba.infra.errors import InputError
+from esba.infra.report import Report
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import assess_angles
 from esba.solvers.eqnlp import EquilibriumNLP, model_gradient
@@ -355,8 +356,8 @@ def _fit_nlp(data: MeasurementSet, free: tuple[str, ...], options: FitOptions) -
 # the result
 
 
-@dataclass(frozen=True, eq=False)
-class FitResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class FitResult(Report):
     """A fit: estimates, their uncertainty, the residuals and the checks.
 
     Attributes
@@ -417,6 +418,18 @@ class FitResult:
     message: str
     iterations: int
     solve_time_s: float
+
+    _plotter = "esba.figures.results:draw_fit"
+
+    def headline(self) -> str:
+        """One line: the status and each fitted parameter with its standard error."""
+        est = ", ".join(f"{n} = {v:.5g} +- {se:.2g} {u}" if math.isfinite(se) else f"{n} = {v:.5g} {u} (not identifiable)"
+                        for n, u, v, se in zip(self.free, self.units, self.estimate, self.std_error))
+        return f"{self.status}: {est}"
+
+    def summary(self) -> str:
+        """The text ``esba fit`` prints for this fit."""
+        return fit_table(self.to_dict())
 
     @property
     def ok(self) -> bool:

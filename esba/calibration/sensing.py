@@ -77,6 +77,7 @@ from esba.analysis.sensitivity import implicit_functions, model_values, paramete
 from esba.calibration.fit import fisher_correlation, identifiability_rule
 from esba.infra import checks, jsonsafe
 from esba.infra.errors import InputError
+from esba.infra.report import Report
 from esba.model import resolution
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Payload, Scene, SceneError
@@ -336,8 +337,8 @@ class Candidate:
         })
 
 
-@dataclass(frozen=True, eq=False)
-class LoadEstimate:
+@dataclass(frozen=True, eq=False, repr=False)
+class LoadEstimate(Report):
     """The estimated loads, their uncertainty, the residuals, and whether they are unique.
 
     Attributes
@@ -393,6 +394,18 @@ class LoadEstimate:
     starts: int
     iterations: int
     solve_time_s: float
+
+    _plotter = "esba.figures.results:draw_load_estimate"
+
+    def headline(self) -> str:
+        """One line: the status and each unknown with its standard error."""
+        est = ", ".join(f"{n} = {v:.4g} +- {se:.2g} {u}" if math.isfinite(se) else f"{n} = {v:.4g} {u} (not determined)"
+                        for n, u, v, se in zip(self.labels, self.units, self.estimate, self.std_error))
+        return f"{self.status}: {est}" + ("" if self.unique else "; not unique")
+
+    def summary(self) -> str:
+        """The text ``esba estimate`` prints for this estimate."""
+        return estimate_table(self.to_dict())
 
     @property
     def ok(self) -> bool:

@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
 
@@ -70,6 +70,7 @@ from .sigmas import (
 
 __all__ = [
     "UncertaintyError",
+    "Ellipse",
     "SigmaSpec",
     "Sigma",
     "Propagation",
@@ -99,11 +100,39 @@ OUTPUTS = (("tip_x", "mm"), ("tip_y", "mm"), ("total_angle", "deg"))
 # first order
 
 
-def ellipse(cov: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, float]:
-    """Semi-axes (mm, largest first) and the angle of the major axis (rad, from x toward y) of
-    the ``level`` ellipse of a 2x2 Gaussian covariance.
+class Ellipse(NamedTuple):
+    """A covariance ellipse (:func:`ellipse`): a named tuple ``(semi_axes, angle)``, unpacked as before.
 
-    >>> axes, angle = ellipse(np.diag([4.0, 1.0]))
+    Attributes
+    ----------
+    semi_axes : ndarray
+        The semi-axes, largest first, in the covariance's unit (mm for a tip).
+    angle : float
+        The major axis's angle from x toward y, rad.
+    """
+
+    semi_axes: np.ndarray
+    angle: float
+
+    @property
+    def angle_deg(self) -> float:
+        """The major axis's angle from x toward y, degrees."""
+        return math.degrees(self.angle)
+
+    def __repr__(self) -> str:
+        a, b = (float(v) for v in self.semi_axes)
+        return f"Ellipse(semi_axes=({a:.4g}, {b:.4g}) mm, angle_deg={self.angle_deg:.2f})"
+
+
+def ellipse(cov: np.ndarray, level: float = 0.95) -> Ellipse:
+    """Semi-axes (mm, largest first) and the angle of the major axis (rad, from x toward y) of
+    the ``level`` ellipse of a 2x2 Gaussian covariance: an :class:`Ellipse`, which unpacks as
+    ``(semi_axes, angle)``.
+
+    >>> e = ellipse(np.diag([4.0, 1.0]))
+    >>> e
+    Ellipse(semi_axes=(4.895, 2.448) mm, angle_deg=0.00)
+    >>> axes, angle = e
     >>> [round(float(a), 4) for a in axes], round(angle, 6)
     ([4.8955, 2.4477], 0.0)
     """
@@ -114,7 +143,7 @@ def ellipse(cov: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, float]:
     w, v = np.linalg.eigh(cov)
     w = np.maximum(w, 0.0)[::-1]  # round-off below 0 (check_covariance refused more)
     v = v[:, ::-1]
-    return k * np.sqrt(w), float(math.atan2(v[1, 0], v[0, 0]) % math.pi)
+    return Ellipse(k * np.sqrt(w), float(math.atan2(v[1, 0], v[0, 0]) % math.pi))
 
 
 @dataclass(frozen=True, eq=False)
@@ -177,7 +206,7 @@ class Propagation:
         """Standard deviation of ``tip_x``, ``tip_y`` (mm) or ``total_angle`` (deg)."""
         return {"tip_x": self.std_tip_mm[0], "tip_y": self.std_tip_mm[1], "total_angle": self.std_total_angle_deg}[output]
 
-    def ellipse(self, level: float = 0.95) -> tuple[np.ndarray, float]:
+    def ellipse(self, level: float = 0.95) -> Ellipse:
         """The tip's ``level`` covariance ellipse: semi-axes (mm) and angle (rad, from x toward y)."""
         return ellipse(self.cov_tip, level)
 

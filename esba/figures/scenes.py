@@ -29,7 +29,7 @@ from matplotlib.figure import Figure
 from esba.infra import outputs
 from esba.statics.equilibrium import Equilibrium
 
-__all__ = ["new_figure", "save_figure", "set_title", "draw_shape", "draw_payloads", "draw_tip_ellipse", "setup_frame_axes", "solve_figure"]
+__all__ = ["new_figure", "save_figure", "set_title", "draw_shape", "draw_payloads", "draw_tip_ellipse", "setup_frame_axes", "solve_figure", "draw_solution"]
 
 
 def new_figure(width: float = 5.5, height: float = 5.0) -> Figure:
@@ -137,6 +137,13 @@ def solve_figure(result: Equilibrium, unloaded: Equilibrium | None = None, tip_c
     """
     fig = new_figure()
     ax = fig.add_subplot()
+    draw_solution(ax, result, unloaded, tip_cov, samples)
+    return fig
+
+
+def draw_solution(ax: Axes, result: Equilibrium, unloaded: Equilibrium | None = None, tip_cov: np.ndarray | None = None,
+                  samples: np.ndarray | None = None) -> None:
+    """:func:`solve_figure`'s drawing into ``ax``: the frame, the shapes, the payloads, the tip's uncertainty."""
     setup_frame_axes(ax, result.scene.actuator.r1)
     if unloaded is not None:
         draw_shape(ax, unloaded, label=f"unloaded: {unloaded.total_angle_deg:.1f} deg", color="0.55", ls="--")
@@ -150,4 +157,3 @@ def solve_figure(result: Equilibrium, unloaded: Equilibrium | None = None, tip_c
     s = result.scene
     ax.set_title(f"n = {s.segments}, P = {result.pressure:.4f} MPa, {s.variant} model", fontsize=10)
     ax.legend(loc="upper right", fontsize=8)
-    return fig

@@ -14,7 +14,7 @@ from esba.model.scene import Scene
 from esba.statics.batch import BatchOptions
 from esba.studies.sweep import ACTUATOR_AXES, AXES, SweepError, SweepResult, sweep
 
-__all__ = ["sweep_figure", "fig12", "FIG12_D", "FIG12_R2"]
+__all__ = ["sweep_figure", "draw_sweep", "fig12", "FIG12_D", "FIG12_R2"]
 
 
 #: The sweep axes a path can follow (:data:`esba.paths.problem.PARAMETERS` names).
@@ -51,8 +51,16 @@ def sweep_figure(result: SweepResult, max_curves: int = 12, traced: bool = True)
     range shows its unstable middle and its folds instead of a line through the jump; the grid
     points themselves are the markers (each solved along the scene's own load history).
     """
-    from .paths import draw_branch
     from .scenes import new_figure
+
+    fig = new_figure(6.5, 4.5)
+    draw_sweep(fig.subplots(), result, max_curves, traced)
+    return fig
+
+
+def draw_sweep(ax, result: SweepResult, max_curves: int = 12, traced: bool = True) -> None:
+    """:func:`sweep_figure`'s drawing into ``ax``."""
+    from .paths import draw_branch
 
     names = [k for k, v in result.axes.items() if len(v) > 1] or list(result.axes)
     x_name = names[0]
@@ -60,8 +68,6 @@ def sweep_figure(result: SweepResult, max_curves: int = 12, traced: bool = True)
     combos = list(itertools.product(*(result.axes[k] for k in others)))
     if len(combos) > max_curves:
         raise SweepError(f"the figure would have {len(combos)} curves (> {max_curves}): sweep fewer values of {', '.join(others)}")
-    fig = new_figure(6.5, 4.5)
-    ax = fig.subplots()
     angle = np.where(result.ok, result.total_angle_deg, np.nan)
     any_traced = any_fold = False
     for k, combo in enumerate(combos):
@@ -108,7 +114,6 @@ def sweep_figure(result: SweepResult, max_curves: int = 12, traced: bool = True)
         )
     fixed.append(f"n={b.segments}")
     ax.set_title("; ".join(fixed) + " (esba sweep --plot)", fontsize=8)
-    return fig
 
 
 

@@ -46,6 +46,7 @@ import numpy as np
 
 from esba.infra import checks, jsonsafe, outputs
 from esba.infra.errors import InputError
+from esba.infra.report import Report
 from esba.model import resolution
 from esba.model.closed_form import chain_tip
 from esba.model.scene import ACTUATOR_RULES, Actuator, Payload, Scene, SceneError, actuator_rule, check_actuator_field
@@ -610,8 +611,8 @@ def check_resumed_rows(plan: SweepPlan, rows: Sequence[Mapping[str, Any]], where
 # the result
 
 
-@dataclass(frozen=True, eq=False)
-class SweepResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class SweepResult(Report):
     """Every point of a sweep grid: the axes, the status and the equilibrium of each point.
 
     Attributes
@@ -657,6 +658,18 @@ class SweepResult:
     validity: tuple[tuple[Finding, ...], ...] = ()
     identity: dict | None = None
     settings: dict = dataclasses.field(default_factory=dict)
+
+    _plotter = "esba.figures.results:draw_sweep"
+
+    def headline(self) -> str:
+        """One line: the axes, the points and how many are ok."""
+        axes = ", ".join(f"{k} ({len(v)})" for k, v in self.axes.items())
+        c = self.counts()
+        return f"{self.status.size} points over {axes}: {c['ok']} ok, {c['not ok']} not ok, {c['infeasible']} infeasible"
+
+    def summary(self) -> str:
+        """The text ``esba sweep`` prints for this grid."""
+        return sweep_table(self.to_dict())
 
     @classmethod
     def from_parts(cls, plan: SweepPlan, parts: Sequence[Mapping[str, Any]], backend: str,
