@@ -299,7 +299,7 @@ class Equilibria(Report):
 
     def headline(self) -> str:
         """One line: how many equilibria, how many stable, at which pressure."""
-        return (f"{len(self.states)} equilibria at P = {self.pressure:.5g} MPa, {len(self.stable)} stable"
+        return (f"{len(self.states)} equilibri{'um' if len(self.states) == 1 else 'a'} at P = {self.pressure:.5g} MPa, {len(self.stable)} stable"
                 + (" (multistable)" if len(self.stable) > 1 else "") + f", n = {self.scene.segments}")
 
     def summary(self) -> str:
