@@ -52,6 +52,7 @@ import numpy as np
 
 from esba.analysis.sensitivity import SensitivityOptions, sensitivities, with_parameters
 from esba.infra import checks, jsonsafe
+from esba.infra.report import Report
 from esba.model.scene import Scene, SceneError
 from esba.statics.batch import BatchOptions, compiler, prepare, solve_arrays
 from esba.statics.batch_options import AUTO_COMPILE_MAX_N, MAX_BATCH_BYTES
@@ -146,8 +147,8 @@ def ellipse(cov: np.ndarray, level: float = 0.95) -> Ellipse:
     return Ellipse(k * np.sqrt(w), float(math.atan2(v[1, 0], v[0, 0]) % math.pi))
 
 
-@dataclass(frozen=True, eq=False)
-class Propagation:
+@dataclass(frozen=True, eq=False, repr=False)
+class Propagation(Report):
     """First-order uncertainty of an equilibrium.
 
     Attributes
@@ -181,6 +182,21 @@ class Propagation:
     shares: dict
     nominal_tip: np.ndarray
     nominal_total_deg: float
+
+    _plotter = "esba.figures.results:draw_propagation"
+
+    def headline(self) -> str:
+        """One line: the status and the standard deviations of the total angle and the tip."""
+        if not self.has_numbers:
+            return f"{self.status}: {self.message}"
+        x, y = self.std_tip_mm
+        return f"{self.status}: std total angle {self.std_total_angle_deg:.4g} deg, tip x, y {x:.4g}, {y:.4g} mm (first order)"
+
+    def summary(self) -> str:
+        """The uncertainty lines ``esba solve --sigma ...`` prints."""
+        from esba.statics.text import uncertainty_rows
+
+        return "\n".join(f"{k:>12}: {v}" for k, v in uncertainty_rows({"uncertainty": self.to_dict()}))
 
     @property
     def ok(self) -> bool:

@@ -13,53 +13,6 @@ from .arguments import UsageError, actuator_changes, add_actuator_flags, count_a
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
 
 
-def _design_rows(d: dict) -> list[tuple[str, str]]:
-    def num(v, fmt):
-        return "-" if v is None else format(v, fmt)
-
-    rows = [
-        ("status", d["status"] + (f": {d['message']}" if d.get("message") else "")),
-        ("r2, d", f"{num(d['r2_mm'], '.5f')}, {num(d['d_mm'], '.5f')} mm (wall {num(d['wall_mm'], '.4f')} mm)"),
-        ("pressure", f"{num(d['pressure_mpa'], '.6f')} MPa (unloaded 90 deg)"),
-        ("stiffness", f"{num(d['stiffness_n_per_m'], '.5f')} N/m (load path: {num(d['stiffness_check_n_per_m'], '.5f')})"),
-        ("objective", f"{d['objective']} = {num(d['objective_value'], '.6g')} {d['objective_unit']}"),
-    ]
-    if d.get("best_reachable_stiffness") is not None:
-        rows.append(("best K", f"{d['best_reachable_stiffness']:.5f} N/m reachable"))
-    rows.append(("stable", f"{d['stable']}; on the load path: {d['on_load_path']}"))
-    active = []
-    for c in d["active_constraints"]:
-        sens = "" if c["sensitivity"] is None else f" (d objective / d bound = {c['sensitivity']:+.4g} {d['objective_unit']}/{c['unit']})"
-        active.append(f"{c['name']}: {c['description']}{sens}")
-    rows.append(("active", "; ".join(active) or "none"))
-    work = f"{d['iterations']} iterations, {d['evaluations']} starts" if d["method"] == "ipopt" else f"{d['evaluations']} designs"
-    rows.append(("time", f"{d['solve_time_s']:.3f} s ({work}; set-up {d['setup_time_s']:.3f} s)"))
-    return rows
-
-
-def _design_table(d: dict) -> str:
-    if d.get("method") != "both":
-        lines = [d["problem"], f"method: {d['method']}"] + [f"{k:>10}: {v}" for k, v in _design_rows(d)]
-    else:
-        lines = [d["ipopt"]["problem"]]
-        for name in ("ipopt", "pso"):
-            lines.append(f"-- {name}")
-            lines += [f"{k:>10}: {v}" for k, v in _design_rows(d[name])]
-        diff = d["differences"]
-
-        def num(v, fmt):
-            return "-" if v is None else format(v, fmt)
-
-        lines.append(
-            f"-- PSO - IPOPT: r2 {num(diff['r2_mm'], '+.2e')} mm, d {num(diff['d_mm'], '+.2e')} mm, objective "
-            f"{num(diff['objective_rel'], '+.2e')} (relative); PSO took {num(diff['time_ratio_pso_over_ipopt'], '.0f')} "
-            f"times as long; agree (0.01 mm, 0.1 %): {diff['agree']}"
-        )
-    if d.get("figure"):
-        lines.append(f"wrote {d['figure']}")
-    return "\n".join(lines)
-
-
 def _envelope_table(d: dict) -> str:
     def one(r: dict) -> list[str]:
         c = r["clearance"] or {}
@@ -143,6 +96,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         DesignOptions,
         DesignProblem,
         compare,
+        design_table,
         optimise_ipopt,
         optimise_pso,
     )
@@ -196,7 +150,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         from esba.figures.design import design_figure
 
         data["figure"] = str(design_figure(run, figure).resolve())
-    print_result(args, data, _design_table)
+    print_result(args, data, design_table)
     for r, d in zip(results, [data] if method != "both" else [data["ipopt"], data["pso"]]):
         warn_findings(d["validity"])
     bad = [r for r in results if r.status != "optimal"]

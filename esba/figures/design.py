@@ -52,6 +52,7 @@ __all__ = [
     "draw_13b",
     "draw_14",
     "draw_design",
+    "draw_design_into",
     "design_figure",
 ]
 
@@ -250,11 +251,17 @@ def draw_14(problem: DesignProblem | None = None, pso_options: PSOOptions | None
 
 def draw_design(run: DesignResult | Comparison, points: int = 40) -> Figure:
     """The stiffness map with the run's design(s), the K_min contour and the swarm (``esba design --plot``)."""
+    fig = new_figure(6.4, 5.2)
+    draw_design_into(fig.add_subplot(), run, points)
+    return fig
+
+
+def draw_design_into(ax: Axes, run: DesignResult | Comparison, points: int = 40) -> None:
+    """:func:`draw_design`'s drawing into ``ax`` (its colour bar beside it)."""
+    fig = ax.figure
     results = [run.ipopt, run.pso] if isinstance(run, Comparison) else [run]
     problem = results[0].problem
     grid, K = stiffness_map(problem.stiffest(), points)
-    fig = new_figure(6.4, 5.2)
-    ax = fig.add_subplot()
     top = 5.0 * math.ceil(np.nanmax(K) / 5.0)
     tri = _contour(fig, ax, grid, K, np.arange(0.0, top + 0.1, 2.5), "secant stiffness K (N/m)", "magma")
     if problem.min_stiffness is not None:
@@ -278,7 +285,6 @@ def draw_design(run: DesignResult | Comparison, points: int = 40) -> Figure:
     _triangle_axes(ax, problem.actuator.r1)
     ax.legend(loc="upper right", fontsize=7)
     set_title(ax, problem.describe(), 7)
-    return fig
 
 
 def design_figure(run: DesignResult | Comparison, path: str | Path, points: int = 40) -> Path:

@@ -39,6 +39,9 @@ __all__ = [
     "draw_fit",
     "draw_load_estimate",
     "draw_stiffness",
+    "draw_design_result",
+    "draw_propagation",
+    "draw_sensitivities",
 ]
 
 
@@ -127,3 +130,44 @@ def draw_stiffness(result, ax: Axes) -> None:
     ax.grid(True, color="0.9", lw=0.6)
     ax.legend(fontsize=7.5, loc="best")
     set_title(ax, f"secant stiffness at P = {result.pressure:.5g} MPa, payload at {result.angle_deg:g} deg", 9)
+
+
+def draw_design_result(result, ax: Axes, points: int = 40) -> None:
+    """A :class:`esba.design.optimise.DesignResult` or ``Comparison``: the stiffness map with the
+    design(s), as ``esba design --plot`` draws it."""
+    from .design import draw_design_into
+
+    draw_design_into(ax, result, points)
+
+
+def draw_propagation(result, ax: Axes) -> None:
+    """A :class:`esba.calibration.uncertainty.Propagation`: the tip's 95 % ellipse around the solved tip."""
+    from .scenes import draw_tip_ellipse
+
+    x, y = (float(v) for v in result.nominal_tip[:2])
+    ax.plot([y], [x], "o", color="C0", label=f"solved tip ({x:.2f}, {y:.2f}) mm")
+    if result.has_numbers:
+        draw_tip_ellipse(ax, result.nominal_tip[:2], result.cov_tip, 0.95, label="95 % ellipse (first order)", lw=1.5)
+    ax.set_aspect("equal", adjustable="datalim")
+    if not ax.yaxis_inverted():
+        ax.invert_yaxis()
+    ax.set_xlabel("y (mm)")
+    ax.set_ylabel("x (mm), downwards")
+    ax.grid(True, color="0.9", lw=0.6)
+    ax.legend(fontsize=7.5, loc="best")
+    set_title(ax, f"the tip's uncertainty: {result.headline()}", 8)
+
+
+def draw_sensitivities(result, ax: Axes) -> None:
+    """A :class:`esba.analysis.sensitivity.Sensitivities`: how far the total angle moves when each
+    parameter grows by 1 % (its derivative times 1 % of its value: one scale for every unit)."""
+    rows = result.to_dict().get("parameters") or {}
+    names = [n for n, r in rows.items() if r["value"]]
+    moves = [0.01 * rows[n]["value"] * rows[n]["dtotal_angle_deg_per_unit"] for n in names]
+    k = np.arange(len(names))
+    ax.barh(k, moves, color=["C0" if m >= 0 else "C3" for m in moves])
+    ax.set_yticks(k, names)
+    ax.axvline(0.0, color="0.5", lw=0.8)
+    ax.set_xlabel("change of the total angle for +1 % of the parameter (deg)")
+    ax.grid(True, axis="x", color="0.9", lw=0.6)
+    set_title(ax, f"sensitivities (first order): {result.headline()}", 8)

@@ -8,7 +8,7 @@ They read only the plain dicts of the results (with the scene's one-line descrip
 
 from __future__ import annotations
 
-__all__ = ["solve_table", "equilibria_table"]
+__all__ = ["solve_table", "equilibria_table", "sensitivity_rows", "uncertainty_rows"]
 
 
 def _fmt(values, digits: int = 3) -> str:
@@ -41,15 +41,16 @@ def solve_table(d: dict) -> str:
     for note in d.get("notes", []):
         rows.append(("note", note))
     if d.get("sensitivities"):
-        rows += _sensitivity_rows(d)
+        rows += sensitivity_rows(d)
     if d.get("uncertainty"):
-        rows += _uncertainty_rows(d)
+        rows += uncertainty_rows(d)
     if d.get("figure"):
         rows.append(("figure", f"wrote {d['figure']}"))
     return "\n".join(f"{k:>12}: {v}" for k, v in rows)
 
 
-def _sensitivity_rows(d: dict) -> list[tuple[str, str]]:
+def sensitivity_rows(d: dict) -> list[tuple[str, str]]:
+    """The rows of ``d["sensitivities"]`` (:meth:`esba.analysis.sensitivity.Sensitivities.to_dict`)."""
     s = d["sensitivities"]
     if s["status"] != "ok":
         return [("sensitivity", s["message"])]
@@ -66,7 +67,9 @@ def _sensitivity_rows(d: dict) -> list[tuple[str, str]]:
     return rows
 
 
-def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
+def uncertainty_rows(d: dict) -> list[tuple[str, str]]:
+    """The rows of ``d["uncertainty"]`` (:meth:`esba.calibration.uncertainty.Propagation.to_dict`), and of
+    ``d["monte_carlo"]`` and ``d["agreement"]`` when given."""
     u = d["uncertainty"]
     given = ", ".join(f"{s['name']} {s['sigma']:.4g} {s['unit']}" + (" (uniform)" if s["distribution"] == "uniform" else "") for s in u["sigmas"])
     rows = [("sigmas", given)]
