@@ -89,6 +89,10 @@ ACTUATOR_FLAGS: dict[str, tuple[str, str]] = {
 }
 
 
+#: Other spellings of an actuator flag: ``--rho`` (as ``esba section``, ``--sigma rho=...`` and ``--param rho`` name it).
+ACTUATOR_ALIASES: dict[str, tuple[str, ...]] = {"rho_deg": ("--rho",)}
+
+
 def actuator_flag(name: str) -> str:
     """The flag of actuator field ``name``: ``--E``, ``--rho-deg``."""
     return "--" + name.replace("_", "-")
@@ -103,10 +107,11 @@ def add_actuator_flags(p: argparse.ArgumentParser, names: Sequence[str] = tuple(
     group = p.add_argument_group("actuator", "the actuator's parameters, as in a scene file's [actuator] table (they override it)" + note)
     for name in names:
         unit, what = ACTUATOR_FLAGS[name]
+        flags = (actuator_flag(name), *ACTUATOR_ALIASES.get(name, ()))
         if values is None:
-            group.add_argument(actuator_flag(name), dest=name, type=float_arg, metavar=unit.upper(), help=f"{what}, {unit}")
+            group.add_argument(*flags, dest=name, type=float_arg, metavar=unit.upper(), help=f"{what}, {unit}")
         else:
-            group.add_argument(actuator_flag(name), dest=name, type=values, metavar="VALUES", help=f"{what}, {unit} (VALUES: start:stop:count or v1,v2,...)")
+            group.add_argument(*flags, dest=name, type=values, metavar="VALUES", help=f"{what}, {unit} (VALUES: start:stop:count or v1,v2,...)")
 
 
 def actuator_changes(args: argparse.Namespace, names: Sequence[str] = tuple(ACTUATOR_FLAGS)) -> dict[str, float]:

@@ -124,3 +124,12 @@ def test_fit_flags_set_the_start(capsys):
     out = json.loads(capsys.readouterr().out)
     assert code == EXIT_OK
     assert out["parameters"]["E"]["start"] == 0.6
+
+
+def test_rho_is_also_spelt_as_the_path_and_sigma_names_do(capsys):
+    args = build_parser().parse_args(["solve", "--rho", "12"])
+    assert scene_from_args(args).actuator.rho_deg == 12.0
+    args = build_parser().parse_args(["sweep", "--rho", "5,15"])
+    assert args.rho_deg == [5.0, 15.0]
+    assert main(["solve", "--rho", "-1", "--no-plot"]) == EXIT_USAGE
+    assert "--rho-deg=-1: expected 0 <= rho_deg < 90" in capsys.readouterr().err
