@@ -701,7 +701,12 @@ def design_rows(d: dict) -> list[tuple[str, str]]:
         sens = "" if c["sensitivity"] is None else f" (d objective / d bound = {c['sensitivity']:+.4g} {d['objective_unit']}/{c['unit']})"
         active.append(f"{c['name']}: {c['description']}{sens}")
     rows.append(("active", "; ".join(active) or "none"))
-    work = f"{d['iterations']} iterations, {d['evaluations']} starts" if d["method"] == "ipopt" else f"{d['evaluations']} designs"
+    work = f"{d['evaluations']} designs"
+    if d["method"] == "ipopt":
+        work = f"{d['iterations']} iterations, {d['evaluations']} starts"
+        if d.get("min_stiffness") is not None and d.get("objective") != "stiffness" and d["evaluations"]:
+            # the stiffest design, found first to see whether the floor can be met, is a start too
+            work += f" ({d['evaluations'] - 1} of --starts and the stiffest design, found first for K >= {d['min_stiffness']:g} N/m)"
     rows.append(("time", f"{d['solve_time_s']:.3f} s ({work}; set-up {d['setup_time_s']:.3f} s)"))
     return rows
 
