@@ -117,6 +117,8 @@ def draw_payloads(ax: Axes, result: Equilibrium, length_mm: float = 25.0, color:
             zorder=10,
         )
         ax.annotate(f"{p.force:g} N", xy=(pt[1] - dy, pt[0] - dx), color=color, fontsize=8, ha="center", va="bottom", zorder=10)
+        ax.update_datalim([(pt[1] - dy, pt[0] - dx)])  # annotations do not scale the axes: the arrow's tail and its label stay inside
+    ax.autoscale_view()
 
 
 def draw_tip_ellipse(ax: Axes, centre: Sequence[float], cov: np.ndarray, level: float = 0.95, label: str | None = None, **style) -> None:

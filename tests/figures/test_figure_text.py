@@ -150,3 +150,18 @@ def test_fit_cli_legend_has_units(tmp_path, monkeypatch, capsys):
     assert texts[1].startswith("fitted: E = ") and " MPa, rho = " in texts[1] and "deg" in texts[1]
     xlabels = [ax.get_xlabel() for ax in drawn.axes(fig) if ax.axison]
     assert "measured tip x (down the unbent axis) (mm)" in xlabels and "measured tip y (horizontal) (mm)" in xlabels
+
+
+def test_the_payload_arrow_and_its_label_lie_inside_the_axes():
+    """An annotation does not scale the axes: the arrow's tail (where its label is) is kept inside."""
+    from matplotlib.text import Annotation
+
+    from esba.figures.scenes import solve_figure
+    from esba.statics.equilibrium import solve
+
+    result = solve(Scene(pressure=0.2, payloads=(Payload(0.5, 90.0),)))
+    ax = drawn.axes(solve_figure(result))[0]
+    (label,) = [a for a in ax.texts if isinstance(a, Annotation) and a.get_text() == "0.5 N"]
+    y, x = label.xy
+    (y0, y1), (x0, x1) = sorted(ax.get_xlim()), sorted(ax.get_ylim())
+    assert y0 <= y <= y1 and x0 <= x <= x1
