@@ -160,7 +160,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
 
 
 def add_sweep(sub) -> None:
-    p = sub.add_parser("sweep", help="solve a grid over pressure, payload, r2, d as one batch; CSV/JSON out; Fig. 12")
+    p = sub.add_parser("sweep", help="solve a grid over pressure, payload and any actuator parameter (L, r1, r2, d, rho, E, M) as one batch; CSV/JSON out; Fig. 12")
     p.add_argument("scene", nargs="?", default=None, metavar="SCENE.toml", help="base scene (default: Table 1 at its 90 degree pressure, no payload, n = 3)")
     values = "VALUES: start:stop:count or v1,v2,..."
     p.add_argument("--pressure", type=_values_arg, metavar="VALUES", help=f"pressures, MPa ({values}; default: the base scene's)")
