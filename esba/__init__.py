@@ -67,6 +67,13 @@ _FACADE = {
     "load_measurements": "esba.calibration.measurements",
     "propagate": "esba.calibration.uncertainty",
     "estimate_load": "esba.calibration.sensing",
+    "Pose": "esba.calibration.sensing",
+    "Measured": "esba.calibration.sensing",
+    "parse_sigma": "esba.calibration.sigmas",
+    "ellipse": "esba.calibration.uncertainty",
+    "Ellipse": "esba.calibration.uncertainty",
+    "Plane": "esba.analysis.folds",
+    "stability_map": "esba.analysis.maps",
     # studies
     "sweep": "esba.studies.sweep",
     "plan_sweep": "esba.studies.sweep",

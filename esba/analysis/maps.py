@@ -32,6 +32,7 @@ import casadi as ca
 import numpy as np
 
 from esba.infra.errors import RunError
+from esba.infra.report import Report
 from esba.model.generated import Model
 from esba.model.stability import CRITICAL_TOL
 from esba.paths.loading import history
@@ -292,8 +293,8 @@ def jump_lines(plane: Plane, xrange, yrange, lines: int = 21) -> dict[str, list[
 # the map
 
 
-@dataclass(frozen=True, eq=False)
-class StabilityMap:
+@dataclass(frozen=True, eq=False, repr=False)
+class StabilityMap(Report):
     """A stability map: the fold curves of the plane, the number of stable states on a raster, the jump lines.
 
     ``reference`` (x, y, count): where the count was anchored by brute force; ``grid_x``, ``grid_y``
@@ -318,6 +319,20 @@ class StabilityMap:
     #: (its fold curves traced once, :attr:`curves` its copies over the range) and the periods (x, y).
     base: StabilityMap | None = None
     periods: tuple[float | None, float | None] = (None, None)
+
+    _plotter = "esba.figures.results:draw_stability_map"
+
+    def headline(self) -> str:
+        """One line: the two parameters, their ranges, the fold curves and cusps."""
+        (x, y), (ux, uy) = self.names, self.plane.units
+        cusps = sum(1 for p in self.special if p.kind == "cusp")
+        return (f"{x} {self.xrange[0]:g}..{self.xrange[1]:g} {ux} by {y} {self.yrange[0]:g}..{self.yrange[1]:g} {uy}: "
+                f"{len(self.curves)} fold curve{'s' if len(self.curves) != 1 else ''}, {cusps} cusp{'s' if cusps != 1 else ''}, "
+                f"{int(self.counts.min())} to {int(self.counts.max())} stable states")
+
+    def summary(self) -> str:
+        """The text ``esba map`` prints for this map (without its files)."""
+        return map_table({**self.to_dict(points=False), "scene": self.plane.scene.describe()})
 
     @property
     def spans(self) -> tuple[float, float]:
@@ -590,3 +605,52 @@ def check_grid(smap: StabilityMap, k: int, near: float = 0.01) -> GridCheck:
                     bad += 1
             cells.append([float(x), float(y), mapped, brute, dist])
     return GridCheck(k, cells, bad, bad_near, near, time.perf_counter() - t)
+
+
+#: The most fold curves ``esba map`` lists (a periodic axis over many turns repeats them).
+MAX_LISTED = 20
+
+
+def map_table(d: dict) -> str:
+    """The text ``esba map`` prints for :meth:`StabilityMap.to_dict` (with ``scene``, and the ``check_grid``, ``out`` and ``figure`` the command adds)."""
+
+    x, y = d["x"], d["y"]
+    ux = f" {x['unit']}" if x["unit"] and x["unit"] != "1" else ""
+    uy = f" {y['unit']}" if y["unit"] and y["unit"] != "1" else ""
+    s = d["summary"]
+    lines = [
+        f"scene: {d['scene']}",
+        f"map of {x['parameter']} {x['from']:g}..{x['to']:g}{ux} by {y['parameter']} {y['from']:g}..{y['to']:g}{uy}",
+        f"fold curves: {s['curves']} ({s['points']} points); cusps: {s['cusp']}; "
+        f"fold/branch-point meetings: {s['branch point of the x-path'] + s['branch point of the y-path']}",
+    ]
+    if d.get("periodic"):
+        lines.append(d["periodic"]["text"] + f" ({d['periodic']['curves_per_period']} curves a period)")
+    for c in d["fold_curves"][:MAX_LISTED]:
+        lines.append(f"  curve {c['index']}: {c['points']} points, {x['parameter']} {c['x_range'][0]:.6g}..{c['x_range'][1]:.6g}{ux}, "
+                     f"{y['parameter']} {c['y_range'][0]:.6g}..{c['y_range'][1]:.6g}{uy}; {c['stop_reason']}")
+    if len(d["fold_curves"]) > MAX_LISTED:
+        lines.append(f"  ... {len(d['fold_curves']) - MAX_LISTED} more curves (--out FILE lists them)")
+    for p in d["special_points"][:2 * MAX_LISTED]:
+        lines.append(f"  {p['label']:3} {p['kind']:<27} {x['parameter']} = {p[x['parameter']]:.10g}{ux}, {y['parameter']} = {p[y['parameter']]:.10g}{uy}, "
+                     f"total angle {p['total_angle_deg']:.3f} deg  {p['status']}")
+    if len(d["special_points"]) > 2 * MAX_LISTED:
+        lines.append(f"  ... {len(d['special_points']) - 2 * MAX_LISTED} more special points (--out FILE.json lists them)")
+    st = d["stable_states"]
+    lines.append(f"stable states: {st['min']} to {st['max']}; more than one on {100 * st['fraction_multistable']:.1f}% of the map "
+                 f"(anchored by brute force at {x['parameter']} = {d['reference'][x['parameter']]:g}, {y['parameter']} = {d['reference'][y['parameter']]:g}: "
+                 f"{d['reference']['stable_states']})")
+    if d.get("recounted"):
+        lines.append(f"counted by brute force at {len(d['recounted'])} raster points where the fold-curve crossings gave fewer than 0 stable states")
+    for name in ("loading", "unloading"):
+        pts = d["jumps"][name]
+        if pts:
+            lines.append(f"{x['parameter']} {'rising' if name == 'loading' else 'falling'}: jumps at " + ", ".join(f"{p[0]:.6g}{ux} ({y['parameter']} {p[1]:.4g})" for p in pts))
+    if d.get("check_grid"):
+        g = d["check_grid"]
+        lines.append(f"check against brute force on a {g['k']} x {g['k']} grid: {g['k'] ** 2 - g['mismatches'] - g['near_mismatches']} cells agree, "
+                     f"{g['mismatches']} disagree, {g['near_mismatches']} disagree within {g['near']:g} of a fold curve")
+    for k in ("out", "figure"):
+        if d.get(k):
+            lines.append(f"wrote {d[k]}")
+    return "\n".join(lines)

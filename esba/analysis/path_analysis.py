@@ -28,9 +28,10 @@ from typing import Any
 import numpy as np
 
 from esba.infra import checks
+from esba.infra.report import Report
 from esba.model.scene import Actuator, Scene, SceneError
 from esba.model.validity import assess
-from esba.paths.branch import Branch
+from esba.paths.branch import Branch, branch_lines, special_counts
 from esba.paths.continuation import PathOptions, bifurcating_branches, trace
 from esba.paths.loading import Ramp, history
 from esba.paths.problem import PathError, PathProblem
@@ -66,8 +67,8 @@ def column_buckling_load(actuator: Actuator | None = None, segments: int = 3) ->
     return (k_axial + k_radial) / float(np.max(np.linalg.eigvalsh(L / (2 * n) * quad)))
 
 
-@dataclass(frozen=True, eq=False)
-class PathAnalysis:
+@dataclass(frozen=True, eq=False, repr=False)
+class PathAnalysis(Report):
     """What :func:`analyse` found.
 
     Attributes
@@ -93,6 +94,19 @@ class PathAnalysis:
     loading: tuple[Ramp, ...]
     lam_from: float
     lam_to: float
+
+    _plotter = "esba.figures.results:draw_path"
+
+    def headline(self) -> str:
+        """One line: the parameter's range, the branches and their special points."""
+        special = [s for b in (self.main, *self.crossing) for s in b.special]
+        kinds = special_counts(special)
+        count = 1 + len(self.crossing)
+        return f"{self.main.name} {self.lam_from:g} to {self.lam_to:g}: {count} branch{'es' if count > 1 else ''}" + (f"; {kinds}" if kinds else "")
+
+    def summary(self) -> str:
+        """The text ``esba path`` prints (without its files)."""
+        return path_table(self.to_dict(points=False))
 
     @property
     def branches(self) -> tuple[Branch, ...]:
@@ -210,3 +224,36 @@ def analyse(
             crossing += bifurcating_branches(problem, bp, bounds=window, options=options, label=f"BP{k} ")
     ramps = tuple(history(problem, first.theta, lam_from, [to, lam_from], options)) if loading and to != lam_from else ()
     return PathAnalysis(scene, problem, first, main, tuple(crossing), ramps, lam_from, to)
+
+
+def path_table(d: dict) -> str:
+    """The text ``esba path`` prints for :meth:`PathAnalysis.to_dict` (and the ``out`` and ``figure`` the command adds)."""
+
+    unit = d["unit"].split(" ")[0]
+    unit = "" if unit == "1" else f" {unit}"
+    lines = [f"scene: {d['scene']}", f"path in {d['parameter']} from {d['from']:g} to {d['to']:g}{unit}"]
+    for b in d["branches"]:
+        lines += branch_lines(b)
+    if any(b["label"].endswith(("away from chamber", "towards chamber")) for b in d["branches"]):
+        lines.append("the branches off a branch point are named by the way they bend: away from the chamber (the total angle rises), towards it (falls)")
+    for r in d["loading"]:
+        what = f"quasi-static {d['parameter']} {r['from']:g} -> {r['to']:g}{unit}"
+        for lam in r["branch_points_crossed"]:
+            lines.append(f"{what}: passes the branch point {lam:.9g}{unit} and goes on along the stable branch crossing there")
+        if not r["jumps"]:
+            lines.append(f"{what}: no jump" + ("" if r["reached"] else f"; NOT reached: {r['message']}"))
+        for j in r["jumps"]:
+            lines.append(
+                f"{what}: jumps at the {j['kind']} {j['lambda']:.9g}{unit}: angle {j['total_angle_before_deg']:.2f} -> "
+                f"{j['total_angle_after_deg']:.2f} deg, tip moves {j['distance_mm']:.1f} mm"
+            )
+    if d.get("hysteresis"):
+        h = d["hysteresis"]
+        for k, loop in enumerate(h["loops"], start=1):
+            name = "hysteresis" if len(h["loops"]) == 1 else f"hysteresis loop {k}"
+            lines.append(f"{name}: towards --to it jumps at {loop['up']:.9g}, back at {loop['down']:.9g}{unit}; "
+                         f"width {loop['width']:.6g}{unit}")
+    for k in ("out", "figure"):
+        if d.get(k):
+            lines.append(f"wrote {d[k]}")
+    return "\n".join(lines)

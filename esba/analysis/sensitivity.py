@@ -62,6 +62,7 @@ import numpy as np
 
 from esba.infra import checks, jsonsafe
 from esba.infra.errors import InputError
+from esba.infra.report import Report
 from esba.model.closed_form import unloaded_pressure
 from esba.model.generated import Model
 from esba.model.scene import Payload, Scene, SceneError
@@ -386,8 +387,8 @@ def _build(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...]) -
     return fun
 
 
-@dataclass(frozen=True, eq=False)
-class Sensitivities:
+@dataclass(frozen=True, eq=False, repr=False)
+class Sensitivities(Report):
     """First-order response of an equilibrium to each scene parameter.
 
     Derivatives are per unit of the parameter (:attr:`Parameter.unit`); angles in radians, tip
@@ -430,6 +431,20 @@ class Sensitivities:
     message: str
     eigenvalue_ratio: float
     held: dict = dataclasses.field(default_factory=dict)
+
+    _plotter = "esba.figures.results:draw_sensitivities"
+
+    def headline(self) -> str:
+        """One line: the status and the parameters."""
+        names = [p.name for p in self.parameters]
+        shown = ", ".join(names[:8]) + (", ..." if len(names) > 8 else "")
+        return f"{self.status}: d(angles, tip)/d(parameter) for {len(names)} parameters ({shown})" if self.ok else f"{self.status}: {self.message}"
+
+    def summary(self) -> str:
+        """The sensitivity lines ``esba solve --sensitivities`` prints."""
+        from esba.statics.text import sensitivity_rows
+
+        return "\n".join(f"{k:>12}: {v}" for k, v in sensitivity_rows({"sensitivities": self.to_dict()}))
 
     @property
     def ok(self) -> bool:

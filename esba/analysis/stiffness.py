@@ -33,6 +33,7 @@ import casadi as ca
 import numpy as np
 
 from esba.infra import checks, jsonsafe
+from esba.infra.report import Report
 from esba.infra.threads import single_threaded
 from esba.model.generated import Model
 from esba.model.scene import MAX_PAYLOAD, MAX_TARGET_ANGLE_DEG, Payload, Scene, SceneError, check_pressure
@@ -168,8 +169,8 @@ def tangent_stiffness(result: Equilibrium) -> TangentStiffness:
     return TangentStiffness(compliance=c, matrix=k)
 
 
-@dataclass(frozen=True, eq=False)
-class SecantStiffness:
+@dataclass(frozen=True, eq=False, repr=False)
+class SecantStiffness(Report):
     """The paper's secant stiffness for each payload (Section 4.4.3).
 
     Attributes
@@ -199,6 +200,18 @@ class SecantStiffness:
     stiffness_n_per_m: tuple[float, ...]
     initial: Equilibrium = field(repr=False)
     loaded: tuple[Equilibrium, ...] = field(repr=False)
+
+    _plotter = "esba.figures.results:draw_stiffness"
+
+    def headline(self) -> str:
+        """One line: the secant stiffness at each payload."""
+        ks = ", ".join(f"{k:.2f}" for k in self.stiffness_n_per_m)
+        fs = ", ".join(f"{f:g}" for f in self.forces)
+        return f"K = {ks} N/m at F = {fs} N ({self.angle_deg:g} deg), P = {self.pressure:.5g} MPa" + ("" if self.ok else "; NOT OK")
+
+    def summary(self) -> str:
+        """The text ``esba stiffness`` prints."""
+        return stiffness_table(self.to_dict())
 
     @cached_property
     def tangent(self) -> TangentStiffness:
@@ -501,3 +514,32 @@ def pressure_for_target(
         ok=not messages,
         message="; ".join(messages + ([note] if note else [])),
     )
+
+
+def stiffness_table(d: dict) -> str:
+    """The text ``esba stiffness`` prints for :meth:`SecantStiffness.to_dict`."""
+
+    lines = [
+        f"secant stiffness K = F / delta from the unloaded state ({d['initial_angle_deg']:.2f} deg), "
+        f"P = {d['pressure_mpa']:.7f} MPa held, tip payload at {d['payload_angle_deg']:g} deg; n = {d['segments']}, {d['variant']}",
+        f"{'F (N)':>8} {'delta (mm)':>11} {'K (N/m)':>9} {'tip x, y (mm)':>18}",
+    ]
+    for f, dl, k, tip in zip(d["payloads_n"], d["displacement_mm"], d["stiffness_n_per_m"], d["tip_mm"]):
+        lines.append(f"{f:8.3f} {dl:11.3f} {'unbounded' if k is None else format(k, '9.3f'):>9} {tip[0]:8.2f}, {tip[1]:7.2f}")
+    t = d["tangent"]
+    def k(v):
+        return "unbounded (the tip does not move that way to first order)" if v is None or not math.isfinite(v) else f"{v:.3f} N/m"
+
+    lines.append(f"tangent stiffness of the unloaded state (F = 0, {d['initial_angle_deg']:.2f} deg), where every secant K starts "
+                 "(C = J H^-1 J^T the tip's compliance there):")
+    lines.append(f"  along the force, the tip free to move across it, 1 / (u^T C u) (the limit of K as F -> 0): "
+                 f"horizontal {k(t['horizontal_n_per_m'])}, vertical {k(t['vertical_n_per_m'])}")
+    if t["matrix_n_per_m"] is not None:
+        m = t["matrix_n_per_m"]
+        lines.append(f"  K_tip = C^-1 (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]: "
+                     "each diagonal entry holds the tip still in the other direction, so it is stiffer than the value above")
+    else:
+        lines.append("  K_tip: singular (one segment moves the tip along one direction only)")
+    for msg in d["messages"]:
+        lines.append(f"NOT OK: {msg}")
+    return "\n".join(lines)

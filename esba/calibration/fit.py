@@ -69,6 +69,7 @@ from esba.analysis.sensitivity import (
 )
 from esba.infra import checks, jsonsafe
 from esba.infra.errors import InputError
+from esba.infra.report import Report
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import assess_angles
 from esba.solvers.eqnlp import EquilibriumNLP, model_gradient
@@ -355,8 +356,8 @@ def _fit_nlp(data: MeasurementSet, free: tuple[str, ...], options: FitOptions) -
 # the result
 
 
-@dataclass(frozen=True, eq=False)
-class FitResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class FitResult(Report):
     """A fit: estimates, their uncertainty, the residuals and the checks.
 
     Attributes
@@ -417,6 +418,18 @@ class FitResult:
     message: str
     iterations: int
     solve_time_s: float
+
+    _plotter = "esba.figures.results:draw_fit"
+
+    def headline(self) -> str:
+        """One line: the status and each fitted parameter with its standard error."""
+        est = ", ".join(f"{n} = {v:.5g} +- {se:.2g} {u}" if math.isfinite(se) else f"{n} = {v:.5g} {u} (not identifiable)"
+                        for n, u, v, se in zip(self.free, self.units, self.estimate, self.std_error))
+        return f"{self.status}: {est}"
+
+    def summary(self) -> str:
+        """The text ``esba fit`` prints for this fit."""
+        return fit_table(self.to_dict())
 
     @property
     def ok(self) -> bool:
@@ -873,3 +886,47 @@ def identifiability(data: MeasurementSet, free: Sequence[str] = DEFAULT_FREE, pa
     F = np.array(rows).T @ np.array(rows)
     ok, ratio, _, warnings, direction = identifiability_rule(F, len(rows), free, scale, p, [], options.identifiability_tol, options.identifiability_floor)
     return Identifiability(free, dict(zip(free, map(float, p))), F, ratio, ok, tuple(warnings), direction)
+
+
+def fit_table(d: dict) -> str:
+    """The text ``esba fit`` prints for :meth:`FitResult.to_dict` (and the ``figure`` the command adds)."""
+
+    def num(v, fmt=".5g"):
+        return "-" if v is None else format(v, fmt)
+
+    level = round(100 * d["level"])
+    lines = [
+        f"fit of {', '.join(d['parameters'])} to {d['measurements']} measured values in {d['rows']} rows of {d['source']}; "
+        f"n = {d['segments']}, {d['variant']}",
+        f"status: {d['status']}" + (f": {d['message']}" if d["message"] else ": every fitted state a stable minimum on its load path")
+        + f" (IPOPT {d['iterations']} iterations, {d['solve_time_s']:.2f} s)",
+        f"{'parameter':<10} {'unit':<5} {'start':>10} {'estimate':>12} {'std error':>11} {level} % interval",
+    ]
+    for name, p in d["parameters"].items():
+        iv = p[f"interval_{level}"]
+        lines.append(f"{name:<10} {p['unit']:<5} {num(p['start']):>10} {num(p['estimate'], '.6g'):>12} {num(p['std_error'], '.3g'):>11} "
+                     f"[{num(iv[0], '.5g')}, {num(iv[1], '.5g')}]")
+    names = list(d["parameters"])
+    if len(names) > 1:
+        pairs = [f"{a}-{b} {num(d['correlation'][i][j], '+.3f')}" for i, a in enumerate(names) for j, b in enumerate(names) if j > i]
+        lines.append("correlation: " + ", ".join(pairs))
+    if d["dof"] > 0:
+        lines.append(f"residual variance s^2 = {num(d['residual_variance'], '.4g')} ({d['dof']} degrees of freedom; "
+                     "standard errors scaled by it)")
+    else:
+        lines.append(f"no residual variance: {d['measurements']} measured values for {len(d['parameters'])} parameters leave no degrees of freedom")
+    lines.append(f"{'row':<22} {'quantity':<12} {'unit':<5} {'measured':>10} {'predicted':>10} {'residual':>10} {'sd':>7} {'r / sd':>7}")
+    for r in d["residuals"]:
+        sd = f"{r['sd']:.3g}" + ("" if r["sd_given"] else "*")
+        lines.append(f"{r['row'][:22]:<22} {r['quantity']:<12} {r['unit']:<5} {r['measured']:>10.4g} {r['predicted']:>10.4g} "
+                     f"{r['residual']:>+10.3g} {sd:>7} {r['normalised']:>+7.2f}")
+    if any(not r["sd_given"] for r in d["residuals"]):
+        lines.append("* no standard deviation given: 1 deg, 1 mm or 1 N/m assumed (only their ratios matter once scaled by s^2)")
+    for s in d["states"]:
+        if s["message"]:
+            lines.append(f"NOT OK: row {s['row']!r}: {s['message']}")
+    for w in d["warnings"]:
+        lines.append(f"WARNING: {w}")
+    if d.get("figure"):
+        lines.append(f"wrote {d['figure']}")
+    return "\n".join(lines)

@@ -46,12 +46,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
 
 from esba.analysis.sensitivity import SensitivityOptions, sensitivities, with_parameters
 from esba.infra import checks, jsonsafe
+from esba.infra.report import Report
 from esba.model.scene import Scene, SceneError
 from esba.statics.batch import BatchOptions, compiler, prepare, solve_arrays
 from esba.statics.batch_options import AUTO_COMPILE_MAX_N, MAX_BATCH_BYTES
@@ -70,6 +71,7 @@ from .sigmas import (
 
 __all__ = [
     "UncertaintyError",
+    "Ellipse",
     "SigmaSpec",
     "Sigma",
     "Propagation",
@@ -99,11 +101,39 @@ OUTPUTS = (("tip_x", "mm"), ("tip_y", "mm"), ("total_angle", "deg"))
 # first order
 
 
-def ellipse(cov: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, float]:
-    """Semi-axes (mm, largest first) and the angle of the major axis (rad, from x toward y) of
-    the ``level`` ellipse of a 2x2 Gaussian covariance.
+class Ellipse(NamedTuple):
+    """A covariance ellipse (:func:`ellipse`): a named tuple ``(semi_axes, angle)``, unpacked as before.
 
-    >>> axes, angle = ellipse(np.diag([4.0, 1.0]))
+    Attributes
+    ----------
+    semi_axes : ndarray
+        The semi-axes, largest first, in the covariance's unit (mm for a tip).
+    angle : float
+        The major axis's angle from x toward y, rad.
+    """
+
+    semi_axes: np.ndarray
+    angle: float
+
+    @property
+    def angle_deg(self) -> float:
+        """The major axis's angle from x toward y, degrees."""
+        return math.degrees(self.angle)
+
+    def __repr__(self) -> str:
+        a, b = (float(v) for v in self.semi_axes)
+        return f"Ellipse(semi_axes=({a:.4g}, {b:.4g}) mm, angle_deg={self.angle_deg:.2f})"
+
+
+def ellipse(cov: np.ndarray, level: float = 0.95) -> Ellipse:
+    """Semi-axes (mm, largest first) and the angle of the major axis (rad, from x toward y) of
+    the ``level`` ellipse of a 2x2 Gaussian covariance: an :class:`Ellipse`, which unpacks as
+    ``(semi_axes, angle)``.
+
+    >>> e = ellipse(np.diag([4.0, 1.0]))
+    >>> e
+    Ellipse(semi_axes=(4.895, 2.448) mm, angle_deg=0.00)
+    >>> axes, angle = e
     >>> [round(float(a), 4) for a in axes], round(angle, 6)
     ([4.8955, 2.4477], 0.0)
     """
@@ -114,11 +144,11 @@ def ellipse(cov: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, float]:
     w, v = np.linalg.eigh(cov)
     w = np.maximum(w, 0.0)[::-1]  # round-off below 0 (check_covariance refused more)
     v = v[:, ::-1]
-    return k * np.sqrt(w), float(math.atan2(v[1, 0], v[0, 0]) % math.pi)
+    return Ellipse(k * np.sqrt(w), float(math.atan2(v[1, 0], v[0, 0]) % math.pi))
 
 
-@dataclass(frozen=True, eq=False)
-class Propagation:
+@dataclass(frozen=True, eq=False, repr=False)
+class Propagation(Report):
     """First-order uncertainty of an equilibrium.
 
     Attributes
@@ -153,6 +183,21 @@ class Propagation:
     nominal_tip: np.ndarray
     nominal_total_deg: float
 
+    _plotter = "esba.figures.results:draw_propagation"
+
+    def headline(self) -> str:
+        """One line: the status and the standard deviations of the total angle and the tip."""
+        if not self.has_numbers:
+            return f"{self.status}: {self.message}"
+        x, y = self.std_tip_mm
+        return f"{self.status}: std total angle {self.std_total_angle_deg:.4g} deg, tip x, y {x:.4g}, {y:.4g} mm (first order)"
+
+    def summary(self) -> str:
+        """The uncertainty lines ``esba solve --sigma ...`` prints."""
+        from esba.statics.text import uncertainty_rows
+
+        return "\n".join(f"{k:>12}: {v}" for k, v in uncertainty_rows({"uncertainty": self.to_dict()}))
+
     @property
     def ok(self) -> bool:
         """The first-order numbers exist and are within the linear range."""
@@ -177,7 +222,7 @@ class Propagation:
         """Standard deviation of ``tip_x``, ``tip_y`` (mm) or ``total_angle`` (deg)."""
         return {"tip_x": self.std_tip_mm[0], "tip_y": self.std_tip_mm[1], "total_angle": self.std_total_angle_deg}[output]
 
-    def ellipse(self, level: float = 0.95) -> tuple[np.ndarray, float]:
+    def ellipse(self, level: float = 0.95) -> Ellipse:
         """The tip's ``level`` covariance ellipse: semi-axes (mm) and angle (rad, from x toward y)."""
         return ellipse(self.cov_tip, level)
 

@@ -106,6 +106,58 @@ def float_arg(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{checks.quote(text)} is not a number (expected decimal digits such as 0.1 or 2e-3)") from None
 
 
+#: The actuator's parameters as flags, named as in a scene file's ``[actuator]`` table:
+#: :data:`esba.model.scene.ACTUATOR_RULES` (field -> unit, meaning), written out here so that
+#: building the parser imports nothing of the model (a test checks they agree). One definition
+#: for every command: :func:`add_actuator_flags`.
+ACTUATOR_FLAGS: dict[str, tuple[str, str]] = {
+    "L": ("mm", "length of the inextensible layer"),
+    "r1": ("mm", "external radius"),
+    "r2": ("mm", "chamber radius"),
+    "d": ("mm", "eccentric distance of the chamber"),
+    "rho_deg": ("deg", "fibre winding angle rho"),
+    "E": ("MPa", "Young's modulus of the rubber"),
+    "M": ("kg", "mass (used only with gravity)"),
+}
+
+
+#: Other spellings of an actuator flag: ``--rho`` (as ``esba section``, ``--sigma rho=...`` and ``--param rho`` name it).
+ACTUATOR_ALIASES: dict[str, tuple[str, ...]] = {"rho_deg": ("--rho",)}
+
+
+def actuator_flag(name: str) -> str:
+    """The flag of actuator field ``name``: ``--E``, ``--rho-deg``."""
+    return "--" + name.replace("_", "-")
+
+
+def add_actuator_flags(p: argparse.ArgumentParser, names: Sequence[str] = tuple(ACTUATOR_FLAGS), values: Callable[[str], list[float]] | None = None,
+                       note: str = "") -> None:
+    """The actuator flags ``names`` (``--L``, ``--r1``, ``--r2``, ``--d``, ``--rho-deg``, ``--E``, ``--M``): one
+    number each, overriding the scene file's ``[actuator]`` value, or with ``values`` (a sweep) a list
+    or range each. A bad value is refused by the scene's own rules when the scene is built
+    (:func:`scene_from_args`), before any computation."""
+    group = p.add_argument_group("actuator", "the actuator's parameters, as in a scene file's [actuator] table (they override it)" + note)
+    for name in names:
+        unit, what = ACTUATOR_FLAGS[name]
+        flags = (actuator_flag(name), *ACTUATOR_ALIASES.get(name, ()))
+        if values is None:
+            group.add_argument(*flags, dest=name, type=float_arg, metavar=unit.upper(), help=f"{what}, {unit}")
+        else:
+            group.add_argument(*flags, dest=name, type=values, metavar="VALUES", help=f"{what}, {unit} (VALUES: start:stop:count or v1,v2,...)")
+
+
+def actuator_changes(args: argparse.Namespace, names: Sequence[str] = tuple(ACTUATOR_FLAGS)) -> dict[str, float]:
+    """The actuator fields that flags set (field -> value), for :meth:`esba.model.scene.Scene.replace`,
+    each checked on its own by the scene's rule (a usage error naming the flag); the chamber's fit
+    (r2 + d < r1) is checked when the scene is built."""
+    from esba.model.scene import SceneError, check_actuator_field
+
+    try:
+        return {name: check_actuator_field(name, getattr(args, name), actuator_flag(name)) for name in names if getattr(args, name, None) is not None}
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+
+
 def add_scene_flags(p: argparse.ArgumentParser, payloads: bool = True) -> None:
     p.add_argument("scene", nargs="?", default=None, metavar="SCENE.toml", help="scene file (default: the main job, Table 1 with a 2 N horizontal tip payload, n = 3)")
     p.add_argument("--segments", "-n", type=segments_arg, help="segment count n, 1 to 256")
@@ -121,6 +173,7 @@ def add_scene_flags(p: argparse.ArgumentParser, payloads: bool = True) -> None:
     p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default: the scene's, else {DEFAULT_VARIANT})")
     p.add_argument("--json", action="store_true", help="print JSON")
+    add_actuator_flags(p)
 
 
 def _per_payload(flag: str, values: list[float] | None, count: int) -> list[float] | None:
@@ -144,6 +197,7 @@ def scene_changes(args: argparse.Namespace, skip: tuple[str, ...] = ()) -> dict:
     changes = {
         field: getattr(args, flag) for flag, field in flags.items() if flag not in skip and getattr(args, flag, None) is not None
     }
+    changes.update(actuator_changes(args, [name for name in ACTUATOR_FLAGS if name not in skip]))
     if getattr(args, "gravity", False):
         changes["gravity"] = True
     if getattr(args, "no_fibres", False):
@@ -220,7 +274,7 @@ def write_page(args: argparse.Namespace, command: str, page, settings_type, igno
     stderr unless ``--json``, then the file written."""
     from .results import print_result
 
-    given = [flag for flag, v in ignored if v is not None]
+    given = [flag for flag, v in ignored if v is not None] + [actuator_flag(name) for name in actuator_changes(args)]
     if given:
         raise UsageError(f"--write-doc runs its own cases of the Table 1 actuator: give no {', '.join(given)} with it")
     outputs.check_file(args.write_doc, "--write-doc", (".md",))

@@ -9,60 +9,8 @@ import sys
 from derive.effects import DEFAULT_VARIANT, VARIANTS
 from esba.infra import outputs
 
-from .arguments import UsageError, count_arg, float_arg, refuse, segments_arg
+from .arguments import UsageError, actuator_changes, add_actuator_flags, count_arg, float_arg, refuse, segments_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
-
-
-def _design_rows(d: dict) -> list[tuple[str, str]]:
-    def num(v, fmt):
-        return "-" if v is None else format(v, fmt)
-
-    rows = [
-        ("status", d["status"] + (f": {d['message']}" if d.get("message") else "")),
-        ("r2, d", f"{num(d['r2_mm'], '.5f')}, {num(d['d_mm'], '.5f')} mm (wall {num(d['wall_mm'], '.4f')} mm)"),
-        ("pressure", f"{num(d['pressure_mpa'], '.6f')} MPa (unloaded 90 deg)"),
-        ("stiffness", f"{num(d['stiffness_n_per_m'], '.5f')} N/m (load path: {num(d['stiffness_check_n_per_m'], '.5f')})"),
-        ("objective", f"{d['objective']} = {num(d['objective_value'], '.6g')} {d['objective_unit']}"),
-    ]
-    if d.get("best_reachable_stiffness") is not None:
-        rows.append(("best K", f"{d['best_reachable_stiffness']:.5f} N/m reachable"))
-    rows.append(("stable", f"{d['stable']}; on the load path: {d['on_load_path']}"))
-    active = []
-    for c in d["active_constraints"]:
-        sens = "" if c["sensitivity"] is None else f" (d objective / d bound = {c['sensitivity']:+.4g} {d['objective_unit']}/{c['unit']})"
-        active.append(f"{c['name']}: {c['description']}{sens}")
-    rows.append(("active", "; ".join(active) or "none"))
-    work = f"{d['evaluations']} designs"
-    if d["method"] == "ipopt":
-        work = f"{d['iterations']} iterations, {d['evaluations']} starts"
-        if d.get("min_stiffness") is not None and d.get("objective") != "stiffness" and d["evaluations"]:
-            # the stiffest design, found first to see whether the floor can be met, is a start too
-            work += f" ({d['evaluations'] - 1} of --starts and the stiffest design, found first for K >= {d['min_stiffness']:g} N/m)"
-    rows.append(("time", f"{d['solve_time_s']:.3f} s ({work}; set-up {d['setup_time_s']:.3f} s)"))
-    return rows
-
-
-def _design_table(d: dict) -> str:
-    if d.get("method") != "both":
-        lines = [d["problem"], f"method: {d['method']}"] + [f"{k:>10}: {v}" for k, v in _design_rows(d)]
-    else:
-        lines = [d["ipopt"]["problem"]]
-        for name in ("ipopt", "pso"):
-            lines.append(f"-- {name}")
-            lines += [f"{k:>10}: {v}" for k, v in _design_rows(d[name])]
-        diff = d["differences"]
-
-        def num(v, fmt):
-            return "-" if v is None else format(v, fmt)
-
-        lines.append(
-            f"-- PSO - IPOPT: r2 {num(diff['r2_mm'], '+.2e')} mm, d {num(diff['d_mm'], '+.2e')} mm, objective "
-            f"{num(diff['objective_rel'], '+.2e')} (relative); PSO took {num(diff['time_ratio_pso_over_ipopt'], '.0f')} "
-            f"times as long; agree (0.01 mm, 0.1 %): {diff['agree']}"
-        )
-    if d.get("figure"):
-        lines.append(f"wrote {d['figure']}")
-    return "\n".join(lines)
 
 
 def _envelope_table(d: dict) -> str:
@@ -117,7 +65,7 @@ def _cmd_envelope(args: argparse.Namespace) -> int:
             args.envelope_pressure, args.envelope_payload, tuple(args.envelope_angle or (90.0,)),
             1.0 if args.envelope_at is None else args.envelope_at, 0.1 if args.fold_margin is None else args.fold_margin,
         )
-        problem = DesignProblem(segments=args.segments, variant=args.variant or DEFAULT_VARIANT, max_pressure=args.max_pressure,
+        problem = DesignProblem(segments=args.segments, variant=args.variant or DEFAULT_VARIANT, max_pressure=args.max_pressure, actuator=_design_actuator(args),
                                 min_wall=0.0 if args.min_wall is None else args.min_wall)
         options = DesignOptions(starts=4 if args.starts is None else args.starts)
         pso_options = PSOOptions(particles=12 if args.particles is None else args.particles, iterations=15 if args.iterations is None else args.iterations,
@@ -148,6 +96,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         DesignOptions,
         DesignProblem,
         compare,
+        design_table,
         optimise_ipopt,
         optimise_pso,
     )
@@ -155,7 +104,8 @@ def _cmd_design(args: argparse.Namespace) -> int:
     from esba.solvers.pso import PSOOptions, PSOOptionsError
 
     if args.write_doc:
-        refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot"], "with --write-doc (the page runs its own design cases)")
+        refuse(args, ["method", "objective", "min_stiffness", "max_pressure", "target_angle", "min_wall", "variant", "plot", *DESIGN_ACTUATOR],
+               "with --write-doc (the page runs its own design cases)")
         page = outputs.check_file(args.write_doc, "--write-doc", (".md",))
     method = args.method or "ipopt"
     if method == "ipopt":
@@ -176,6 +126,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
             return EXIT_OK
         problem = DesignProblem(
             objective=args.objective or "stiffness",
+            actuator=_design_actuator(args),
             segments=args.segments,
             variant=args.variant or DEFAULT_VARIANT,
             min_stiffness=args.min_stiffness,
@@ -199,7 +150,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         from esba.figures.design import design_figure
 
         data["figure"] = str(design_figure(run, figure).resolve())
-    print_result(args, data, _design_table)
+    print_result(args, data, design_table)
     for r, d in zip(results, [data] if method != "both" else [data["ipopt"], data["pso"]]):
         warn_findings(d["validity"])
     bad = [r for r in results if r.status != "optimal"]
@@ -228,6 +179,24 @@ def _design_validity(result, d: dict) -> list[dict]:
         for f in assess_angles(scene, [math.radians(v) for v in degrees], pressure):
             out.append({**f.to_dict(), "state": state, "message": f"{result.method} design, {state} state: {f.message}"})
     return out
+
+
+#: The actuator's fields a design holds fixed (flags as in a scene file's [actuator] table): the chamber
+#: (r2, d) is what it designs, and the mass plays no part without gravity.
+DESIGN_ACTUATOR = ("L", "r1", "rho_deg", "E")
+
+
+def _design_actuator(args: argparse.Namespace):
+    """Table 1's actuator with the flags of :data:`DESIGN_ACTUATOR`; its chamber is a placeholder
+    that the design replaces (inside any r1: a quarter of it, concentric)."""
+    from esba.model.scene import Actuator, SceneError
+
+    fixed = actuator_changes(args, DESIGN_ACTUATOR)
+    chamber = {"r2": fixed["r1"] / 4, "d": 0.0} if "r1" in fixed else {}
+    try:
+        return Actuator(**chamber, **fixed)
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
 
 
 #: ``esba.design.optimise.METHODS`` and ``esba.design.optimise.OBJECTIVES`` (written out so that building the parser
@@ -260,4 +229,5 @@ def add_design(sub) -> None:
     p.add_argument("--envelope-at", type=float_arg, metavar="FRACTION", help="the envelope's payload point, a fraction of L (default 1, the tip)")
     p.add_argument("--fold-margin", type=float_arg, metavar="M", help="no fold up to (1 + M) times the envelope (default 0.1)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    add_actuator_flags(p, DESIGN_ACTUATOR, note="; the chamber r2, d is what the design finds")
     p.set_defaults(func=_cmd_design)

@@ -12,48 +12,9 @@ from .results import EXIT_FAILED, EXIT_OK, print_result
 DEFAULT_EQUILIBRIA_FIGURE = "esba-equilibria.png"
 
 
-def _equilibria_table(d: dict) -> str:
-    lines = [
-        f"scene: {d['scene']}",
-        f"pressure: {d['pressure_mpa']:.7f} MPa",
-        f"domain searched: {d['domain']['text']}",
-        f"  {'#':>2}  {'stability':<9} {'Morse':>5} {'total deg':>10} {'tip x, y mm':>17} {'energy N mm':>12} {'min eigenvalue':>15}  theta deg",
-    ]
-    for k, s in enumerate(d["states"], start=1):
-        tip = f"{s['tip_mm'][0]:7.2f}, {s['tip_mm'][1]:7.2f}"
-        theta = ", ".join(f"{t:.2f}" for t in s["theta_deg"][:8]) + (", ..." if len(s["theta_deg"]) > 8 else "")
-        lines.append(f"  {k:>2}  {s['stability']:<9} {s['morse_index']:>5} {s['total_angle_deg']:>10.3f} {tip:>17} {s['energy_nmm']:>12.4f} {s['min_eigenvalue']:>15.4g}  ({theta})"
-                     + ("" if s["in_domain"] else "  OUTSIDE the model's domain"))
-    stable = d["stable"]
-    if d["least_energy_stable"] is not None:
-        least = d["least_energy_stable"] + 1
-        lines.append(f"stable: {len(stable)} ({'multistable' if d['multistable'] else 'one stable state'}); least energy: #{least}")
-    else:
-        lines.append("stable: none in the domain")
-    if d["history_state"] is not None:
-        lines.append(f"the load history (inflate, then load) reaches #{d['history_state'] + 1}")
-    for b in d["barriers"]:
-        lines.append(
-            f"barrier: #{b['a'] + 1} <-> #{b['b'] + 1} through the saddle #{b['saddle'] + 1}: "
-            f"{b['barrier_from_a_nmm']:.4f} N mm from #{b['a'] + 1}, {b['barrier_from_b_nmm']:.4f} N mm from #{b['b'] + 1}"
-        )
-    if d["complete"] is None:
-        lines.append("completeness: not checked (--no-check)")
-    else:
-        lines.append("completeness: " + ("a second search from fresh starts found nothing new" if d["complete"] else f"the second search from fresh starts found {d['check_found']} more (listed above): the search may be incomplete"))
-    listed = d["outside_domain"] - d["not_listed"]
-    if listed:
-        lines.append(f"outside the model's domain: {listed} of the states listed (the warnings say how, as solve's do)")
-    if d["not_listed"]:
-        lines.append(f"beyond the domain searched: {d['not_listed']} equilibria, not listed")
-    lines.append(f"search: {d['starts']} starts, {d['rounds']} deflation rounds, {d['newton_runs']} Newton runs, {d['newton_iterations']} iterations, {d['time_s']:.3f} s")
-    if d.get("figure"):
-        lines.append(f"figure: wrote {d['figure']}")
-    return "\n".join(lines)
-
-
 def _cmd_equilibria(args: argparse.Namespace) -> int:
     from esba.statics.equilibria import EquilibriaOptions, EquilibriaOptionsError, equilibria
+    from esba.statics.text import equilibria_table
 
     figure = scene_figure(args, DEFAULT_EQUILIBRIA_FIGURE)
     scene = scene_from_args(args)
@@ -71,7 +32,7 @@ def _cmd_equilibria(args: argparse.Namespace) -> int:
         from esba.figures.equilibria import equilibria_figure, save_figure
 
         data["figure"] = str(save_figure(equilibria_figure(res), figure).resolve())
-    print_result(args, data, _equilibria_table)
+    print_result(args, data, equilibria_table)
     for k, s in enumerate(res.states, start=1):
         for f in s.validity:
             print(f"esba: warning: state #{k} ({s.total_angle_deg:.2f} deg): {f.message}", file=sys.stderr)

@@ -137,45 +137,8 @@ def _fit_file(path: str, scene):
     return scene, tuple(names), matrix
 
 
-def _estimate_table(d: dict) -> str:
-    key = f"interval_{round(100 * d['level'])}"
-
-    def num(v, fmt=".4g"):
-        return "-" if v is None else format(v, fmt)
-
-    lines = [f"load estimate: {d['status']}" + (f": {d['message']}" if d["message"] else "")
-             + f" ({d['starts']} starts, {d['iterations']} iterations, {d['solve_time_s']:.2f} s)"]
-    lines.append(f"{'unknown':<14} {'unit':<4} {'estimate':>10} {'std error':>10} {round(100 * d['level'])} % interval")
-    for name, u in d["unknowns"].items():
-        iv = u[key]
-        lines.append(f"{name:<14} {u['unit']:<4} {num(u['estimate'], '.5g'):>10} {num(u['std_error'], '.3g'):>10} [{num(iv[0], '.4g')}, {num(iv[1], '.4g')}]")
-    names = list(d["unknowns"])
-    if len(names) > 1:
-        lines.append("correlation: " + ", ".join(f"{a}-{b} {num(d['correlation'][i][j], '+.3f')}" for i, a in enumerate(names)
-                                                 for j, b in enumerate(names) if j > i))
-    if d["dof"] > 0:
-        fit = f"chi-square {num(d['chi2'], '.3g')} on {d['dof']} degrees of freedom" + (f" (p = {num(d['p_value'], '.2g')})" if d["p_value"] is not None else "")
-    else:
-        fit = f"chi-square {num(d['chi2'], '.3g')}, no degrees of freedom left"
-    lines.append(f"unique: {'yes' if d['unique'] else 'no'}; identifiable: {'yes' if d['identifiable'] else 'no'}; {fit}")
-    for u in d["undetermined"]:
-        lines.append(f"cannot see: {u}")
-    if len(d["alternatives"]) > 1:
-        lines.append("loads that explain the data equally well:")
-        for c in d["alternatives"]:
-            est = ", ".join(f"{k} = {v:.4g}" for k, v in c["estimate"].items())
-            st = "; ".join(f"{s['total_angle_deg']:.2f} deg {'stable' if s['stable'] else 'UNSTABLE'}" for s in c["states"])
-            lines.append(f"  {est}: chi-square {c['chi2']:.3g}, state {st}")
-    lines.append(f"{'pose':<12} {'quantity':<14} {'unit':<4} {'measured':>10} {'predicted':>10} {'r / sd':>7}")
-    for r in d["residuals"]:
-        lines.append(f"{r['pose'][:12]:<12} {r['quantity']:<14} {r['unit']:<4} {r['measured']:>10.4g} {r['predicted']:>10.4g} {r['normalised']:>+7.2f}")
-    for s in d["states"]:
-        lines.append(f"{s['pose'][:12]:<12} state: theta ({', '.join(f'{t:.2f}' for t in s['theta_deg'])}) deg, total {s['total_angle_deg']:.2f} deg, "
-                     f"{'stable' if s['stable'] else 'UNSTABLE'}, {'on' if s['on_load_history'] else 'not on'} the inflate-then-load history")
-    return "\n".join(lines)  # the warnings go to stderr, one line each
-
-
 def _cmd_estimate(args: argparse.Namespace) -> int:
+    from esba.calibration.sensing import estimate_table
     from esba.calibration.measurements import MeasurementError
     from esba.calibration.poses import load_poses
     from esba.calibration.sensing import SensingError, SensingOptions, estimate_load
@@ -219,7 +182,7 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
                                progress=None if args.json else "esba estimate")  # a bar with its forecast, on a terminal
     except (SensingError, MeasurementError, SceneError, UncertaintyError) as exc:
         raise UsageError(str(exc)) from None
-    print_result(args, result.to_dict(), _estimate_table)
+    print_result(args, result.to_dict(), estimate_table)
     for w in result.warnings:
         print(f"esba: warning: {w}", file=sys.stderr)
     if not result.ok:

@@ -11,7 +11,7 @@ from pathlib import Path
 from derive.effects import VARIANTS
 from esba.infra import outputs
 
-from .arguments import UsageError, output_file_arg, segments_arg
+from .arguments import UsageError, actuator_changes, add_actuator_flags, output_file_arg, segments_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 
@@ -48,49 +48,8 @@ def _has_scene_table(path: str) -> bool:
         return False
 
 
-def _fit_table(d: dict) -> str:
-    def num(v, fmt=".5g"):
-        return "-" if v is None else format(v, fmt)
-
-    level = round(100 * d["level"])
-    lines = [
-        f"fit of {', '.join(d['parameters'])} to {d['measurements']} measured values in {d['rows']} rows of {d['source']}; "
-        f"n = {d['segments']}, {d['variant']}",
-        f"status: {d['status']}" + (f": {d['message']}" if d["message"] else ": every fitted state a stable minimum on its load path")
-        + f" (IPOPT {d['iterations']} iterations, {d['solve_time_s']:.2f} s)",
-        f"{'parameter':<10} {'unit':<5} {'start':>10} {'estimate':>12} {'std error':>11} {level} % interval",
-    ]
-    for name, p in d["parameters"].items():
-        iv = p[f"interval_{level}"]
-        lines.append(f"{name:<10} {p['unit']:<5} {num(p['start']):>10} {num(p['estimate'], '.6g'):>12} {num(p['std_error'], '.3g'):>11} "
-                     f"[{num(iv[0], '.5g')}, {num(iv[1], '.5g')}]")
-    names = list(d["parameters"])
-    if len(names) > 1:
-        pairs = [f"{a}-{b} {num(d['correlation'][i][j], '+.3f')}" for i, a in enumerate(names) for j, b in enumerate(names) if j > i]
-        lines.append("correlation: " + ", ".join(pairs))
-    if d["dof"] > 0:
-        lines.append(f"residual variance s^2 = {num(d['residual_variance'], '.4g')} ({d['dof']} degrees of freedom; "
-                     "standard errors scaled by it)")
-    else:
-        lines.append(f"no residual variance: {d['measurements']} measured values for {len(d['parameters'])} parameters leave no degrees of freedom")
-    lines.append(f"{'row':<22} {'quantity':<12} {'unit':<5} {'measured':>10} {'predicted':>10} {'residual':>10} {'sd':>7} {'r / sd':>7}")
-    for r in d["residuals"]:
-        sd = f"{r['sd']:.3g}" + ("" if r["sd_given"] else "*")
-        lines.append(f"{r['row'][:22]:<22} {r['quantity']:<12} {r['unit']:<5} {r['measured']:>10.4g} {r['predicted']:>10.4g} "
-                     f"{r['residual']:>+10.3g} {sd:>7} {r['normalised']:>+7.2f}")
-    if any(not r["sd_given"] for r in d["residuals"]):
-        lines.append("* no standard deviation given: 1 deg, 1 mm or 1 N/m assumed (only their ratios matter once scaled by s^2)")
-    for s in d["states"]:
-        if s["message"]:
-            lines.append(f"NOT OK: row {s['row']!r}: {s['message']}")
-    for w in d["warnings"]:
-        lines.append(f"WARNING: {w}")
-    if d.get("figure"):
-        lines.append(f"wrote {d['figure']}")
-    return "\n".join(lines)
-
-
 def _cmd_fit(args: argparse.Namespace) -> int:
+    from esba.calibration.fit import fit_table
     from esba.calibration.fit import FitError, FitOptions, fit, predict
     from esba.calibration.measurements import MeasurementError, load_measurements
     from esba.model.scene import SceneError, load_scene
@@ -101,6 +60,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
             raise UsageError(f"--scene {args.scene}: {args.measurements} has a [scene] table of its own; give the actuator in one place")
         data = load_measurements(args.measurements, base)
         changes = {k: v for k, v in (("segments", args.segments), ("variant", args.variant)) if v is not None}
+        changes.update(actuator_changes(args))
         if changes:  # the flags override the scene (the file's [scene], --scene or Table 1)
             data = load_measurements(args.measurements, data.base.replace(**changes))
         result = fit(data, args.free, FitOptions(level=args.level))
@@ -108,23 +68,22 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     out = result.to_dict()
     if args.plot:
-        from esba.figures.fit import Series, measured_vs_predicted, save_figure
+        from esba.figures.fit import Series, measured_vs_predicted, parameters_text, save_figure
 
         sds = {(r["row"], r["quantity"]): r["sd"] for r in out["residuals"] if r["sd_given"]}
         start = predict(data)
         cov = result.covariance if all(math.isfinite(v) for v in result.covariance.ravel()) else None
         fitted = predict(data, result.params(), cov)
         fig = measured_vs_predicted([
-            Series("start: " + ", ".join(f"{n} = {v:g}" for n, v in zip(result.free, result.start)), start, sds, "s", "0.5"),
-            Series("fitted: " + ", ".join(f"{n} = {v:.4g}" if math.isfinite(se) else f"{n} not identifiable"
-                                          for n, v, se in zip(result.free, result.estimate, result.std_error)) + " (95 %)",
+            Series("start: " + parameters_text(result.free, result.start, result.units), start, sds, "s", "0.5"),
+            Series("fitted: " + parameters_text(result.free, result.estimate, result.units, result.std_error) + " (bars: 95 %)",
                    fitted, sds, "o", "C0", face="C0"),
         ], title=f"{data.source}: the model's error against each measured value")
         try:
             out["figure"] = str(save_figure(fig, args.plot).resolve())
         except OSError as exc:
             raise UsageError(f"--plot {args.plot!r}: cannot write: {exc}") from None
-    print_result(args, out, _fit_table)
+    print_result(args, out, fit_table)
     for w in result.warnings:
         if w.startswith("not identifiable"):
             print(f"esba: warning: {w}", file=sys.stderr)
@@ -144,6 +103,7 @@ def add_fit(sub) -> None:
     p.add_argument("--free", type=_free_arg, default=["E", "rho"], metavar="NAMES", help="parameters to fit, comma-separated (default E,rho; any of L,r1,r2,d,rho,E,M)")
     p.add_argument("--segments", "-n", type=segments_arg, help="segment count n >= 1 (overrides the scene's)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant (overrides the scene's)")
+    add_actuator_flags(p, note="; a row's own L_mm, E_mpa, ... still win for that row")
     p.add_argument("--level", type=_level_arg, default=0.95, help="confidence level of the intervals (default 0.95)")
     p.add_argument("--plot", type=output_file_arg(".png", ".pdf", ".svg"), metavar="FILE", help="write measured against predicted, with error bars (.png, .pdf, .svg)")
     p.add_argument("--json", action="store_true", help="print JSON")

@@ -14,8 +14,6 @@ from .results import EXIT_FAILED, EXIT_OK, print_result
 #: Where ``esba map`` writes its fold curves and figure unless told otherwise (the current folder).
 DEFAULT_MAP_OUT = "esba-map.csv"
 DEFAULT_MAP_FIGURE = "esba-map.png"
-#: The most fold curves the table lists (a periodic axis over many turns repeats them).
-MAX_LISTED = 20
 
 #: The parameters of a map (``esba.paths.problem.PARAMETERS``, written out so that building the
 #: parser does not import CasADi; a test checks they agree). A payload's take its number (payload2).
@@ -45,49 +43,6 @@ def axis_arg(flag: str):
     return parse
 
 
-def _map_table(d: dict) -> str:
-    x, y = d["x"], d["y"]
-    ux = f" {x['unit']}" if x["unit"] and x["unit"] != "1" else ""
-    uy = f" {y['unit']}" if y["unit"] and y["unit"] != "1" else ""
-    s = d["summary"]
-    lines = [
-        f"scene: {d['scene']}",
-        f"map of {x['parameter']} {x['from']:g}..{x['to']:g}{ux} by {y['parameter']} {y['from']:g}..{y['to']:g}{uy}",
-        f"fold curves: {s['curves']} ({s['points']} points); cusps: {s['cusp']}; "
-        f"fold/branch-point meetings: {s['branch point of the x-path'] + s['branch point of the y-path']}",
-    ]
-    if d.get("periodic"):
-        lines.append(d["periodic"]["text"] + f" ({d['periodic']['curves_per_period']} curves a period)")
-    for c in d["fold_curves"][:MAX_LISTED]:
-        lines.append(f"  curve {c['index']}: {c['points']} points, {x['parameter']} {c['x_range'][0]:.6g}..{c['x_range'][1]:.6g}{ux}, "
-                     f"{y['parameter']} {c['y_range'][0]:.6g}..{c['y_range'][1]:.6g}{uy}; {c['stop_reason']}")
-    if len(d["fold_curves"]) > MAX_LISTED:
-        lines.append(f"  ... {len(d['fold_curves']) - MAX_LISTED} more curves (--out FILE lists them)")
-    for p in d["special_points"][:2 * MAX_LISTED]:
-        lines.append(f"  {p['label']:3} {p['kind']:<27} {x['parameter']} = {p[x['parameter']]:.10g}{ux}, {y['parameter']} = {p[y['parameter']]:.10g}{uy}, "
-                     f"total angle {p['total_angle_deg']:.3f} deg  {p['status']}")
-    if len(d["special_points"]) > 2 * MAX_LISTED:
-        lines.append(f"  ... {len(d['special_points']) - 2 * MAX_LISTED} more special points (--out FILE.json lists them)")
-    st = d["stable_states"]
-    lines.append(f"stable states: {st['min']} to {st['max']}; more than one on {100 * st['fraction_multistable']:.1f}% of the map "
-                 f"(anchored by brute force at {x['parameter']} = {d['reference'][x['parameter']]:g}, {y['parameter']} = {d['reference'][y['parameter']]:g}: "
-                 f"{d['reference']['stable_states']})")
-    if d.get("recounted"):
-        lines.append(f"counted by brute force at {len(d['recounted'])} raster points where the fold-curve crossings gave fewer than 0 stable states")
-    for name in ("loading", "unloading"):
-        pts = d["jumps"][name]
-        if pts:
-            lines.append(f"{x['parameter']} {'rising' if name == 'loading' else 'falling'}: jumps at " + ", ".join(f"{p[0]:.6g}{ux} ({y['parameter']} {p[1]:.4g})" for p in pts))
-    if d.get("check_grid"):
-        g = d["check_grid"]
-        lines.append(f"check against brute force on a {g['k']} x {g['k']} grid: {g['k'] ** 2 - g['mismatches'] - g['near_mismatches']} cells agree, "
-                     f"{g['mismatches']} disagree, {g['near_mismatches']} disagree within {g['near']:g} of a fold curve")
-    for k in ("out", "figure"):
-        if d.get(k):
-            lines.append(f"wrote {d[k]}")
-    return "\n".join(lines)
-
-
 def _map_write_doc(args: argparse.Namespace) -> int:
     """``esba map --write-doc FILE``: the maps of docs/maps.md (no other map flags)."""
     from esba.pages.maps import PAGE, MapsSettings
@@ -98,6 +53,7 @@ def _map_write_doc(args: argparse.Namespace) -> int:
 
 
 def _cmd_map(args: argparse.Namespace) -> int:
+    from esba.analysis.maps import map_table
     if args.write_doc:
         return _map_write_doc(args)
     for flag, v in (("--x", args.x), ("--y", args.y)):
@@ -142,7 +98,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
         from esba.figures.maps import map_figure, save_figure
 
         data["figure"] = str(save_figure(map_figure(smap), plot).resolve())
-    print_result(args, data, _map_table)
+    print_result(args, data, map_table)
     if checked is not None and not checked.agrees:
         print(f"esba: the map disagrees with brute force in {checked.mismatches} cells away from a fold curve", file=sys.stderr)
         return EXIT_FAILED

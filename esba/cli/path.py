@@ -32,47 +32,6 @@ DEFAULT_PATH_FIGURE = "esba-path.png"
 _PATH_PARAMETERS = ("pressure", "payload", "omega", "at", "load", "r2", "d", "rho", "E", "L", "r1", "M")
 
 
-def _path_table(d: dict) -> str:
-    unit = d["unit"].split(" ")[0]
-    unit = "" if unit == "1" else f" {unit}"
-    lines = [f"scene: {d['scene']}", f"path in {d['parameter']} from {d['from']:g} to {d['to']:g}{unit}"]
-    head = f"  {'':2} {'point':<13} {d['parameter'] + unit:>16} {'angle deg':>10} {'tip x, y mm':>17}  {'Morse':>5}  status"
-    for b in d["branches"]:
-        lines.append(f"{b['label'] or 'branch'}: {b['points']} points; {b['stop_reason']}")
-        if b["special_points"]:
-            lines.append(head)
-        for sp in b["special_points"]:
-            tip = f"{sp['tip_mm'][0]:7.2f}, {sp['tip_mm'][1]:7.2f}"
-            kind = f"; {sp['bifurcation']}" if sp.get("bifurcation") else ""
-            lines.append(
-                f"  {sp['label']:2} {sp['kind']:<13} {sp['lambda']:16.9g} {sp['total_angle_deg']:10.3f} {tip:>17}  "
-                f"{sp['morse_before']} -> {sp['morse_after']}  {sp['status']}{kind}"
-            )
-    if any(b["label"].endswith(("away from chamber", "towards chamber")) for b in d["branches"]):
-        lines.append("the branches off a branch point are named by the way they bend: away from the chamber (the total angle rises), towards it (falls)")
-    for r in d["loading"]:
-        what = f"quasi-static {d['parameter']} {r['from']:g} -> {r['to']:g}{unit}"
-        for lam in r["branch_points_crossed"]:
-            lines.append(f"{what}: passes the branch point {lam:.9g}{unit} and goes on along the stable branch crossing there")
-        if not r["jumps"]:
-            lines.append(f"{what}: no jump" + ("" if r["reached"] else f"; NOT reached: {r['message']}"))
-        for j in r["jumps"]:
-            lines.append(
-                f"{what}: jumps at the {j['kind']} {j['lambda']:.9g}{unit}: angle {j['total_angle_before_deg']:.2f} -> "
-                f"{j['total_angle_after_deg']:.2f} deg, tip moves {j['distance_mm']:.1f} mm"
-            )
-    if d.get("hysteresis"):
-        h = d["hysteresis"]
-        for k, loop in enumerate(h["loops"], start=1):
-            name = "hysteresis" if len(h["loops"]) == 1 else f"hysteresis loop {k}"
-            lines.append(f"{name}: towards --to it jumps at {loop['up']:.9g}, back at {loop['down']:.9g}{unit}; "
-                         f"width {loop['width']:.6g}{unit}")
-    for k in ("out", "figure"):
-        if d.get(k):
-            lines.append(f"wrote {d[k]}")
-    return "\n".join(lines)
-
-
 def _path_write_doc(args: argparse.Namespace) -> int:
     """``esba path --write-doc FILE``: every path case of docs/paths.md (no other path flags)."""
     from esba.pages.paths import PAGE, PathsSettings
@@ -109,6 +68,7 @@ def _check_path_size(max_steps: int, n: int) -> None:
 
 def _cmd_path(args: argparse.Namespace) -> int:
 
+    from esba.analysis.path_analysis import path_table
     if args.write_doc:
         return _path_write_doc(args)
     if args.to is None:
@@ -147,7 +107,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
         from esba.figures.paths import path_figure, save_figure
 
         data["figure"] = str(save_figure(path_figure(result, args.y), plot).resolve())
-    print_result(args, data, _path_table)
+    print_result(args, data, path_table)
     warn_findings(data["validity"])
     reached = result.main.stopped == "loop" or (len(result.main) and result.main.lam[-1] == args.to)
     if not reached:

@@ -4,7 +4,6 @@ sensitivities and uncertainty, and its Monte Carlo (in this process or on Dask).
 from __future__ import annotations
 
 import argparse
-import math
 import re
 import sys
 import time
@@ -34,96 +33,9 @@ DEFAULT_SOLVE_FIGURE = "esba-solve.png"
 _MAX_ITER = 100_000
 
 
-def _fmt(values, digits: int = 3) -> str:
-    return ", ".join(f"{v:.{digits}f}" for v in values)
-
-
-def _solve_table(d: dict) -> str:
-    terms = ", ".join(f"{k} {v:.3f}" for k, v in d["energy_terms_nmm"].items())
-    loads = "; ".join(f"{p['force_n']:g} N at {p['angle_deg']:g} deg, s = {p['at']:g}" for p in d["payloads"]) or "none"
-    rows = [
-        ("scene", d["scene"]),
-        ("effects", ", ".join(d["effects"])),
-        ("payloads", loads),
-        ("pressure", f"{d['pressure_mpa']:.7f} MPa ({d['pressure_from']})"),
-        ("theta", f"({_fmt(d['theta_deg'], 2)}) deg"),
-        ("total angle", f"{d['total_angle_deg']:.3f} deg"),
-        ("tip x, y", f"{d['tip_mm'][0]:.3f}, {d['tip_mm'][1]:.3f} mm (orientation {d['tip_angle_deg']:.2f} deg)"),
-        ("energy", f"{d['energy_nmm']:.4f} N mm ({terms})"),
-        ("stability", f"{d['stability']} (Hessian eigenvalues {_fmt(d['eigenvalues'], 3)} N mm/rad^2)"),
-        ("solver", f"{d['certificate'] or 'IPOPT ' + d['status']}; {d['steps']} path points and solves, {d['iterations']} iterations in all, {d['solve_time_s']:.3f} s"),
-    ]
-    if d.get("message"):
-        rows.append(("NOT OK", d["message"]))
-    if d.get("history"):
-        rows.append(("history", d["history"]))
-    if d.get("multistability"):
-        rows.append(("other states", d["multistability"]["message"]))
-    for note in d.get("notes", []):
-        rows.append(("note", note))
-    if d.get("sensitivities"):
-        rows += _sensitivity_rows(d)
-    if d.get("uncertainty"):
-        rows += _uncertainty_rows(d)
-    if d.get("figure"):
-        rows.append(("figure", f"wrote {d['figure']}"))
-    return "\n".join(f"{k:>12}: {v}" for k, v in rows)
-
-
-def _sensitivity_rows(d: dict) -> list[tuple[str, str]]:
-    s = d["sensitivities"]
-    if s["status"] != "ok":
-        return [("sensitivity", s["message"])]
-    rows = [("sensitivity", "per unit of each parameter, the others held (implicit function theorem, exact AD); fold: linear estimate of the change that reaches it")]
-    if s.get("held_fixed"):
-        rows.append(("held fixed", s["held_fixed"]["meaning"]))
-    if s.get("round_off"):
-        rows.append(("round-off", s["round_off"]))
-    rows.append(("", f"{'parameter':<14} {'value':>10} {'unit':<6} {'d angle (deg)':>14} {'d tip x (mm)':>13} {'d tip y (mm)':>13} {'fold':>10}"))
-    for name, r in s["parameters"].items():
-        fold = "-" if r["fold_distance"] is None else f"{r['fold_distance']:+.3g}"
-        rows.append(("", f"{name:<14} {r['value']:>10.5g} {r['unit']:<6} {r['dtotal_angle_deg_per_unit']:>14.5g} "
-                         f"{r['dtip_mm_per_unit'][0]:>13.5g} {r['dtip_mm_per_unit'][1]:>13.5g} {fold:>10}"))
-    return rows
-
-
-def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
-    u = d["uncertainty"]
-    given = ", ".join(f"{s['name']} {s['sigma']:.4g} {s['unit']}" + (" (uniform)" if s["distribution"] == "uniform" else "") for s in u["sigmas"])
-    rows = [("sigmas", given)]
-    first = u["std_total_angle_deg"] is not None
-    if not first:  # first order refuses (near a fold): the Monte Carlo, when run, is still reported below
-        rows.append(("uncertainty", f"{u['status']}: {u['message']}"))
-    else:
-        e = u["tip_ellipse_95"]
-        rows.append(("first order", f"std total angle {u['std_total_angle_deg']:.4g} deg; std tip x, y {u['std_tip_mm'][0]:.4g}, {u['std_tip_mm'][1]:.4g} mm; "
-                                    f"95 % tip ellipse: semi-axes {e['semi_axes_mm'][0]:.3g} and {e['semi_axes_mm'][1]:.3g} mm, the major at {e['angle_deg']:.1f} deg from x"))
-        if u["status"] != "ok":
-            rows.append(("NOT LINEAR", u["message"]))
-    mc = d.get("monte_carlo")
-    if mc:
-        c = mc["counts"]
-        std = mc["std"]
-
-        def num(v):
-            return "-" if v is None else f"{v:.4g}"
-
-        rows.append(("Monte Carlo", f"{c['samples']} samples (seed {mc['seed']}, {mc['backend']}): {c['ok']} solved, {c['invalid']} outside the scene's rules, "
-                                    f"{c['not_ok']} without a stable equilibrium; std total angle {num(std['total_angle'])} deg, tip x, y "
-                                    f"{num(std['tip_x'])}, {num(std['tip_y'])} mm"))
-        st = mc.get("study")
-        if st:
-            where = f"; samples in {st['out']}" + (f" (resumed at sample {st['resumed_from_sample']})" if st.get("resumed_from_sample") else "") if st.get("out") else ""
-            rows.append(("solved", f"{st['runner']} in {st['seconds']:.1f} s{where}"))
-        if first:
-            rows.append(("agreement", d["agreement"]["verdict"]))
-        else:
-            rows.append(("agreement", f"none to judge: first order gives no answer ({u['status']}, above); the Monte Carlo is the estimate"))
-    return rows
-
-
 def _cmd_solve(args: argparse.Namespace) -> int:
     from esba.statics.equilibrium import EquilibriumError, SolverOptions, SolverOptionsError, solve
+    from esba.statics.text import solve_table
 
     figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
     scene = scene_from_args(args)
@@ -206,7 +118,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         cov = propagation.cov_tip if propagation is not None and propagation.has_numbers else None
         tips = mc.tip[mc.ok] if mc is not None else None
         data["figure"] = str(save_figure(solve_figure(result, unloaded, tip_cov=cov, samples=tips), figure).resolve())
-    print_result(args, data, _solve_table)
+    print_result(args, data, solve_table)
     warn_findings(result.validity)
     if result.multistable:
         print(f"esba: warning: {result.multistability.message}", file=sys.stderr)
@@ -322,34 +234,8 @@ def add_solve(sub) -> None:
     p.set_defaults(func=_cmd_solve)
 
 
-def _stiffness_table(d: dict) -> str:
-    lines = [
-        f"secant stiffness K = F / delta from the unloaded state ({d['initial_angle_deg']:.2f} deg), "
-        f"P = {d['pressure_mpa']:.7f} MPa held, tip payload at {d['payload_angle_deg']:g} deg; n = {d['segments']}, {d['variant']}",
-        f"{'F (N)':>8} {'delta (mm)':>11} {'K (N/m)':>9} {'tip x, y (mm)':>18}",
-    ]
-    for f, dl, k, tip in zip(d["payloads_n"], d["displacement_mm"], d["stiffness_n_per_m"], d["tip_mm"]):
-        lines.append(f"{f:8.3f} {dl:11.3f} {'unbounded' if k is None else format(k, '9.3f'):>9} {tip[0]:8.2f}, {tip[1]:7.2f}")
-    t = d["tangent"]
-    def k(v):
-        return "unbounded (the tip does not move that way to first order)" if v is None or not math.isfinite(v) else f"{v:.3f} N/m"
-
-    lines.append(f"tangent stiffness of the unloaded state (F = 0, {d['initial_angle_deg']:.2f} deg), where every secant K starts "
-                 "(C = J H^-1 J^T the tip's compliance there):")
-    lines.append(f"  along the force, the tip free to move across it, 1 / (u^T C u) (the limit of K as F -> 0): "
-                 f"horizontal {k(t['horizontal_n_per_m'])}, vertical {k(t['vertical_n_per_m'])}")
-    if t["matrix_n_per_m"] is not None:
-        m = t["matrix_n_per_m"]
-        lines.append(f"  K_tip = C^-1 (N/m, x down, y horizontal): [[{m[0][0]:.2f}, {m[0][1]:.2f}], [{m[1][0]:.2f}, {m[1][1]:.2f}]]: "
-                     "each diagonal entry holds the tip still in the other direction, so it is stiffer than the value above")
-    else:
-        lines.append("  K_tip: singular (one segment moves the tip along one direction only)")
-    for msg in d["messages"]:
-        lines.append(f"NOT OK: {msg}")
-    return "\n".join(lines)
-
-
 def _cmd_stiffness(args: argparse.Namespace) -> int:
+    from esba.analysis.stiffness import stiffness_table
     from esba.analysis.stiffness import PAPER_FORCES, secant_stiffness
     from esba.model.scene import SceneError
     from esba.statics.equilibrium import EquilibriumError
@@ -364,7 +250,7 @@ def _cmd_stiffness(args: argparse.Namespace) -> int:
         print(f"esba: failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
     data = result.to_dict()
-    print_result(args, data, _stiffness_table)
+    print_result(args, data, stiffness_table)
     warn_findings(data.get("validity", []))
     if not result.ok:
         print("esba: stiffness not ok: a solve failed or was not stable", file=sys.stderr)
@@ -378,6 +264,10 @@ def add_stiffness(sub) -> None:
     p.add_argument("--payload", type=float_arg, action="append", metavar="N", help="tip payload in N (repeatable; default 0.5, 1, 2)")
     p.add_argument("--payload-angle", type=float_arg, default=90.0, metavar="DEG", help="direction Omega of the payload (default 90, horizontal)")
     p.set_defaults(func=_cmd_stiffness)
+
+
+def _fmt(values, digits: int = 3) -> str:
+    return ", ".join(f"{v:.{digits}f}" for v in values)
 
 
 def _target_sentence(d: dict) -> str:

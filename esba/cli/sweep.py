@@ -10,7 +10,9 @@ from derive.effects import VARIANTS
 from esba.infra import outputs
 
 from .arguments import (
+    ACTUATOR_FLAGS,
     UsageError,
+    add_actuator_flags,
     float_arg,
     load_scene_file,
     refuse,
@@ -30,50 +32,13 @@ def _values_arg(text: str) -> list[float]:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def _sweep_table(d: dict) -> str:
-    def axis(k: str, v: dict) -> str:  # a long axis as its range (JSON keeps every value)
-        values = v["values"]
-        return f"{k} {values} {v['unit']}" if len(values) <= 8 else f"{k} {len(values)} values from {min(values):g} to {max(values):g} {v['unit']}"
-
-    lines = [f"base: {d['base']}", "axes: " + "; ".join(axis(k, v) for k, v in d["axes"].items())]
-    lines.append("points: " + ", ".join(f"{count} {status}" for status, count in d["counts"].items()) + f"; {d['backend']}")
-    st = d.get("study")
-    if st:
-        resumed = f", resumed at row {st['resumed_from_row']}" if st["resumed_from_row"] else ""
-        lines.append(f"study: {st['chunks_solved']} chunks of up to {st['chunk']} points {st['runner']} in {st['seconds']:.1f} s{resumed}")
-    rows = d.get("rows")
-
-    def num(v, fmt: str) -> str:
-        return "-" if v is None else format(v, fmt)
-
-    if rows is not None and len(rows) <= 60:
-        head = f"{'P MPa':>9} {'F N':>6} {'Om deg':>7} {'r2':>6} {'d':>6} {'angle deg':>10} {'tip x, y mm':>18}  status"
-        lines.append(head)
-        snapped = 0
-        for r in rows:
-            ang = "" if r["total_angle_deg"] is None else f"{r['total_angle_deg']:10.3f}"
-            tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
-            snap = "snap-through" in (r.get("notes") or "")
-            snapped += snap
-            lines.append(f"{num(r['pressure_mpa'], '9.5f'):>9} {num(r['payload_n'], '6.3g'):>6} {num(r['payload_angle_deg'], '7.3g'):>7} "
-                         f"{num(r['r2_mm'], '6.3g'):>6} {num(r['d_mm'], '6.3g'):>6} {ang:>10} {tip:>18}  {r['status']}"
-                         + (", snapped" if snap else ""))
-        if snapped:
-            lines.append(f"snapped: {snapped} point(s) jumped on their load path (a fold); where and from which state: the notes (--json, --out)")
-    else:
-        total = sum(d["counts"].values())
-        lines.append(f"{total} rows" + (f" in {d['out']}" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
-    nothing = bool(st) and st["chunks_solved"] == 0 and st["resumed_from_row"] == st["rows"]
-    for k in ("out", "figure"):
-        if d.get(k):
-            if k == "out" and nothing:
-                lines.append(f"{d[k]} already holds every row of this study ({st['rows']}): nothing solved, nothing written")
-            else:
-                lines.append(f"wrote {d[k]}")
-    return "\n".join(lines)
+def _actuator_axes(args: argparse.Namespace) -> dict[str, list[float]]:
+    """The actuator flags given, as sweep axes (field -> values)."""
+    return {name: getattr(args, name) for name in ACTUATOR_FLAGS if getattr(args, name, None) is not None}
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
+    from esba.studies.sweep import sweep_table
     from esba.figures.scenes import save_figure
     from esba.figures.sweeps import fig12, sweep_figure
     from esba.model.scene import Scene
@@ -81,7 +46,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     from esba.studies.sweep import sweep
 
     if args.fig12 is not None:
-        refuse(args, ["pressure", "payload", "payload_angle", "r2", "d", "target_angle", "out", "plot"], "with --fig12 (it draws its own grid: r2 and d at P = 0.2 MPa, no payload)")
+        refuse(args, ["pressure", "payload", "payload_angle", *ACTUATOR_FLAGS, "target_angle", "out", "plot"],
+               "with --fig12 (it draws its own grid: r2 and d at P = 0.2 MPa, no payload)")
         figure = outputs.figure_file(args.fig12, "--fig12", "sweep-fig12.png")
         out = None
     else:
@@ -90,7 +56,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         out = outputs.check_file(args.out, "--out", (".csv", ".json")) if args.out is not None else None
         figure = outputs.figure_file(args.plot, "--plot", "esba-sweep.png") if args.plot is not None else None
     base = load_scene_file(args.scene, None) or Scene()
-    changes = scene_changes(args, skip=("pressure",))
+    changes = scene_changes(args, skip=("pressure", *ACTUATOR_FLAGS))  # these are the grid's axes
     base = base.replace(**changes) if changes else base
     options = BatchOptions(compile="never" if args.no_compile else "auto", progress=not (args.json or args.no_progress))
     if on_cluster(args) or args.resume:
@@ -111,7 +77,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             StudyFile(out, "sweep", {}, [], 0).check_free()
         except StudyError as exc:
             raise UsageError(str(exc)) from None
-    result = sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d, options=options)
+    result = sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, options=options, **_actuator_axes(args))
     if figure is not None:
         drawn = sweep_figure(result)  # refuses a figure with too many curves before anything is written
     data = result.to_dict()
@@ -119,7 +85,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         data["out"] = str(result.write(out))
     if figure is not None:
         data["figure"] = str(save_figure(drawn, figure))
-    print_result(args, data, _sweep_table)
+    print_result(args, data, sweep_table)
     _warn_sweep(result.tally())
     if data["counts"]["not ok"]:
         print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
@@ -160,6 +126,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
     from esba.studies.chunks import StudyError, StudyStopped
     from esba.studies.distributed import DistributedError, open_runner
     from esba.studies.sweep import SweepError, plan_sweep
+    from esba.studies.sweep import sweep_table
     from esba.studies.sweep_runner import DEFAULT_CHUNK, check_study, sweep_study
 
     if args.fig12 is not None:
@@ -171,7 +138,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
     if args.plot is not None and streamed:
         raise UsageError("--plot needs every row in memory, and with --out FILE.csv on --workers, --scheduler or --resume the rows stream to the file: plot in a run without them")
     try:
-        plan = plan_sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, r2=args.r2, d=args.d)
+        plan = plan_sweep(base, pressure=args.pressure, payload=args.payload, payload_angle=args.payload_angle, **_actuator_axes(args))
         check_study(plan, args.chunk or DEFAULT_CHUNK, streamed)  # before a cluster starts
     except (SweepError, SceneError, StudyError) as exc:
         raise UsageError(str(exc)) from None
@@ -200,7 +167,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
             data["figure"] = str(save_figure(sweep_figure(study.result), figure))
         except SweepError as exc:
             raise UsageError(str(exc)) from None
-    print_result(args, data, _sweep_table)
+    print_result(args, data, sweep_table)
     _warn_sweep(study.tally)
     if data["counts"]["not ok"]:
         print(f"esba: {data['counts']['not ok']} point(s) not ok: see their status and message", file=sys.stderr)
@@ -209,14 +176,12 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
 
 
 def add_sweep(sub) -> None:
-    p = sub.add_parser("sweep", help="solve a grid over pressure, payload, r2, d as one batch; CSV/JSON out; Fig. 12")
+    p = sub.add_parser("sweep", help="solve a grid over pressure, payload and any actuator parameter (L, r1, r2, d, rho, E, M) as one batch; CSV/JSON out; Fig. 12")
     p.add_argument("scene", nargs="?", default=None, metavar="SCENE.toml", help="base scene (default: Table 1 at its 90 degree pressure, no payload, n = 3)")
     values = "VALUES: start:stop:count or v1,v2,..."
     p.add_argument("--pressure", type=_values_arg, metavar="VALUES", help=f"pressures, MPa ({values}; default: the base scene's)")
     p.add_argument("--payload", type=_values_arg, metavar="VALUES", help="tip payload magnitudes, N (one payload, horizontal unless --payload-angle)")
     p.add_argument("--payload-angle", type=_values_arg, metavar="VALUES", help="payload directions Omega from the vertical, degrees")
-    p.add_argument("--r2", type=_values_arg, metavar="VALUES", help="chamber radii, mm")
-    p.add_argument("--d", type=_values_arg, metavar="VALUES", help="eccentric distances, mm")
     p.add_argument("--segments", "-n", type=segments_arg, help="segment count n, 1 to 256")
     p.add_argument("--target-angle", type=float_arg, metavar="DEG", help="without --pressure: each design at the pressure that bends it unloaded to DEG")
     p.add_argument("--gravity", action="store_true", help="include the actuator's weight (Eq. 15)")
@@ -228,6 +193,7 @@ def add_sweep(sub) -> None:
     p.add_argument("--no-compile", action="store_true", help="use CasADi's interpreter, not compiled C")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print JSON (every row)")
+    add_actuator_flags(p, values=_values_arg, note="; each a sweep axis")
     add_cluster_flags(p, "the grid")
     p.add_argument("--chunk", type=chunk_arg, default=None, metavar="K", help="points per chunk with --workers, --scheduler or --resume (default 1000)")
     p.add_argument("--resume", action="store_true", help="stream the rows chunk by chunk to --out FILE.csv and continue the study that file holds (a new one if there is none)")

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from esba.infra import jsonsafe
+from esba.infra.report import Report
 from esba.model.scene import SceneError
 from esba.solvers.pso import PSOOptions, PSOResult, minimize
 from esba.statics.equilibrium import STEP_OPTIONS, solve, stability_verdict
@@ -90,8 +91,8 @@ __all__ = [
 # results
 
 
-@dataclass(frozen=True, eq=False)
-class DesignResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class DesignResult(Report):
     """An optimised design (or why there is none).
 
     Attributes
@@ -167,6 +168,17 @@ class DesignResult:
     iterations: int
     evaluations: int
     pso: PSOResult | None = field(default=None, repr=False)
+
+    _plotter = "esba.figures.results:draw_design_result"
+
+    def headline(self) -> str:
+        """One line: the method, the status and the design with its objective."""
+        return (f"{self.method} {self.status}: r2 = {self.r2_mm:.4f}, d = {self.d_mm:.4f} mm, "
+                f"{self.problem.objective} = {self.objective:.5g} {self.problem.unit}")
+
+    def summary(self) -> str:
+        """The text ``esba design`` prints for this run."""
+        return design_table(self.to_dict())
 
     @property
     def ok(self) -> bool:
@@ -562,8 +574,8 @@ def optimise_pso(
 # both, side by side
 
 
-@dataclass(frozen=True, eq=False)
-class Comparison:
+@dataclass(frozen=True, eq=False, repr=False)
+class Comparison(Report):
     """IPOPT and PSO on the same problem, and how far apart they are.
 
     Attributes
@@ -586,6 +598,16 @@ class Comparison:
     objective_rel_diff: float
     stiffness_rel_diff: float
     speedup: float
+
+    _plotter = "esba.figures.results:draw_design_result"
+
+    def headline(self) -> str:
+        """One line: both designs and whether they agree."""
+        return f"IPOPT and PSO {'agree' if self.agree else 'differ'}: {self.ipopt.headline()}; PSO r2 = {self.pso.r2_mm:.4f}, d = {self.pso.d_mm:.4f} mm"
+
+    def summary(self) -> str:
+        """The text ``esba design --method both`` prints."""
+        return design_table(self.to_dict())
 
     @property
     def agree(self) -> bool:
@@ -657,3 +679,57 @@ def optimise(
     if method == "both":
         return compare(problem, options, pso_options)
     raise DesignError(f"method={method!r}: allowed are {', '.join(METHODS)}")
+
+
+def design_rows(d: dict) -> list[tuple[str, str]]:
+    """The rows ``esba design`` prints for one run's :meth:`DesignResult.to_dict`."""
+    def num(v, fmt):
+        return "-" if v is None else format(v, fmt)
+
+    rows = [
+        ("status", d["status"] + (f": {d['message']}" if d.get("message") else "")),
+        ("r2, d", f"{num(d['r2_mm'], '.5f')}, {num(d['d_mm'], '.5f')} mm (wall {num(d['wall_mm'], '.4f')} mm)"),
+        ("pressure", f"{num(d['pressure_mpa'], '.6f')} MPa (unloaded 90 deg)"),
+        ("stiffness", f"{num(d['stiffness_n_per_m'], '.5f')} N/m (load path: {num(d['stiffness_check_n_per_m'], '.5f')})"),
+        ("objective", f"{d['objective']} = {num(d['objective_value'], '.6g')} {d['objective_unit']}"),
+    ]
+    if d.get("best_reachable_stiffness") is not None:
+        rows.append(("best K", f"{d['best_reachable_stiffness']:.5f} N/m reachable"))
+    rows.append(("stable", f"{d['stable']}; on the load path: {d['on_load_path']}"))
+    active = []
+    for c in d["active_constraints"]:
+        sens = "" if c["sensitivity"] is None else f" (d objective / d bound = {c['sensitivity']:+.4g} {d['objective_unit']}/{c['unit']})"
+        active.append(f"{c['name']}: {c['description']}{sens}")
+    rows.append(("active", "; ".join(active) or "none"))
+    work = f"{d['evaluations']} designs"
+    if d["method"] == "ipopt":
+        work = f"{d['iterations']} iterations, {d['evaluations']} starts"
+        if d.get("min_stiffness") is not None and d.get("objective") != "stiffness" and d["evaluations"]:
+            # the stiffest design, found first to see whether the floor can be met, is a start too
+            work += f" ({d['evaluations'] - 1} of --starts and the stiffest design, found first for K >= {d['min_stiffness']:g} N/m)"
+    rows.append(("time", f"{d['solve_time_s']:.3f} s ({work}; set-up {d['setup_time_s']:.3f} s)"))
+    return rows
+
+
+def design_table(d: dict) -> str:
+    """The text ``esba design`` prints for :meth:`DesignResult.to_dict` or :meth:`Comparison.to_dict` (and the ``figure`` the command adds)."""
+    if d.get("method") != "both":
+        lines = [d["problem"], f"method: {d['method']}"] + [f"{k:>10}: {v}" for k, v in design_rows(d)]
+    else:
+        lines = [d["ipopt"]["problem"]]
+        for name in ("ipopt", "pso"):
+            lines.append(f"-- {name}")
+            lines += [f"{k:>10}: {v}" for k, v in design_rows(d[name])]
+        diff = d["differences"]
+
+        def num(v, fmt):
+            return "-" if v is None else format(v, fmt)
+
+        lines.append(
+            f"-- PSO - IPOPT: r2 {num(diff['r2_mm'], '+.2e')} mm, d {num(diff['d_mm'], '+.2e')} mm, objective "
+            f"{num(diff['objective_rel'], '+.2e')} (relative); PSO took {num(diff['time_ratio_pso_over_ipopt'], '.0f')} "
+            f"times as long; agree (0.01 mm, 0.1 %): {diff['agree']}"
+        )
+    if d.get("figure"):
+        lines.append(f"wrote {d['figure']}")
+    return "\n".join(lines)

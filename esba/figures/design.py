@@ -40,7 +40,7 @@ from esba.design.optimise import (
 from esba.model.scene import SceneError
 from esba.solvers.pso import PSOOptions
 
-from .scenes import new_figure, save_figure
+from .scenes import new_figure, save_figure, set_title
 
 __all__ = [
     "FIG13A_PRESSURE",
@@ -52,6 +52,7 @@ __all__ = [
     "draw_13b",
     "draw_14",
     "draw_design",
+    "draw_design_into",
     "design_figure",
 ]
 
@@ -250,11 +251,17 @@ def draw_14(problem: DesignProblem | None = None, pso_options: PSOOptions | None
 
 def draw_design(run: DesignResult | Comparison, points: int = 40) -> Figure:
     """The stiffness map with the run's design(s), the K_min contour and the swarm (``esba design --plot``)."""
+    fig = new_figure(6.4, 5.2)
+    draw_design_into(fig.add_subplot(), run, points)
+    return fig
+
+
+def draw_design_into(ax: Axes, run: DesignResult | Comparison, points: int = 40) -> None:
+    """:func:`draw_design`'s drawing into ``ax`` (its colour bar beside it)."""
+    fig = ax.figure
     results = [run.ipopt, run.pso] if isinstance(run, Comparison) else [run]
     problem = results[0].problem
     grid, K = stiffness_map(problem.stiffest(), points)
-    fig = new_figure(6.4, 5.2)
-    ax = fig.add_subplot()
     top = 5.0 * math.ceil(np.nanmax(K) / 5.0)
     tri = _contour(fig, ax, grid, K, np.arange(0.0, top + 0.1, 2.5), "secant stiffness K (N/m)", "magma")
     if problem.min_stiffness is not None:
@@ -265,19 +272,19 @@ def draw_design(run: DesignResult | Comparison, points: int = 40) -> Figure:
         if r.pso is not None:
             pts = r.pso.history.positions.reshape(-1, 2)
             ax.plot(pts[:, 0], pts[:, 1], "o", mfc="none", mec="0.8", ms=3, alpha=0.5)
-    markers = {"ipopt": ("*", "cyan", 16), "pso": ("o", "C2", 8)}
+    # IPOPT's star filled, PSO's circle open and larger on top of it: both show where they coincide
+    markers = {"ipopt": ("*", "cyan", 16, "cyan", 5), "pso": ("o", "C2", 14, "none", 6)}
     for r in results:
-        m, c, s = markers[r.method]
+        m, c, s, face, z = markers[r.method]
         if math.isfinite(r.r2_mm):
-            ax.plot([r.r2_mm], [r.d_mm], m, color=c, mec="k", ms=s, clip_on=False, zorder=5,
+            ax.plot([r.r2_mm], [r.d_mm], m, color=c, mec="k" if face != "none" else c, mfc=face, mew=1.0 if face != "none" else 2.0, ms=s, clip_on=False, zorder=z,
                     label=f"{r.method} ({r.status}): r2 = {r.r2_mm:.4f}, d = {r.d_mm:.4f} mm, {problem.objective} = {r.objective:.4g} {problem.unit}")
     if problem.min_wall > 0:
         w = problem.actuator.r1 - problem.min_wall
         ax.plot([0, w], [w, 0], "--", color="w", lw=1.0, label=f"wall = {problem.min_wall:g} mm")
     _triangle_axes(ax, problem.actuator.r1)
     ax.legend(loc="upper right", fontsize=7)
-    ax.set_title(problem.describe()[:110], fontsize=7)
-    return fig
+    set_title(ax, problem.describe(), 7)
 
 
 def design_figure(run: DesignResult | Comparison, path: str | Path, points: int = 40) -> Path:

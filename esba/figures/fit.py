@@ -1,7 +1,7 @@
 """The model's error against the measured value, with error bars (``esba fit --plot`` and ``docs/experiments.md``).
 
-One panel per kind of measured value (angles in degrees, tip coordinates in mm, stiffnesses in
-N/m): each series puts every measured value (x) against the prediction's error, predicted minus
+One panel per measured quantity (total angles in degrees, tip x and tip y in mm, each in its own
+panel, stiffnesses in N/m): each series puts every measured value (x) against the prediction's error, predicted minus
 measured (y), with the measurement's standard deviation as a horizontal bar and the prediction's
 propagated uncertainty (95 %, from the fitted parameters' covariance) as a vertical one; the line
 at 0 is a perfect model. (Predicted against measured put every series on the diagonal, where
@@ -31,10 +31,28 @@ from esba.calibration.fit import Prediction
 
 from .scenes import new_figure, save_figure
 
-__all__ = ["Series", "measured_vs_predicted", "save_figure", "PANELS"]
+__all__ = ["Series", "measured_vs_predicted", "parameters_text", "save_figure", "PANELS"]
 
 #: The panels: (title, quantities, unit).
-PANELS = (("total angle", ("total_angle",), "deg"), ("tip position", ("tip_x", "tip_y"), "mm"), ("secant stiffness", ("stiffness",), "N/m"))
+PANELS = (
+    ("total angle", ("total_angle",), "deg"),
+    ("tip x (down the unbent axis)", ("tip_x",), "mm"),
+    ("tip y (horizontal)", ("tip_y",), "mm"),
+    ("secant stiffness", ("stiffness",), "N/m"),
+)
+
+
+def parameters_text(names: Sequence[str], values: Sequence[float], units: Sequence[str], std_errors: Sequence[float] | None = None) -> str:
+    """Parameter values with their units for a legend; with ``std_errors``, a parameter without a
+    finite one is "not identifiable" (a value on its bound means nothing).
+
+    >>> parameters_text(("E", "rho"), (0.5356, 11.46), ("MPa", "deg"))
+    'E = 0.5356 MPa, rho = 11.46 deg'
+    >>> parameters_text(("E", "rho"), (0.5356, 3e-5), ("MPa", "deg"), (0.003, float("nan")))
+    'E = 0.5356 MPa, rho not identifiable'
+    """
+    ses = [0.0] * len(names) if std_errors is None else std_errors
+    return ", ".join(f"{n} = {v:.4g} {u}" if math.isfinite(float(se)) else f"{n} not identifiable" for n, v, u, se in zip(names, values, units, ses))
 
 
 @dataclass(frozen=True)
@@ -67,8 +85,12 @@ def measured_vs_predicted(series: Sequence[Series], title: str = "") -> Figure:
     """The figure: a panel per kind of measured value, a marker per measured value at (measured,
     predicted - measured)."""
     used = [p for p in PANELS if any(pr.quantity in p[1] for s in series for pr in s.predictions)]
-    fig = new_figure(4.0 * max(1, len(used)), 4.2)
-    axes = fig.subplots(1, max(1, len(used)), squeeze=False)[0]
+    cols = len(used) if len(used) <= 3 else 2  # four panels: two rows of two
+    rows = math.ceil(max(1, len(used)) / max(1, cols))
+    fig = new_figure(4.0 * max(1, cols), 3.6 * rows + 0.8)
+    axes = fig.subplots(rows, max(1, cols), squeeze=False).ravel()
+    for ax in axes[len(used):]:
+        ax.set_axis_off()
     for ax, (name, quantities, unit) in zip(axes, used):
         lo, hi = math.inf, -math.inf
         for s in series:
@@ -85,8 +107,7 @@ def measured_vs_predicted(series: Sequence[Series], title: str = "") -> Figure:
             pad = 0.06 * (hi - lo if hi > lo else 1.0)
             ax.set_xlim(lo - pad, hi + pad)
         ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
-        label = name + (" (x and y)" if len(quantities) > 1 else "")
-        ax.set_xlabel(f"measured {label} ({unit})")
+        ax.set_xlabel(f"measured {name} ({unit})")
         ax.set_ylabel(f"predicted - measured ({unit})")
         ax.grid(True, color="0.9", lw=0.6)
     handles, labels = axes[0].get_legend_handles_labels()

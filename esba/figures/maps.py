@@ -30,9 +30,9 @@ from matplotlib.figure import Figure
 from esba.analysis.maps import StabilityMap
 
 from .paths import parameter_label
-from .scenes import new_figure, save_figure
+from .scenes import new_figure, save_figure, set_title
 
-__all__ = ["map_figure", "draw_map", "save_figure", "COUNT_COLOURS"]
+__all__ = ["map_figure", "map_title", "scene_line", "draw_map", "save_figure", "COUNT_COLOURS"]
 
 #: Shades of 0, 1, 2, 3, 4+ stable states.
 COUNT_COLOURS = ("#f2f2f2", "#ffffff", "#c6dbef", "#6baed6", "#2171b5")
@@ -80,13 +80,23 @@ def draw_map(ax: Axes, smap: StabilityMap) -> None:
     ax.legend(fontsize=7, loc="best")
 
 
+def map_title(smap: StabilityMap) -> str:
+    """What a map shows, in words: ``stable states over payload direction ... and payload magnitude``."""
+    return f"stable states over {_what(smap.plane.px)} and {_what(smap.plane.py)}"
+
+
+def scene_line(smap: StabilityMap) -> str:
+    """The scene a map varies two parameters of, in one line (the pressure the map holds)."""
+    x, y = smap.names
+    return f"{smap.plane.scene.describe()}; P = {smap.plane.px.pressure:.5g} MPa held; {x} and {y} vary"
+
+
 def map_figure(smap: StabilityMap, title: str | None = None) -> Figure:
-    """A figure of one stability map."""
-    fig = new_figure(6.0, 4.8)
+    """A figure of one stability map, titled ``title`` (default :func:`map_title`) over its scene line."""
+    fig = new_figure(6.0, 5.0)
     ax = fig.add_subplot(1, 1, 1)
     draw_map(ax, smap)
-    if title:
-        ax.set_title(title, fontsize=9)
+    set_title(ax, f"{title or map_title(smap)}\n{scene_line(smap)}", 8)
     return fig
 
 
@@ -97,7 +107,7 @@ DESIGN_STATES = {"clear": "#ffffff", "margin": "#fdd49e", "snaps": "#ef6548", "o
 def design_plane_figure(plane) -> Figure:
     """The design plane (:class:`esba.design.envelope.DesignPlane`): each design coloured by whether a
     fold lies in its envelope, contours of the stiffness, the optimum without and with the constraint."""
-    fig = new_figure(6.0, 4.8)
+    fig = new_figure(6.0, 5.2)
     ax = fig.add_subplot(1, 1, 1)
     labels = {"clear": "clear of folds", "margin": "fold within the margin", "snaps": "snaps inside the envelope",
               "over budget": "90 deg pressure over the budget", "fails": "no stable loaded state"}
@@ -109,16 +119,23 @@ def design_plane_figure(plane) -> Figure:
     ok = np.isfinite(plane.stiffness)
     if ok.sum() >= 3:
         cs = ax.tricontour(plane.r2[ok], plane.d[ok], plane.stiffness[ok], levels=8, colors="C0", linewidths=0.8)
-        ax.clabel(cs, fontsize=7, fmt="%.0f")
+        ax.clabel(cs, fontsize=7, fmt="%.0f N/m")
+        ax.plot([], [], color="C0", lw=0.8, label="secant stiffness K (N/m)")
     if plane.optimum:
         u = plane.optimum[0].unconstrained
         if u.get("r2_mm") is not None:
-            ax.plot([u["r2_mm"]], [u["d_mm"]], "X", color="k", ms=10, label="stiffest design (no fold constraint)")
-        for r, marker, colour in zip(plane.optimum, ("*", "P"), ("C3", "C2")):
-            ax.plot([r.r2_mm], [r.d_mm], marker, color=colour, ms=12 if marker == "*" else 9, label=f"stiffest clear design ({r.method})")
-    ax.set_xlabel("r2 (mm)")
-    ax.set_ylabel("d (mm)")
+            ax.plot([u["r2_mm"]], [u["d_mm"]], "X", color="k", ms=10, clip_on=False, zorder=4, label="stiffest design (no fold constraint)")
+        # the map's star open and larger, the swarm's plus inside it: both show where they coincide
+        styles = ({"marker": "*", "ms": 20, "mfc": "none", "mec": "C3", "mew": 2.0, "zorder": 6},
+                  {"marker": "P", "ms": 8, "mfc": "C2", "mec": "k", "mew": 0.5, "zorder": 5})
+        for r, style in zip(plane.optimum, styles):
+            ax.plot([r.r2_mm], [r.d_mm], ls="none", clip_on=False, label=f"stiffest clear design ({r.method}): r2 = {r.r2_mm:.3f}, d = {r.d_mm:.3f} mm", **style)
+    ax.set_xlabel("chamber radius r2 (mm)")
+    ax.set_ylabel("eccentric distance d (mm)")
     ax.legend(fontsize=7, loc="upper right")
+    p = plane.problem
+    set_title(ax, f"the design plane: which designs snap inside the envelope\n({plane.envelope.describe()})\n"
+                  f"each design at its {p.start_angle_deg:g} deg pressure; n = {p.segments}, {p.variant}", 8)
     return fig
 
 

@@ -281,7 +281,7 @@ def draw_8c(data: PayloadShapes | None = None) -> Figure:
     data = payload_shapes() if data is None else data
     fig = new_figure(6.4, 6.0)
     ax = fig.add_subplot()
-    setup_frame_axes(ax)
+    setup_frame_axes(ax, data.unloaded.scene.actuator.r1)
     u = data.unloaded
     draw_shape(ax, u, label=f"no payload: {u.total_angle_deg:.1f}°", joints=False, color="0.55", ls="--", lw=1.5)
     for k, r in enumerate(data.loaded):

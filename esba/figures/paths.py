@@ -31,7 +31,7 @@ from esba.paths.problem import PathError
 
 from .scenes import new_figure, save_figure
 
-__all__ = ["Y_AXES", "LOADING_BANDS", "branch_values", "draw_branch", "draw_loading", "path_figure", "parameter_label", "path_title", "save_figure"]
+__all__ = ["Y_AXES", "LOADING_BANDS", "branch_values", "draw_branch", "draw_loading", "draw_path", "path_figure", "parameter_label", "path_title", "save_figure"]
 
 #: What a path figure can show against the parameter: name -> (label, unit).
 Y_AXES = {"total-angle": ("total bending angle", "deg"), "tip-x": ("tip x, vertical, downwards", "mm"), "tip-y": ("tip y, horizontal", "mm")}
@@ -124,6 +124,13 @@ def path_figure(analysis, y: str = "total-angle", title: str | None = None) -> F
     """The figure of a :class:`esba.analysis.path_analysis.PathAnalysis`: every branch, its special points, the hysteresis."""
     fig = new_figure(7.0, 4.8)
     ax = fig.add_subplot()
+    draw_path(ax, analysis, y)
+    ax.set_title(title or path_title(analysis), fontsize=8)
+    return fig
+
+
+def draw_path(ax: Axes, analysis, y: str = "total-angle") -> None:
+    """Every branch of a :class:`esba.analysis.path_analysis.PathAnalysis`, its special points and the hysteresis, into ``ax``."""
     draw_loading(ax, analysis.loading, y)
     draw_branch(ax, analysis.main, y, "C0", "branch through the start")
     for k, b in enumerate(analysis.crossing):
@@ -141,8 +148,6 @@ def path_figure(analysis, y: str = "total-angle", title: str | None = None) -> F
     ax.set_ylabel(f"{name} ({yunit})")
     ax.grid(True, color="0.9", lw=0.6)
     ax.legend(fontsize=7.5, loc="best")
-    ax.set_title(title or path_title(analysis), fontsize=8)
-    return fig
 
 
 def parameter_label(problem) -> str:

@@ -17,6 +17,7 @@ True
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 from typing import Sequence
 
@@ -28,7 +29,7 @@ from matplotlib.figure import Figure
 from esba.infra import outputs
 from esba.statics.equilibrium import Equilibrium
 
-__all__ = ["new_figure", "save_figure", "draw_shape", "draw_payloads", "draw_tip_ellipse", "setup_frame_axes", "solve_figure"]
+__all__ = ["new_figure", "save_figure", "set_title", "draw_shape", "draw_payloads", "draw_tip_ellipse", "setup_frame_axes", "solve_figure", "draw_solution"]
 
 
 def new_figure(width: float = 5.5, height: float = 5.0) -> Figure:
@@ -61,14 +62,25 @@ def save_figure(fig: Figure, path: str | Path, dpi: int = 150) -> Path:
     return path
 
 
-def setup_frame_axes(ax: Axes) -> None:
-    """Equal scales, y to the right, x downwards, labelled in mm, with the clamp at the origin."""
+def set_title(ax: Axes, text: str, fontsize: float = 9.0) -> None:
+    """``ax``'s title, wrapped to the figure's width (never cut: a long scene line takes two lines)."""
+    chars = max(20, int(0.95 * ax.figure.get_figwidth() * 72.0 / (0.62 * fontsize)))  # DejaVu Sans: about 0.6 em a character
+    ax.set_title("\n".join(textwrap.fill(line, chars) for line in text.split("\n")), fontsize=fontsize)
+
+
+def setup_frame_axes(ax: Axes, clamp_mm: float = 8.0) -> None:
+    """Equal scales, y to the right, x downwards, labelled in mm, with the clamp at the origin: a
+    hatched block as wide as the actuator (``clamp_mm`` either side, its external radius), above
+    the base. A state bent past 180 degrees rises above the base beside it (the model has no
+    contact with the mount)."""
+    from matplotlib.patches import Rectangle
+
     ax.set_aspect("equal", adjustable="datalim")
     if not ax.yaxis_inverted():
         ax.invert_yaxis()
     ax.set_xlabel("y (mm)")
     ax.set_ylabel("x (mm), downwards")
-    ax.axhline(0.0, color="0.3", lw=2.5, solid_capstyle="butt", zorder=0)
+    ax.add_patch(Rectangle((-clamp_mm, -0.6 * clamp_mm), 2 * clamp_mm, 0.6 * clamp_mm, facecolor="0.85", edgecolor="0.3", hatch="///", lw=1.0, zorder=0))
     ax.grid(True, color="0.9", lw=0.6)
 
 
@@ -105,6 +117,8 @@ def draw_payloads(ax: Axes, result: Equilibrium, length_mm: float = 25.0, color:
             zorder=10,
         )
         ax.annotate(f"{p.force:g} N", xy=(pt[1] - dy, pt[0] - dx), color=color, fontsize=8, ha="center", va="bottom", zorder=10)
+        ax.update_datalim([(pt[1] - dy, pt[0] - dx)])  # annotations do not scale the axes: the arrow's tail and its label stay inside
+    ax.autoscale_view()
 
 
 def draw_tip_ellipse(ax: Axes, centre: Sequence[float], cov: np.ndarray, level: float = 0.95, label: str | None = None, **style) -> None:
@@ -125,7 +139,14 @@ def solve_figure(result: Equilibrium, unloaded: Equilibrium | None = None, tip_c
     """
     fig = new_figure()
     ax = fig.add_subplot()
-    setup_frame_axes(ax)
+    draw_solution(ax, result, unloaded, tip_cov, samples)
+    return fig
+
+
+def draw_solution(ax: Axes, result: Equilibrium, unloaded: Equilibrium | None = None, tip_cov: np.ndarray | None = None,
+                  samples: np.ndarray | None = None) -> None:
+    """:func:`solve_figure`'s drawing into ``ax``: the frame, the shapes, the payloads, the tip's uncertainty."""
+    setup_frame_axes(ax, result.scene.actuator.r1)
     if unloaded is not None:
         draw_shape(ax, unloaded, label=f"unloaded: {unloaded.total_angle_deg:.1f} deg", color="0.55", ls="--")
     verdict = "" if result.ok else f" [{result.stability}, {result.status}]"
@@ -138,4 +159,3 @@ def solve_figure(result: Equilibrium, unloaded: Equilibrium | None = None, tip_c
     s = result.scene
     ax.set_title(f"n = {s.segments}, P = {result.pressure:.4f} MPa, {s.variant} model", fontsize=10)
     ax.legend(loc="upper right", fontsize=8)
-    return fig

@@ -12,13 +12,14 @@ import numpy as np
 
 from esba.model.scene import Scene
 from esba.statics.batch import BatchOptions
-from esba.studies.sweep import AXES, SweepError, SweepResult, sweep
+from esba.studies.sweep import ACTUATOR_AXES, AXES, SweepError, SweepResult, sweep
 
-__all__ = ["sweep_figure", "fig12", "FIG12_D", "FIG12_R2"]
+__all__ = ["sweep_figure", "draw_sweep", "fig12", "FIG12_D", "FIG12_R2"]
 
 
 #: The sweep axes a path can follow (:data:`esba.paths.problem.PARAMETERS` names).
-_PATH_OF_AXIS = {"pressure": "pressure", "payload": "payload", "payload_angle": "omega", "r2": "r2", "d": "d"}
+_PATH_OF_AXIS = {"pressure": "pressure", "payload": "payload", "payload_angle": "omega", "L": "L", "r1": "r1", "r2": "r2", "d": "d",
+                 "rho_deg": "rho", "E": "E", "M": "M"}
 
 
 def _traced(result: SweepResult, idx: np.ndarray, x_name: str):
@@ -26,7 +27,7 @@ def _traced(result: SweepResult, idx: np.ndarray, x_name: str):
     the curve cannot be one branch (each design at its own pressure) or has no ok point."""
     from esba.paths.continuation import PathOptions, PathProblem, trace
 
-    if x_name in ("r2", "d") and "pressure" not in result.axes and result.base.pressure is None:
+    if x_name in ACTUATOR_AXES and "pressure" not in result.axes and result.base.pressure is None:
         return None  # every design at the pressure of its own target angle: not one path
     ok = [i for i in idx if result.status[i] == "ok"]
     if not ok:
@@ -50,8 +51,16 @@ def sweep_figure(result: SweepResult, max_curves: int = 12, traced: bool = True)
     range shows its unstable middle and its folds instead of a line through the jump; the grid
     points themselves are the markers (each solved along the scene's own load history).
     """
-    from .paths import draw_branch
     from .scenes import new_figure
+
+    fig = new_figure(6.5, 4.5)
+    draw_sweep(fig.subplots(), result, max_curves, traced)
+    return fig
+
+
+def draw_sweep(ax, result: SweepResult, max_curves: int = 12, traced: bool = True) -> None:
+    """:func:`sweep_figure`'s drawing into ``ax``."""
+    from .paths import draw_branch
 
     names = [k for k, v in result.axes.items() if len(v) > 1] or list(result.axes)
     x_name = names[0]
@@ -59,8 +68,6 @@ def sweep_figure(result: SweepResult, max_curves: int = 12, traced: bool = True)
     combos = list(itertools.product(*(result.axes[k] for k in others)))
     if len(combos) > max_curves:
         raise SweepError(f"the figure would have {len(combos)} curves (> {max_curves}): sweep fewer values of {', '.join(others)}")
-    fig = new_figure(6.5, 4.5)
-    ax = fig.subplots()
     angle = np.where(result.ok, result.total_angle_deg, np.nan)
     any_traced = any_fold = False
     for k, combo in enumerate(combos):
@@ -90,8 +97,11 @@ def sweep_figure(result: SweepResult, max_curves: int = 12, traced: bool = True)
     if (combos and others) or any_traced:
         ax.legend(fontsize=7)
     a, b = result.base.actuator, result.base
-    fixed = [f"L={a.L:g} r1={a.r1:g}" + ("" if "r2" in result.axes else f" r2={a.r2:g}") + ("" if "d" in result.axes else f" d={a.d:g}")]
-    fixed.append(f"rho={a.rho_deg:g} deg E={a.E:g} MPa")
+    held = [f"{k}={getattr(a, k):g}" for k in ("L", "r1", "r2", "d") if k not in result.axes]
+    held += [f"{k.removesuffix('_deg')}={getattr(a, k):g} {AXES[k]}" for k in ("rho_deg", "E") if k not in result.axes]
+    if b.gravity and "M" not in result.axes:
+        held.append(f"M={a.M:g} kg")
+    fixed = [" ".join(held)] if held else []
     if "pressure" not in result.axes:
         fixed.append(f"P={b.pressure:g} MPa" if b.pressure is not None else f"P for an unloaded {b.target_angle_deg:g} deg")
     if b.payloads:
@@ -104,7 +114,6 @@ def sweep_figure(result: SweepResult, max_curves: int = 12, traced: bool = True)
         )
     fixed.append(f"n={b.segments}")
     ax.set_title("; ".join(fixed) + " (esba sweep --plot)", fontsize=8)
-    return fig
 
 
 

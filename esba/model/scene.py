@@ -68,7 +68,7 @@ from esba.infra.errors import InputError
 
 from .generated import Model, load_model
 
-__all__ = ["Actuator", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "MAX_PRESSURE", "MAX_PAYLOAD"]
+__all__ = ["Actuator", "ACTUATOR_RULES", "check_actuator_field", "actuator_rule", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "MAX_PRESSURE", "MAX_PAYLOAD"]
 
 #: The largest target angle (the unloaded bend a pressure is sought for), degrees: ten turns, as a
 #: measurement file allows (:data:`esba.calibration.measurements.MAX_ANGLE_DEG`); 1e6 deg is a typo.
@@ -142,6 +142,46 @@ def _flag(where: str, value: Any) -> bool:
     return value
 
 
+#: What each field of :class:`Actuator` allows on its own (the chamber must also lie inside the
+#: actuator, r2 + d < r1): name -> (lowest, lowest allowed?, highest or None, unit, meaning). The one
+#: definition of the actuator's fields for scene files, the command line's flags and sweep axes.
+ACTUATOR_RULES: dict[str, tuple[float, bool, float | None, str, str]] = {
+    "L": (0.0, False, None, "mm", "length of the inextensible layer"),
+    "r1": (0.0, False, None, "mm", "external radius"),
+    "r2": (0.0, False, None, "mm", "chamber radius"),
+    "d": (0.0, True, None, "mm", "eccentric distance of the chamber"),
+    "rho_deg": (0.0, True, 90.0, "deg", "fibre winding angle rho"),
+    "E": (0.0, False, None, "MPa", "Young's modulus of the rubber"),
+    "M": (0.0, True, None, "kg", "mass (used only with gravity)"),
+}
+
+
+def actuator_rule(name: str) -> str:
+    """What actuator field ``name`` allows on its own, as a message says it (``"> 0"``, ``"0 <= rho_deg < 90"``)."""
+    low, closed, high, _, _ = ACTUATOR_RULES[name]
+    if high is not None:
+        return f"{low:g} {'<=' if closed else '<'} {name} < {high:g}"
+    return f"{'>=' if closed else '>'} {low:g}"
+
+
+def check_actuator_field(name: str, value: Any, where: str | None = None) -> float:
+    """Actuator field ``name`` checked on its own (:data:`ACTUATOR_RULES`); ``where`` names it in the
+    message (default ``actuator.NAME``).
+
+    >>> check_actuator_field("rho_deg", 95)
+    Traceback (most recent call last):
+    ...
+    esba.model.scene.SceneError: actuator.rho_deg=95: expected 0 <= rho_deg < 90
+    """
+    where = f"actuator.{name}" if where is None else where
+    low, closed, high, _, _ = ACTUATOR_RULES[name]
+    value = _number(where, value)
+    if value < low or (value == low and not closed) or (high is not None and value >= high):
+        rule = actuator_rule(name)
+        raise SceneError(f"{where}={value:g}: expected {rule if high is not None else 'a number ' + rule}")
+    return value
+
+
 @dataclass(frozen=True)
 class Actuator:
     """Geometry and material of one ESBA (Table 1 of the paper by default).
@@ -182,20 +222,13 @@ class Actuator:
     M: float = 0.035
 
     def __post_init__(self) -> None:
-        for name in ("L", "r1", "r2", "E"):
-            object.__setattr__(self, name, _positive(f"actuator.{name}", getattr(self, name)))
-        for name in ("d", "M", "rho_deg"):
-            value = _number(f"actuator.{name}", getattr(self, name))
-            if value < 0:
-                raise SceneError(f"actuator.{name}={value:g}: expected a number >= 0")
-            object.__setattr__(self, name, value)
+        for name in ACTUATOR_RULES:
+            object.__setattr__(self, name, check_actuator_field(name, getattr(self, name)))
         if not self.r2 + self.d < self.r1:
             raise SceneError(
                 f"actuator.r2={self.r2:g} with d={self.d:g}, r1={self.r1:g}: "
                 "the chamber must lie inside the actuator, r2 + d < r1"
             )
-        if not self.rho_deg < 90.0:
-            raise SceneError(f"actuator.rho_deg={self.rho_deg:g}: expected 0 <= rho_deg < 90")
 
     def parameters(self) -> dict[str, float]:
         """The model parameters of the actuator (radians): L, r1, r2, d, rho, E, M."""

@@ -21,6 +21,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from esba.infra import outputs
+from esba.infra.report import Report
 from esba.model.stability import CRITICAL_TOL
 
 from .problem import PathError
@@ -133,8 +134,32 @@ class SpecialPoint:
 STOPS = ("bound", "max_steps", "event", "loop", "corrector", "domain", "instability", "start", "refused")
 
 
-@dataclass(frozen=True, eq=False)
-class Branch:
+def special_counts(points: Sequence[SpecialPoint]) -> str:
+    """How many special points of each kind, in words: ``"2 folds, 1 branch point"`` (empty for none)."""
+    counts = {k: sum(1 for s in points if s.kind == k) for k in dict.fromkeys(s.kind for s in points)}
+    return ", ".join(f"{n} {k}{'s' if n != 1 else ''}" for k, n in counts.items())
+
+
+def branch_lines(b: dict[str, Any]) -> list[str]:
+    """A branch's :meth:`Branch.to_dict` as text: its label, points and why it stopped, then a row per
+    special point (the lines ``esba path`` prints for each branch)."""
+    unit = b["unit"].split(" ")[0]
+    unit = "" if unit == "1" else f" {unit}"
+    lines = [f"{b['label'] or 'branch'}: {b['points']} points; {b['stop_reason']}"]
+    if b["special_points"]:
+        lines.append(f"  {'':2} {'point':<13} {b['parameter'] + unit:>16} {'angle deg':>10} {'tip x, y mm':>17}  {'Morse':>5}  status")
+    for sp in b["special_points"]:
+        tip = f"{sp['tip_mm'][0]:7.2f}, {sp['tip_mm'][1]:7.2f}"
+        kind = f"; {sp['bifurcation']}" if sp.get("bifurcation") else ""
+        lines.append(
+            f"  {sp['label']:2} {sp['kind']:<13} {sp['lambda']:16.9g} {sp['total_angle_deg']:10.3f} {tip:>17}  "
+            f"{sp['morse_before']} -> {sp['morse_after']}  {sp['status']}{kind}"
+        )
+    return lines
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Branch(Report):
     """A traced branch: one row per point, in the order traced.
 
     Attributes
@@ -196,8 +221,24 @@ class Branch:
     beyond: tuple[float, np.ndarray] | None = field(repr=False, default=None)
     evaluations: int = 0
 
+    _plotter = "esba.figures.results:draw_branch"
+
     def __len__(self) -> int:
         return len(self.lam)
+
+    def headline(self) -> str:
+        """One line: the parameter's range, the points, the special points and why the trace stopped."""
+        if not len(self):
+            return f"{self.label or 'branch'} in {self.name}: no point; {self.stopped}"
+        unit = self.unit.split(" ")[0]
+        unit = "" if unit == "1" else f" {unit}"
+        kinds = special_counts(self.special)
+        return (f"{self.label + ', ' if self.label else ''}{self.name} {self.lam[0]:.4g} to {self.lam[-1]:.4g}{unit}, {len(self)} points"
+                f"{'; ' + kinds if kinds else ''}; stopped: {self.stopped}")
+
+    def summary(self) -> str:
+        """The branch and its special points, as ``esba path`` prints each branch."""
+        return "\n".join(branch_lines(self.to_dict(points=False)))
 
     @cached_property
     def tip(self) -> np.ndarray:

@@ -69,6 +69,7 @@ import numpy as np
 
 from esba.infra import checks
 from esba.infra.errors import InputError
+from esba.infra.report import Report
 from esba.infra.threads import single_threaded
 from esba.model import resolution
 from esba.model.closed_form import pressure_for_angle
@@ -265,8 +266,8 @@ class Barrier:
         return {"a": self.a, "b": self.b, "saddle": self.saddle, "barrier_from_a_nmm": self.from_a, "barrier_from_b_nmm": self.from_b}
 
 
-@dataclass(frozen=True, eq=False)
-class Equilibria:
+@dataclass(frozen=True, eq=False, repr=False)
+class Equilibria(Report):
     """Every equilibrium :func:`equilibria` found in the scene's domain.
 
     Attributes
@@ -308,6 +309,19 @@ class Equilibria:
     outside: int
     time_s: float
     history_state: int | None = None
+
+    _plotter = "esba.figures.results:draw_equilibria"
+
+    def headline(self) -> str:
+        """One line: how many equilibria, how many stable, at which pressure."""
+        return (f"{len(self.states)} equilibri{'um' if len(self.states) == 1 else 'a'} at P = {self.pressure:.5g} MPa, {len(self.stable)} stable"
+                + (" (multistable)" if len(self.stable) > 1 else "") + f", n = {self.scene.segments}")
+
+    def summary(self) -> str:
+        """The text ``esba equilibria`` prints for this scene (without its figure)."""
+        from .text import equilibria_table
+
+        return equilibria_table({**self.to_dict(), "scene": self.scene.describe()})
 
     @property
     def stable(self) -> tuple[State, ...]:

@@ -43,6 +43,7 @@ import numpy as np
 
 from esba.infra import checks
 from esba.infra.errors import EquilibriumError, InputError
+from esba.infra.report import Report
 from esba.infra.threads import single_threaded
 from esba.model import resolution
 from esba.model.closed_form import pressure_for_angle
@@ -195,8 +196,8 @@ STEP_OPTIONS = SolverOptions(multistability="never")
 # the result
 
 
-@dataclass(frozen=True, eq=False)
-class Equilibrium:
+@dataclass(frozen=True, eq=False, repr=False)
+class Equilibrium(Report):
     """One solved scene: the equilibrium, its stability and how it was found.
 
     Angles are in radians (``theta``, ``total_angle``, ``tip[2]``) with degree twins; lengths in
@@ -285,6 +286,20 @@ class Equilibrium:
     validity: tuple[Finding, ...] = ()
     history: str = ""
     multistability: Multistability | None = None
+
+    _plotter = "esba.figures.results:draw_equilibrium"
+
+    def headline(self) -> str:
+        """One line: the verdict, pressure, bend and tip."""
+        x, y = self.tip_mm
+        verdict = self.stability if self.ok else f"NOT OK ({self.stability}, {self.status})"
+        return f"{verdict}, P = {self.pressure:.5g} MPa, total angle {self.total_angle_deg:.3f} deg, tip ({x:.2f}, {y:.2f}) mm, n = {self.scene.segments}"
+
+    def summary(self) -> str:
+        """The text ``esba solve`` prints for this scene (without its figure)."""
+        from .text import solve_table
+
+        return solve_table({**self.to_dict(), "scene": self.scene.describe()})
 
     @property
     def multistable(self) -> bool | None:

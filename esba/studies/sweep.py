@@ -2,8 +2,10 @@
 
 :func:`sweep` takes a base scene and values for any of the axes ``pressure`` (MPa), ``payload``
 (N, one payload at the base scene's first payload's direction and point, else horizontal at the
-tip), ``payload_angle`` (degrees), ``r2`` and ``d`` (mm), and solves every point of their
-Cartesian product. Geometries outside the design space (r2 + d >= r1) are rows marked
+tip), ``payload_angle`` (degrees) and any field of the actuator, named as in a scene file's
+``[actuator]`` table (``L``, ``r1``, ``r2``, ``d`` in mm, ``rho_deg`` in degrees, ``E`` in MPa, ``M``
+in kg), and solves every point of their Cartesian product. Each value is checked by the scene's
+own rule for its field; geometries outside the design space (r2 + d >= r1) are rows marked
 ``infeasible`` and not solved; every other row is ok or says why not.
 
 A sweep is a :class:`SweepPlan` (:func:`plan_sweep`: the validated grid, plain values only) and
@@ -33,6 +35,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
+import itertools
 import math
 from dataclasses import dataclass
 from numbers import Real
@@ -43,9 +46,10 @@ import numpy as np
 
 from esba.infra import checks, jsonsafe, outputs
 from esba.infra.errors import InputError
+from esba.infra.report import Report
 from esba.model import resolution
 from esba.model.closed_form import chain_tip
-from esba.model.scene import MAX_PAYLOAD, MAX_PRESSURE, Payload, Scene, SceneError
+from esba.model.scene import ACTUATOR_RULES, MAX_PAYLOAD, MAX_PRESSURE, Actuator, Payload, Scene, SceneError, actuator_rule, check_actuator_field
 from esba.model.validity import Finding, Tally, assess_arrays
 from esba.statics.batch import METHODS, BatchOptions, check_size, decide_backend, solve_arrays
 from esba.statics.batch_options import DEFAULT_BATCH_OPTIONS
@@ -57,6 +61,8 @@ from esba.statics.equilibrium import (
 
 __all__ = [
     "AXES",
+    "ACTUATOR_AXES",
+    "AXIS_COLUMNS",
     "SweepPlan",
     "SweepResult",
     "plan_sweep",
@@ -72,8 +78,18 @@ __all__ = [
     "MAX_STUDY_POINTS",
 ]
 
+#: The actuator's axes of a sweep: every field of a scene's ``[actuator]`` table
+#: (:data:`esba.model.scene.ACTUATOR_RULES`), in its order.
+ACTUATOR_AXES: tuple[str, ...] = tuple(ACTUATOR_RULES)
+
 #: The axes of a sweep, in the order of the grid's dimensions, with their units.
-AXES: dict[str, str] = {"pressure": "MPa", "payload": "N", "payload_angle": "deg", "r2": "mm", "d": "mm"}
+AXES: dict[str, str] = {"pressure": "MPa", "payload": "N", "payload_angle": "deg", **{k: ACTUATOR_RULES[k][3] for k in ACTUATOR_AXES}}
+
+#: The column of each axis in a sweep's rows (and CSV file).
+AXIS_COLUMNS: dict[str, str] = {
+    "pressure": "pressure_mpa", "payload": "payload_n", "payload_angle": "payload_angle_deg",
+    "L": "L_mm", "r1": "r1_mm", "r2": "r2_mm", "d": "d_mm", "rho_deg": "rho_deg", "E": "E_mpa", "M": "M_kg",
+}
 
 #: Columns of a sweep's rows that hold text (every other column is a number, empty when undefined).
 TEXT_FIELDS = ("status", "stability", "method", "message", "notes", "validity")
@@ -186,7 +202,7 @@ class SweepPlan:
 
     def scene_of(self, cols: Mapping[str, np.ndarray], i: int) -> Scene:
         """The scene of point ``i`` of ``cols`` (from :meth:`columns`)."""
-        changes: dict[str, Any] = {"r2": float(cols["r2"][i]), "d": float(cols["d"][i])}
+        changes: dict[str, Any] = {k: float(cols[k][i]) for k in ACTUATOR_AXES}
         if not self.angle_mode:
             changes["pressure"] = float(cols["pressure"][i])
         if self.payload_swept:
@@ -222,25 +238,34 @@ def _axis(name: str, values) -> list[float] | None:
         raise SweepError(f"{name}: {len(vals)} values; expected at most {MAX_POINTS}")
     if not vals or not all(math.isfinite(v) for v in vals):
         raise SweepError(f"{name}={checks.quote(values)}: expected one or more finite numbers")
-    if name in ("pressure", "payload", "d") and min(vals) < 0:
+    if name in ("pressure", "payload") and min(vals) < 0:
         raise SweepError(f"{name}: {min(vals):g} {AXES[name]} given; expected values >= 0")
     if name == "r2" and min(vals) <= 0:
         raise SweepError(f"r2: {min(vals):g} mm given; expected values > 0")
     bound = {"pressure": MAX_PRESSURE, "payload": MAX_PAYLOAD}.get(name)
     if bound is not None and max(vals) > bound:  # a scene's own bounds (esba.model.scene), before any point is solved
         raise SweepError(f"{name}: {max(vals):g} {AXES[name]} given; expected values <= {bound:g} (the model means nothing beyond)")
+    if name in ACTUATOR_RULES:  # each value by the scene's own rule for the field
+        for v in vals:
+            try:
+                check_actuator_field(name, v)
+            except SceneError:
+                raise SweepError(f"{name}: {v:g} {AXES[name]} given; expected values {actuator_rule(name)}") from None
     return vals
 
 
-def plan_sweep(base: Scene | None = None, *, pressure=None, payload=None, payload_angle=None, r2=None, d=None) -> SweepPlan:
+def plan_sweep(base: Scene | None = None, *, pressure=None, payload=None, payload_angle=None, **actuator) -> SweepPlan:
     """The validated grid of :func:`sweep` (same arguments but the options), not solved."""
     base = Scene() if base is None else base
     if not isinstance(base, Scene):
         raise SweepError(f"base={checks.quote(base)}: expected a Scene")
-    given = {"pressure": pressure, "payload": payload, "payload_angle": payload_angle, "r2": r2, "d": d}
-    axes = {k: v for k, v in ((k, _axis(k, given[k])) for k in AXES) if v is not None}
+    unknown = sorted(set(actuator) - set(ACTUATOR_AXES))
+    if unknown:
+        raise SweepError(f"unknown sweep axis {checks.some(unknown)}: allowed are {', '.join(AXES)}")
+    given = {"pressure": pressure, "payload": payload, "payload_angle": payload_angle, **actuator}
+    axes = {k: v for k, v in ((k, _axis(k, given.get(k))) for k in AXES) if v is not None}
     if not axes:
-        raise SweepError("sweep needs at least one axis: pressure, payload, payload_angle, r2 or d")
+        raise SweepError(f"sweep needs at least one axis: {', '.join(AXES)}")
     payload_swept = "payload" in axes or "payload_angle" in axes
     first = base.payloads[0] if base.payloads else Payload(0.0, 90.0, 1.0)
     if payload_swept:
@@ -249,8 +274,7 @@ def plan_sweep(base: Scene | None = None, *, pressure=None, payload=None, payloa
         "pressure": base.pressure if base.pressure is not None else float("nan"),
         "payload": first.force if base.payloads else 0.0,
         "payload_angle": first.angle_deg,
-        "r2": base.actuator.r2,
-        "d": base.actuator.d,
+        **{k: getattr(base.actuator, k) for k in ACTUATOR_AXES},
     }
     angle_mode = "pressure" not in axes and base.pressure is None
     plan = SweepPlan(base, axes, {k: float(v) for k, v in fixed.items()}, first.at, payload_swept, angle_mode)
@@ -273,27 +297,37 @@ def check_resolvable(plan: SweepPlan) -> None:
     """Refuse, before anything is solved, a grid whose most demanding point is at a scale the
     solver cannot resolve (:func:`esba.model.resolution.check_resolvable`).
 
-    The checks are bounded whatever the grid's size: the stiffness test at the least stiff
-    feasible design (the segment stiffness is closed form), the moment test at the strongest
-    payload and pressure of the corner designs of the (r2, d) box, where the pressure that a
-    target angle needs is largest (a thin chamber or a concentric one needs the most).
+    The checks are bounded whatever the grid's size: at each corner of the box of the other
+    actuator axes (L, r1, rho, E, M: their least and largest values, at most 32 corners), the
+    stiffness test at the least stiff feasible design (the segment stiffness is closed form), the
+    moment test at the strongest payload and pressure of the corner designs of the (r2, d) box,
+    where the pressure that a target angle needs is largest (a thin chamber or a concentric one
+    needs the most).
     """
+    others = [k for k in ACTUATOR_AXES if k not in ("r2", "d")]
+    spans = [sorted({min(plan.axes[k]), max(plan.axes[k])}) if k in plan.axes else [plan.fixed[k]] for k in others]
+    for corner in itertools.product(*spans):
+        _check_resolvable_at(plan, dict(zip(others, corner)))
+
+
+def _check_resolvable_at(plan: SweepPlan, corner: dict[str, float]) -> None:
+    """:func:`check_resolvable` over the (r2, d) box at one corner of the other actuator axes."""
     r2s = np.asarray(plan.axes.get("r2", [plan.fixed["r2"]]), dtype=float)
     ds = np.asarray(plan.axes.get("d", [plan.fixed["d"]]), dtype=float)
-    a = plan.base.actuator
+    r1 = corner["r1"]
     # the stiffness of Eq. (8) at theta = 0 falls with r2 and with d: at each r2 the least stiff
     # feasible design has the largest d with r2 + d < r1 (Actuator's rule)
     ds_sorted = np.sort(ds)
-    top = np.searchsorted(ds_sorted, a.r1 - r2s, side="left") - 1  # index of the largest d < r1 - r2
+    top = np.searchsorted(ds_sorted, r1 - r2s, side="left") - 1  # index of the largest d < r1 - r2
     ok = top >= 0
     if not ok.any():
         return
     r2_ok, d_top = r2s[ok], ds_sorted[top[ok]]
-    stiffness = 5 * a.r1**4 - 4 * r2_ok**2 * (a.r1 + d_top) ** 2 - r2_ok**4  # up to a positive factor
+    stiffness = 5 * r1**4 - 4 * r2_ok**2 * (r1 + d_top) ** 2 - r2_ok**4  # up to a positive factor
     soft = int(np.argmin(stiffness))
     designs = {(float(r2_ok[soft]), float(d_top[soft]))}
     for r2_ in (r2s.min(), r2s.max()):
-        column = ds[ds + r2_ < a.r1]  # the feasible d at this r2 (Actuator: r2 + d < r1)
+        column = ds[ds + r2_ < r1]  # the feasible d at this r2 (Actuator: r2 + d < r1)
         if column.size:
             designs |= {(float(r2_), float(column.min())), (float(r2_), float(column.max()))}
     payloads = plan.axes.get("payload", [plan.fixed["payload"]])
@@ -301,7 +335,7 @@ def check_resolvable(plan: SweepPlan) -> None:
     top_pressure = None if plan.angle_mode else max(plan.axes.get("pressure", [plan.fixed["pressure"]]))
     for r2_, d_ in sorted(designs):
         try:
-            extreme = plan.base.replace(r2=r2_, d=d_)
+            extreme = plan.base.replace(r2=r2_, d=d_, **corner)
         except SceneError:  # infeasible: reported as such, not solved
             continue
         resolution.check_stiffness(extreme, DEFAULT_OPTIONS.stationarity_tol)
@@ -338,16 +372,18 @@ def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions |
     """
     cols = plan.columns(start, stop)
     size = stop - start
-    # geometry: validated once per distinct (r2, d)
+    # the actuator: validated once per distinct design (each value is checked by plan_sweep; a
+    # chamber outside the actuator, r2 + d >= r1, is infeasible)
     status = np.full(size, "ok", dtype=object)
     messages = [""] * size
-    bad: dict[tuple[float, float], str] = {}
-    for key in set(zip(cols["r2"].tolist(), cols["d"].tolist())):
+    bad: dict[tuple[float, ...], str] = {}
+    designs = list(zip(*(cols[k].tolist() for k in ACTUATOR_AXES)))
+    for key in set(designs):
         try:
-            dataclasses.replace(plan.base.actuator, r2=key[0], d=key[1])
+            Actuator(**dict(zip(ACTUATOR_AXES, key)))
         except SceneError as exc:
             bad[key] = str(exc)
-    for i, key in enumerate(zip(cols["r2"].tolist(), cols["d"].tolist())):
+    for i, key in enumerate(designs):
         if key in bad:
             status[i], messages[i] = "infeasible", bad[key]
     feasible = np.where(status != "infeasible")[0]
@@ -366,8 +402,10 @@ def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions |
         model = base.model()
         values: dict[str, Any] = base.parameters(0.0 if plan.angle_mode else plan.fixed["pressure"])
         values = {k: np.full(len(feasible), float(values[k])) for k in model.parameters}
-        values["r2"] = cols["r2"][feasible]
-        values["d"] = cols["d"][feasible]
+        for k in plan.axes.keys() & set(ACTUATOR_AXES):  # the model's parameter: rho in radians
+            name, column = ("rho", np.radians(cols[k][feasible])) if k == "rho_deg" else (k, cols[k][feasible])
+            if name in values:
+                values[name] = column
         if not plan.angle_mode:
             values["P"] = cols["pressure"][feasible]
         if plan.payload_swept:
@@ -386,9 +424,8 @@ def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions |
             if not ok[j]:
                 status[i], messages[i] = "not ok", batch.messages[j]
         backend, timings = batch.backend, dict(batch.timings)
-        a = base.actuator
         found = assess_arrays(
-            n, a.L, a.r1, cols["r2"][feasible], cols["d"][feasible], theta[feasible], tip[feasible, 0], pres[feasible],
+            n, cols["L"][feasible], cols["r1"][feasible], cols["r2"][feasible], cols["d"][feasible], theta[feasible], tip[feasible, 0], pres[feasible],
             cols["payload"][feasible] if plan.payload_swept else max((p.force for p in base.payloads), default=0.0),
         )
         for j, i in enumerate(feasible):
@@ -414,7 +451,7 @@ def solve_points(plan: SweepPlan, start: int, stop: int, options: BatchOptions |
 
 def row_fields(n: int) -> list[str]:
     """The columns of a sweep's rows (and CSV file) for n segments."""
-    head = ["pressure_mpa", "payload_n", "payload_angle_deg", "r2_mm", "d_mm", "status", "stability", "method", "total_angle_deg", "tip_x_mm", "tip_y_mm"]
+    head = [*AXIS_COLUMNS.values(), "status", "stability", "method", "total_angle_deg", "tip_x_mm", "tip_y_mm"]
     return head + [f"theta{k + 1}_deg" for k in range(n)] + ["message", "notes", "validity"]
 
 
@@ -437,19 +474,16 @@ def point_rows(points: Mapping[str, np.ndarray], part: Mapping[str, Any]) -> lis
     n = theta.shape[1]
     for i in range(len(part["status"])):
         feasible = part["status"][i] != "infeasible"
-        row: dict[str, Any] = {
-            "pressure_mpa": _number(part["pressure"][i] if feasible else points["pressure"][i]),
-            "payload_n": _number(points["payload"][i]),
-            "payload_angle_deg": _number(points["payload_angle"][i]),
-            "r2_mm": _number(points["r2"][i]),
-            "d_mm": _number(points["d"][i]),
+        row: dict[str, Any] = {column: _number(points[axis][i]) for axis, column in AXIS_COLUMNS.items()}
+        row["pressure_mpa"] = _number(part["pressure"][i] if feasible else points["pressure"][i])
+        row.update({
             "status": str(part["status"][i]),
             "stability": str(part["stability"][i]),
             "method": str(part["method"][i]),
             "total_angle_deg": _number(math.degrees(float(np.sum(theta[i])))) if feasible else None,
             "tip_x_mm": _number(tip[i, 0]) if feasible else None,
             "tip_y_mm": _number(tip[i, 1]) if feasible else None,
-        }
+        })
         for k in range(n):
             row[f"theta{k + 1}_deg"] = _number(math.degrees(theta[i, k])) if feasible else None
         row["message"] = part["messages"][i]
@@ -475,7 +509,6 @@ def parse_row(cells: Mapping[str, str]) -> dict[str, Any]:
     return {k: (v if k in TEXT_FIELDS else (float(v) if v != "" else None)) for k, v in cells.items()}
 
 
-_AXIS_COLUMNS = {"pressure": "pressure_mpa", "payload": "payload_n", "payload_angle": "payload_angle_deg", "r2": "r2_mm", "d": "d_mm"}
 _STATUSES = ("ok", "not ok", "infeasible")
 
 
@@ -514,7 +547,7 @@ def resumed_row_problem(plan: SweepPlan, index: int, cells: Mapping[str, Any], p
         at = 0
     else:
         at = index
-    for axis, column in _AXIS_COLUMNS.items():
+    for axis, column in AXIS_COLUMNS.items():
         if axis == "pressure" and plan.angle_mode:
             continue
         raw = cells.get(column)
@@ -552,7 +585,7 @@ def resumed_row_problem(plan: SweepPlan, index: int, cells: Mapping[str, Any], p
     total = sum(got[f"theta{k + 1}_deg"] for k in range(plan.base.segments))
     if abs(total - got["total_angle_deg"]) > 1e-9 * max(1.0, abs(total)):
         return f"has total_angle_deg={cells.get('total_angle_deg')}, not the sum of its angles ({total:.12g})"
-    L = plan.base.actuator.L
+    L = float(points["L"][at])
     if math.hypot(got["tip_x_mm"], got["tip_y_mm"]) > L * (1 + 1e-9):
         return f"has its tip ({cells.get('tip_x_mm')}, {cells.get('tip_y_mm')}) mm further from the base than the length L"
     x, y = chain_tip([math.radians(got[f"theta{k + 1}_deg"]) for k in range(plan.base.segments)], L)
@@ -583,8 +616,8 @@ def check_resumed_rows(plan: SweepPlan, rows: Sequence[Mapping[str, Any]], where
 # the result
 
 
-@dataclass(frozen=True, eq=False)
-class SweepResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class SweepResult(Report):
     """Every point of a sweep grid: the axes, the status and the equilibrium of each point.
 
     Attributes
@@ -630,6 +663,18 @@ class SweepResult:
     validity: tuple[tuple[Finding, ...], ...] = ()
     identity: dict | None = None
     settings: dict = dataclasses.field(default_factory=dict)
+
+    _plotter = "esba.figures.results:draw_sweep"
+
+    def headline(self) -> str:
+        """One line: the axes, the points and how many are ok."""
+        axes = ", ".join(f"{k} ({len(v)})" for k, v in self.axes.items())
+        c = self.counts()
+        return f"{self.status.size} points over {axes}: {c['ok']} ok, {c['not ok']} not ok, {c['infeasible']} infeasible"
+
+    def summary(self) -> str:
+        """The text ``esba sweep`` prints for this grid."""
+        return sweep_table(self.to_dict())
 
     @classmethod
     def from_parts(cls, plan: SweepPlan, parts: Sequence[Mapping[str, Any]], backend: str,
@@ -686,7 +731,7 @@ class SweepResult:
 
     def scene(self, i: int) -> Scene:
         """The scene of point ``i`` (the base scene with the point's axis values)."""
-        changes: dict[str, Any] = {"r2": float(self.points["r2"][i]), "d": float(self.points["d"][i])}
+        changes: dict[str, Any] = {k: float(self.points[k][i]) for k in ACTUATOR_AXES}
         if "pressure" in self.axes or self.base.pressure is not None:
             changes["pressure"] = float(self.points["pressure"][i])
         if "payload" in self.axes or "payload_angle" in self.axes:
@@ -757,9 +802,8 @@ def sweep(
     pressure=None,
     payload=None,
     payload_angle=None,
-    r2=None,
-    d=None,
     options: BatchOptions | None = None,
+    **actuator,
 ) -> SweepResult:
     """Solve every point of the grid of the given axes around ``base`` in one batch.
 
@@ -768,9 +812,12 @@ def sweep(
     base : Scene, optional
         Everything not swept (default ``Scene()``: Table 1 at its 90 degree pressure, n = 3).
         Without a ``pressure`` axis the base scene's pressure (or target angle, per geometry) is used.
-    pressure, payload, payload_angle, r2, d : float or sequence of float, optional
-        Axis values (MPa, N, degrees, mm, mm). A ``payload`` or ``payload_angle`` axis replaces
-        the base scene's payloads with one payload.
+    pressure, payload, payload_angle : float or sequence of float, optional
+        Axis values (MPa, N, degrees). A ``payload`` or ``payload_angle`` axis replaces the base
+        scene's payloads with one payload.
+    **actuator : float or sequence of float, optional
+        Any field of the actuator as an axis, named as in a scene file's ``[actuator]`` table:
+        ``L``, ``r1``, ``r2``, ``d`` (mm), ``rho_deg`` (degrees), ``E`` (MPa), ``M`` (kg).
     options : BatchOptions, optional
         ``compile="auto"`` is decided once for the whole grid (:func:`esba.statics.batch.decide_backend`).
 
@@ -780,7 +827,7 @@ def sweep(
     """
     if options is not None and not isinstance(options, BatchOptions):
         raise SweepError(f"options={checks.quote(options)}: expected a BatchOptions (esba.statics.batch.BatchOptions) or None")
-    plan = plan_sweep(base, pressure=pressure, payload=payload, payload_angle=payload_angle, r2=r2, d=d)
+    plan = plan_sweep(base, pressure=pressure, payload=payload, payload_angle=payload_angle, **actuator)
     check_points(plan)
     check_size(plan.size, plan.base.segments, "the sweep", SweepError)
     check_resolvable(plan)
@@ -798,3 +845,51 @@ def study_identity(plan: SweepPlan, options: BatchOptions) -> dict[str, Any]:
 
     batch = {k: v for k, v in dataclasses.asdict(options).items() if k not in ("progress", "cache")}
     return {"plan": plan.describe(), "batch": batch, "esba": code_digest()}
+
+
+def sweep_table(d: dict) -> str:
+    """The text ``esba sweep`` prints for :meth:`SweepResult.to_dict` (or a study's, with the ``out`` and ``figure`` the command adds)."""
+
+    def axis(k: str, v: dict) -> str:  # a long axis as its range (JSON keeps every value)
+        values = v["values"]
+        return f"{k} {values} {v['unit']}" if len(values) <= 8 else f"{k} {len(values)} values from {min(values):g} to {max(values):g} {v['unit']}"
+
+    lines = [f"base: {d['base']}", "axes: " + "; ".join(axis(k, v) for k, v in d["axes"].items())]
+    lines.append("points: " + ", ".join(f"{count} {status}" for status, count in d["counts"].items()) + f"; {d['backend']}")
+    st = d.get("study")
+    if st:
+        resumed = f", resumed at row {st['resumed_from_row']}" if st["resumed_from_row"] else ""
+        lines.append(f"study: {st['chunks_solved']} chunks of up to {st['chunk']} points {st['runner']} in {st['seconds']:.1f} s{resumed}")
+    rows = d.get("rows")
+
+    def num(v, fmt: str) -> str:
+        return "-" if v is None else format(v, fmt)
+
+    if rows is not None and len(rows) <= 60:
+        extra = [k for k in d["axes"] if k in ACTUATOR_AXES and k not in ("r2", "d")]  # other swept actuator fields
+        head = (f"{'P MPa':>9} {'F N':>6} {'Om deg':>7} {'r2':>6} {'d':>6}" + "".join(f" {k.removesuffix('_deg'):>7}" for k in extra)
+                + f" {'angle deg':>10} {'tip x, y mm':>18}  status")
+        lines.append(head)
+        snapped = 0
+        for r in rows:
+            ang = "" if r["total_angle_deg"] is None else f"{r['total_angle_deg']:10.3f}"
+            tip = "" if r["tip_x_mm"] is None else f"{r['tip_x_mm']:8.2f}, {r['tip_y_mm']:8.2f}"
+            snap = "snap-through" in (r.get("notes") or "")
+            snapped += snap
+            lines.append(f"{num(r['pressure_mpa'], '9.5f'):>9} {num(r['payload_n'], '6.3g'):>6} {num(r['payload_angle_deg'], '7.3g'):>7} "
+                         f"{num(r['r2_mm'], '6.3g'):>6} {num(r['d_mm'], '6.3g'):>6}" + "".join(f" {num(r[AXIS_COLUMNS[k]], '7.4g'):>7}" for k in extra)
+                         + f" {ang:>10} {tip:>18}  {r['status']}"
+                         + (", snapped" if snap else ""))
+        if snapped:
+            lines.append(f"snapped: {snapped} point(s) jumped on their load path (a fold); where and from which state: the notes (--json, --out)")
+    else:
+        total = sum(d["counts"].values())
+        lines.append(f"{total} rows" + (f" in {d['out']}" if d.get("out") else ": write them with --out FILE.csv or FILE.json"))
+    nothing = bool(st) and st["chunks_solved"] == 0 and st["resumed_from_row"] == st["rows"]
+    for k in ("out", "figure"):
+        if d.get(k):
+            if k == "out" and nothing:
+                lines.append(f"{d[k]} already holds every row of this study ({st['rows']}): nothing solved, nothing written")
+            else:
+                lines.append(f"wrote {d[k]}")
+    return "\n".join(lines)

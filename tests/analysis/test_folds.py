@@ -182,7 +182,7 @@ def test_design_plane_figure_shows_each_design():
     assert len(dp.state) == 6 and dp.count("clear") == 1 and dp.count("snaps") >= 3  # r2 = 0.8, d = 0 is clear
     (ax,) = drawn.axes(design_plane_figure(dp))
     shown = sum(len(c.get_offsets()) for c in ax.collections if c.get_label() and not c.get_label().startswith("_"))
-    assert shown == 6 and ax.get_xlabel() == "r2 (mm)" and ax.get_ylabel() == "d (mm)"
+    assert shown == 6 and ax.get_xlabel() == "chamber radius r2 (mm)" and ax.get_ylabel() == "eccentric distance d (mm)"
 
 
 def test_counting_in_blocks_gives_the_same_regions(pf):

@@ -101,8 +101,9 @@ def test_cli_writes_and_checks_the_page(tmp_path, capsys, comparison, monkeypatc
     assert page.exists() and figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # the figure: per panel, each column's measured values against the model at 0.54 MPa and fitted
     axes = saved[figure.resolve()].axes
-    assert [ax.get_xlabel() for ax in axes] == ["measured total angle (deg)", "measured tip position (x and y) (mm)", "measured secant stiffness (N/m)"]
-    for ax, quantities in zip(axes, (("total_angle",), ("tip_x", "tip_y"), ("stiffness",))):
+    assert [ax.get_xlabel() for ax in axes] == ["measured total angle (deg)", "measured tip x (down the unbent axis) (mm)", "measured tip y (horizontal) (mm)",
+                                                 "measured secant stiffness (N/m)"]
+    for ax, quantities in zip(axes, (("total_angle",), ("tip_x",), ("tip_y",), ("stiffness",))):
         series = drawn.errorbars(ax)
         assert len(series) == 4
         for col in comparison.columns:

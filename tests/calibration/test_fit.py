@@ -277,15 +277,16 @@ def test_cli_fit_table_json_and_plot(tmp_path, capsys, clean, monkeypatch):
     assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # the figure: a panel per kind of value, the measured values (x) against the start and the fit (y)
     axes = saved[fig.resolve()].axes
-    assert [ax.get_xlabel() for ax in axes] == ["measured total angle (deg)", "measured tip position (x and y) (mm)", "measured secant stiffness (N/m)"]
-    for ax, quantities in zip(axes, (("total_angle",), ("tip_x", "tip_y"), ("stiffness",))):
+    assert [ax.get_xlabel() for ax in axes] == ["measured total angle (deg)", "measured tip x (down the unbent axis) (mm)", "measured tip y (horizontal) (mm)",
+                                                 "measured secant stiffness (N/m)"]
+    for ax, quantities in zip(axes, (("total_angle",), ("tip_x",), ("tip_y",), ("stiffness",))):
         series = drawn.errorbars(ax)
         assert [k.split(":")[0] for k in series] == ["start", "fitted"]
         measured = sorted(v for (_, q), v in clean.items() if q in quantities)
         fitted = next(v for k, v in series.items() if k.startswith("fitted"))
         assert sorted(fitted[:, 0]) == pytest.approx(measured)
         assert fitted[:, 1] == pytest.approx(0.0, abs=FIT_EXACT_REL * np.abs(fitted[:, 0]).max())  # clean data: the fit predicts them
-    assert [ax.get_ylabel() for ax in axes] == ["predicted - measured (deg)", "predicted - measured (mm)", "predicted - measured (N/m)"]
+    assert [ax.get_ylabel() for ax in axes] == ["predicted - measured (deg)", "predicted - measured (mm)", "predicted - measured (mm)", "predicted - measured (N/m)"]
     assert main(["fit", str(path), "--free", "E", "--level", "0.9", "--json"]) == EXIT_OK
     d = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert list(d["parameters"]) == ["E"] and "interval_90" in d["parameters"]["E"] and d["status"] == "ok"

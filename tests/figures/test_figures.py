@@ -138,8 +138,9 @@ def test_fig8c_shows_each_shape_and_the_measured_tips():
     assert drawn.xy(free)[1] == pytest.approx(data.unloaded.centreline[:, 0])
     exp = drawn.labelled(ax, "experiment tip (Table 2)")
     assert drawn.points(exp) == [[figures.TABLE2_EXP_TIP_MM[1], figures.TABLE2_EXP_TIP_MM[0]]]
-    # the clamp, a shape and its segment ends per n, the unloaded shape, the two measured tips
-    assert len(drawn.lines(ax)) == 1 + 2 * 4 + 1 + 2
+    # a shape and its segment ends per n, the unloaded shape, the two measured tips; the clamp a block
+    assert len(drawn.lines(ax)) == 2 * 4 + 1 + 2
+    assert len(ax.patches) == 1
     assert len(drawn.legend(ax)) == 4 + 1 + 2
 
 

@@ -28,7 +28,8 @@ def test_ellipse_figure_draws_each_shape_and_its_force_ellipse_at_the_arrow_head
     items = [Ellipse(0.1, 0.0, shape[-1], shape, cov), Ellipse(0.2, 90.0, shape[-1], shape, cov * np.nan)]
     fig = ellipse_figure(items, 1.0)
     (ax,) = axes(fig)
-    drawn = lines(ax)[1:]  # the first is the clamp at x = 0
+    drawn = lines(ax)  # the clamp is a block (a patch), not a line
+    assert len(ax.patches) == 1
     assert len(drawn) == 3  # two shapes, one ellipse (the second load's covariance is undetermined: no ellipse)
     assert np.allclose(drawn[0].get_xdata(), shape[:, 1]) and np.allclose(drawn[0].get_ydata(), shape[:, 0])
     ellipse = drawn[1]

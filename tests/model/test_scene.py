@@ -58,7 +58,7 @@ def test_frozen(obj):
         (lambda: Actuator(M=-0.1), "actuator.M=-0.1: expected a number >= 0"),
         (lambda: Actuator(r2=4), "actuator.r2=4 with d=4, r1=8: the chamber must lie inside the actuator, r2 + d < r1"),
         (lambda: Actuator(rho_deg=90), "actuator.rho_deg=90: expected 0 <= rho_deg < 90"),
-        (lambda: Actuator(rho_deg=-5), "actuator.rho_deg=-5: expected a number >= 0"),
+        (lambda: Actuator(rho_deg=-5), "actuator.rho_deg=-5: expected 0 <= rho_deg < 90"),
         (lambda: Payload(-1.0), "payload.force=-1: expected a magnitude >= 0 N"),
         (lambda: Payload(1.0, at=0.0), "payload.at=0: expected a fraction of the length with 0 < at <= 1"),
         (lambda: Payload(1.0, at=1.01), "payload.at=1.01: expected a fraction"),

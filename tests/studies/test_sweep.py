@@ -78,7 +78,7 @@ def test_bad_sweeps_are_refused():
     assert parse_values("0:1:3") == [0.0, 0.5, 1.0] and parse_values("7") == [7.0]
     with pytest.raises(SweepError):
         parse_values("a,b")
-    assert list(AXES) == ["pressure", "payload", "payload_angle", "r2", "d"]
+    assert list(AXES) == ["pressure", "payload", "payload_angle", "L", "r1", "r2", "d", "rho_deg", "E", "M"]
 
 
 def test_fig12_trends_are_the_papers():
