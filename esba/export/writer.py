@@ -90,33 +90,32 @@ def example_line(spec: ExportSpec) -> tuple[str, str, str]:
 
 def _read_line(spec: ExportSpec) -> str:
     """The demo's code that reads one line's numbers into ``loads``."""
-    name, k = spec.name, spec.payloads
-    real = f"({name}_real)"
+    k = spec.payloads
     if k == 0:
         want, check = '"pressure_MPa" (-i: "total_angle_deg")', "count != 1"
         body = ""
     elif k == 1:
         want, check = '"pressure_MPa force_N angle_deg [at]" (-i: the total angle in degrees first)', "count != 3 && count != 4"
         body = (
-            f"        loads.payload[0].force = {real}v[1];\n"
-            f"        loads.payload[0].angle = {real}(v[2] / DEG);\n"
-            f"        if (count == 4) loads.payload[0].at = {real}v[3];\n"
+            "        loads.payload[0].force = real_of(v[1]);\n"
+            "        loads.payload[0].angle = real_of(v[2] / DEG);\n"
+            "        if (count == 4) loads.payload[0].at = real_of(v[3]);\n"
         )
     else:
         want, check = f'"pressure_MPa" and {k} x "force_N angle_deg at" (-i: the total angle in degrees first)', f"count != {1 + 3 * k}"
         body = (
             f"        for (k = 0; k < {k}; ++k) {{\n"
-            f"            loads.payload[k].force = {real}v[1 + 3 * k];\n"
-            f"            loads.payload[k].angle = {real}(v[2 + 3 * k] / DEG);\n"
-            f"            loads.payload[k].at = {real}v[3 + 3 * k];\n"
+            "            loads.payload[k].force = real_of(v[1 + 3 * k]);\n"
+            "            loads.payload[k].angle = real_of(v[2 + 3 * k] / DEG);\n"
+            "            loads.payload[k].at = real_of(v[3 + 3 * k]);\n"
             "        }\n"
         )
     want_c = want.replace('"', '\\"')
     return (
         f"        if ({check}) {{\n"
-        f'            fprintf(stderr, "line %d: expected {want_c}\\n", lineno);\n'
+        f'            fprintf(stderr, "line %lu: expected {want_c}\\n", lineno);\n'
         "            failed = 1;\n            continue;\n        }\n"
-        f"        if (!inverse) loads.pressure = {real}v[0];\n" + body
+        "        if (!inverse) loads.pressure = real_of(v[0]);\n" + body
     )
 
 
@@ -268,7 +267,7 @@ def export_c(spec: ExportSpec, out: str | Path, command: str | None = None) -> E
     model = spec.model()
     header, source = render_source(spec, command, model)
     example = example_line(spec)
-    values = {"NAME": spec.name, "UPPER": spec.name.upper(), "COMMAND": command}
+    values = {"NAME": spec.name, "UPPER": spec.name.upper(), "COMMAND": command, "REAL_MAX": "DBL_MAX" if spec.precision == "double" else "(double)FLT_MAX"}
     demo = fill((TEMPLATES / "demo.c").read_text(encoding="utf-8"), {**values, "READ_LINE": _read_line(spec), "LINE_PAYLOADS": _line_payloads(spec)})
     makefile = fill((TEMPLATES / "Makefile").read_text(encoding="utf-8"), values)
     files = {
