@@ -1,5 +1,9 @@
 """Write an export's folder: ``NAME.h``, ``NAME.c``, ``Makefile``, ``README.md`` and ``demo.c``.
 
+A file of the same name that esba did not write (a ``Makefile`` of the user's), or one changed since
+esba wrote it, is not replaced without ``force``: the manifest ``esba-export.json`` that every export
+writes beside its files holds each file's SHA-256, which says which files are esba's own.
+
 The README's example line (what ``./demo`` prints for the Table 1 actuator at 0.12 MPa under a
 2 N horizontal tip payload) is computed here, in Python (:mod:`esba.export.reference`), and
 formatted as the demo formats it: a test builds the demo from the Makefile alone and compares.
@@ -9,7 +13,7 @@ Examples
 >>> import tempfile
 >>> e = export_c(ExportSpec(3), tempfile.mkdtemp())
 >>> sorted(p.name for p in e.files)
-['Makefile', 'README.md', 'demo.c', 'esba_n3_air_axial_radial_fibres_payload1_paper.c', 'esba_n3_air_axial_radial_fibres_payload1_paper.h']
+['Makefile', 'README.md', 'demo.c', 'esba-export.json', 'esba_n3_air_axial_radial_fibres_payload1_paper.c', 'esba_n3_air_axial_radial_fibres_payload1_paper.h']
 >>> e.example_input
 '0.12 2 90'
 >>> e.example_output
@@ -18,16 +22,20 @@ Examples
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Iterable
 
+from esba import __version__
 from esba.infra import outputs
 
 from .ccode import TEMPLATES, ExportSpec, fill, render_source
 from .reference import reference_equilibrium
 
-__all__ = ["Export", "export_c", "EXAMPLE", "STATUS_TABLE", "example_line", "format_line", "default_command"]
+__all__ = ["Export", "export_c", "MANIFEST", "file_names", "foreign_files", "check_out_folder", "EXAMPLE", "STATUS_TABLE", "example_line", "format_line", "default_command"]
 
 #: The README's example: pressure (MPa) and the first payload (N, degrees from the vertical).
 EXAMPLE = {"pressure": 0.12, "force": 2.0, "angle_deg": 90.0}
@@ -254,16 +262,121 @@ the state it lands in; the result is that state taken on to the full load, with 
 """
 
 
-def export_c(spec: ExportSpec, out: str | Path, command: str | None = None) -> Export:
-    """Write ``spec``'s export into the folder ``out`` (created when missing, one level); return it.
+#: The manifest of an export, beside its files: what wrote them and each file's SHA-256.
+MANIFEST = "esba-export.json"
+_WRITER = "esba export c"
+
+
+def file_names(spec: ExportSpec) -> tuple[str, ...]:
+    """The files ``spec``'s export writes (the manifest last)."""
+    return (f"{spec.name}.h", f"{spec.name}.c", "demo.c", "Makefile", "README.md", MANIFEST)
+
+
+def _sha256(path: Path) -> str | None:
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return None
+
+
+def _manifest(folder: Path) -> dict[str, str]:
+    """The files an earlier export wrote into ``folder`` (name -> SHA-256); {} when there is no manifest of esba's."""
+    try:
+        data = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError, UnicodeDecodeError):
+        return {}
+    files = data.get("files") if isinstance(data, dict) and data.get("written_by") == _WRITER else None
+    if not isinstance(files, dict):
+        return {}
+    return {str(k): str(v) for k, v in files.items() if isinstance(v, str)}
+
+
+def foreign_files(folder: str | Path, names: Iterable[str]) -> list[str]:
+    """The files among ``names`` that are in ``folder`` and that an export would replace although esba
+    did not write them: not in the folder's manifest, changed since (their SHA-256 differs), links or
+    folders. The manifest itself counts as esba's when it is one.
+
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp()); _ = (d / "Makefile").write_text("all:\\n")
+    >>> foreign_files(d, ["Makefile", "demo.c", MANIFEST])
+    ['Makefile']
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        return []
+    known = _manifest(folder)
+    found = []
+    for name in names:
+        path = folder / name
+        if not path.exists() and not path.is_symlink():
+            continue
+        if name == MANIFEST:
+            if not (path.is_file() and not path.is_symlink() and _manifest_is_ours(path)):
+                found.append(name)
+            continue
+        if path.is_symlink() or not path.is_file() or known.get(name) != _sha256(path):
+            found.append(name)
+    return found
+
+
+def _manifest_is_ours(path: Path) -> bool:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, UnicodeDecodeError):
+        return False
+    return isinstance(data, dict) and data.get("written_by") == _WRITER
+
+
+def check_out_folder(out: str | Path, spec: ExportSpec, force: bool = False, flag: str = "--out") -> tuple[Path, bool]:
+    """The export's folder, checked before anything is generated: writable (created when missing, one
+    level), and no file in it that the export would replace without ``force`` (:func:`foreign_files`).
+    Returns the folder and whether it was created here.
 
     Raises
     ------
     esba.infra.outputs.OutputError
-        when ``out`` cannot be written (checked before anything is generated).
+        naming the folder and every file in the way.
     """
-    folder = outputs.check_folder(out, "--out")
-    command = command or default_command(spec, str(out))
+    path = Path(out)
+    existed = path.exists() or path.is_symlink()
+    foreign = foreign_files(path, file_names(spec)) if path.is_dir() else []
+    folders = [name for name in foreign if (path / name).is_dir() and not (path / name).is_symlink()]
+    if folders:
+        raise outputs.OutputError(f"{flag} {str(out)!r}: {', '.join(folders)} in it {'is a folder' if len(folders) == 1 else 'are folders'}, "
+                                  "where the export writes a file")
+    if foreign and not force:
+        raise outputs.OutputError(f"{flag} {str(out)!r}: the export would replace {', '.join(foreign)}, which esba did not write there "
+                                  "(or which changed since): move them away, or give --force to replace them")
+    folder = outputs.check_folder(out, flag)
+    return folder, not existed
+
+
+def export_c(spec: ExportSpec, out: str | Path, command: str | None = None, force: bool = False) -> Export:
+    """Write ``spec``'s export into the folder ``out`` (created when missing, one level); return it.
+
+    Files of the same names that esba did not write there are replaced only with ``force``
+    (:func:`check_out_folder`). When the export fails, a folder it created is removed again.
+
+    Raises
+    ------
+    esba.infra.outputs.OutputError
+        when ``out`` cannot be written or holds files in the way (checked before anything is generated).
+    """
+    folder, created = check_out_folder(out, spec, force)
+    try:
+        return _write(spec, folder, command or default_command(spec, str(out)))
+    except BaseException:
+        if created:
+            for name in file_names(spec):
+                (folder / name).unlink(missing_ok=True)
+            try:
+                folder.rmdir()
+            except OSError:  # something else is in it now: leave it
+                pass
+        raise
+
+
+def _write(spec: ExportSpec, folder: Path, command: str) -> Export:
     model = spec.model()
     header, source = render_source(spec, command, model)
     example = example_line(spec)
@@ -277,5 +390,18 @@ def export_c(spec: ExportSpec, out: str | Path, command: str | None = None) -> E
         "Makefile": makefile,
         "README.md": _readme(spec, command, example),
     }
-    written = tuple(outputs.write_text(folder / name, text) for name, text in files.items())
-    return Export(spec, folder, written, example[0], example[1], example[2])
+    known = _manifest(folder)
+    written = []
+    for name, text in files.items():
+        path = folder / name
+        if path.is_symlink():  # replaced (with force), not written through
+            path.unlink()
+        written.append(outputs.write_text(path, text))
+    # the manifest: these files, and those of earlier exports into the folder that are still as written
+    hashes = {name: sha for name, sha in known.items() if name not in files and _sha256(folder / name) == sha}
+    hashes.update({p.name: _sha256(p) for p in written})
+    manifest = {"written_by": _WRITER, "command": command, "esba": __version__, "files": dict(sorted(hashes.items()))}
+    if (folder / MANIFEST).is_symlink():
+        (folder / MANIFEST).unlink()
+    written.append(outputs.write_text(folder / MANIFEST, json.dumps(manifest, indent=1) + "\n"))
+    return Export(spec, folder, tuple(written), example[0], example[1], example[2])
