@@ -40,11 +40,12 @@ extern "C" {
 #define ESBA_BAD_SIZE 8       /* n is not the segment count of this export */
 #endif
 
-/* Flags of a result (out->flags: bits, beside the status). The first four say that the state lies
- * outside the model's domain: converged and perhaps stable, but beyond what the paper's model
- * describes (esba.model.validity, whose thresholds this export was written with):
-{{FLAG_TABLE}} * A status of ESBA_OK with any of ESBA_FLAGS_OUTSIDE_MODEL is an answer of the model, not of
- * the actuator. */
+/* Flags of a result (out->flags: bits, beside the status), by the rule of esba.model.validity
+ * (whose thresholds this export was written with). The first four (ESBA_FLAGS_OUTSIDE_MODEL) say
+ * that the state lies outside the model's domain, the next two that a load is far outside the
+ * paper's experiments; the last is pressure_for_angle's note:
+{{FLAG_TABLE}} * A status of ESBA_OK with any of ESBA_FLAGS_OUTSIDE_MODEL is an answer of the model (converged,
+ * perhaps stable), not of the actuator. */
 #ifndef ESBA_FLAG_BITS
 #define ESBA_FLAG_BITS
 {{FLAG_DEFINES}}#define ESBA_FLAGS_OUTSIDE_MODEL (ESBA_FLAG_AXIAL_STRAIN | ESBA_FLAG_RADIAL_STRAIN | ESBA_FLAG_TOTAL_BEND | ESBA_FLAG_TIP_BEHIND_BASE)
