@@ -21,9 +21,10 @@
 #define CRITICAL_TOL RC({{CRITICAL_TOL}})
 /* Newton has converged when its step is below this (rad): round-off of the gradient beyond it. */
 #define STEP_TOL RC({{STEP_TOL}})
-/* Newton has also converged when max |dU/dtheta| is below this (N mm/rad; esba.solvers.newton's
- * acceptance): near a cusp the Hessian is nearly singular and amplifies the gradient's round-off
- * into steps that never fall below STEP_TOL, at a state that is an equilibrium all the same. */
+/* Newton that ends its iterations without a step below STEP_TOL has still converged when max
+ * |dU/dtheta| is below this (N mm/rad; esba.solvers.newton's acceptance): near a cusp the Hessian is
+ * nearly singular and amplifies the gradient's round-off into steps that never get that small, at
+ * a state that is an equilibrium all the same. */
 #define GRAD_TOL RC({{GRAD_TOL}})
 /* Newton steps below this (rad) are round-off, amplified near a singular Hessian: their ratio says nothing. */
 #define TINY RC({{TINY}})
@@ -292,7 +293,6 @@ static int newton(WORK *w, REAL *theta, const REAL *p, int max_iter, REAL *contr
         int k;
         if (!eval_newton(w, theta, p) || !factor(w, RC(0.0))) return 0;
         if (w->rel < *low) *low = w->rel;
-        if (it > 0 && max_abs(w->g, N) <= GRAD_TOL) return 1;
         solve(w, w->g, w->x);
         size = max_abs(w->x, N);
         if (!isfinite(size)) return 0;
@@ -306,7 +306,11 @@ static int newton(WORK *w, REAL *theta, const REAL *p, int max_iter, REAL *contr
         if (it > 0 && f == RC(1.0) && size <= RC(1e3) * STEP_TOL && size > RC(0.5) * previous) return 1;
         previous = size;
     }
-    return 0;
+    /* the steps never fell below STEP_TOL: round-off amplified by a nearly singular Hessian (near a
+     * cusp) at a state that is an equilibrium all the same when its gradient is below GRAD_TOL */
+    if (!eval_newton(w, theta, p) || !factor(w, RC(0.0))) return 0;
+    if (w->rel < *low) *low = w->rel;
+    return max_abs(w->g, N) <= GRAD_TOL;
 }
 
 /* A stable state near theta at p (in place): a Newton method whose Hessian is shifted (H + mu I)
