@@ -310,16 +310,18 @@ def _sha256(path: Path) -> str | None:
         return None
 
 
-def _manifest(folder: Path) -> dict[str, str]:
-    """The files an earlier export wrote into ``folder`` (name -> SHA-256); {} when there is no manifest of esba's."""
+def _manifest(folder: Path) -> dict[str, str] | None:
+    """The files an earlier export wrote into ``folder`` (name -> SHA-256); None when the folder holds
+    no manifest of esba's (none at all, or a file of that name that esba did not write)."""
+    path = folder / MANIFEST
     try:
-        data = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+        data = None if path.is_symlink() else json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError, UnicodeDecodeError):
-        return {}
-    files = data.get("files") if isinstance(data, dict) and data.get("written_by") == _WRITER else None
-    if not isinstance(files, dict):
-        return {}
-    return {str(k): str(v) for k, v in files.items() if isinstance(v, str)}
+        return None
+    if not isinstance(data, dict) or data.get("written_by") != _WRITER:
+        return None
+    files = data.get("files")
+    return {str(k): str(v) for k, v in files.items() if isinstance(v, str)} if isinstance(files, dict) else {}
 
 
 def foreign_files(folder: str | Path, names: Iterable[str]) -> list[str]:
@@ -342,20 +344,12 @@ def foreign_files(folder: str | Path, names: Iterable[str]) -> list[str]:
         if not path.exists() and not path.is_symlink():
             continue
         if name == MANIFEST:
-            if not (path.is_file() and not path.is_symlink() and _manifest_is_ours(path)):
-                found.append(name)
-            continue
-        if path.is_symlink() or not path.is_file() or known.get(name) != _sha256(path):
+            ours = known is not None
+        else:
+            ours = not path.is_symlink() and path.is_file() and (known or {}).get(name) == _sha256(path)
+        if not ours:
             found.append(name)
     return found
-
-
-def _manifest_is_ours(path: Path) -> bool:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, UnicodeDecodeError):
-        return False
-    return isinstance(data, dict) and data.get("written_by") == _WRITER
 
 
 def check_out_folder(out: str | Path, spec: ExportSpec, force: bool = False, flag: str = "--out") -> tuple[Path, bool]:
@@ -421,7 +415,7 @@ def _write(spec: ExportSpec, folder: Path, command: str) -> Export:
         "Makefile": makefile,
         "README.md": _readme(spec, command, example),
     }
-    known = _manifest(folder)
+    known = _manifest(folder) or {}
     written = []
     for name, text in files.items():
         path = folder / name
