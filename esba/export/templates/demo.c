@@ -7,7 +7,7 @@
  *                and prints "pressure_mpa ... theta_deg ... total_deg ... tip_mm x y status ..."
  *
  * A result outside the model's range gets " flags name,name" after its status (the bits of
- * {{UPPER}}_FLAG_* in {{NAME}}.h). Blank lines and lines starting with # are skipped; a line longer
+ * ESBA_FLAG_* in {{NAME}}.h). Blank lines and lines starting with # are skipped; a line longer
  * than MAX_LINE bytes, or one that holds a NUL byte, is refused whole (never read in pieces). The
  * exit code is 0 when every line could be read (whatever the statuses), 1 when a line was refused
  * or standard input could not be read or standard output not written (a message on stderr). */
@@ -69,7 +69,7 @@ static int read_line(FILE *in, char *line) {
     return seen ? verdict : 0;
 }
 
-/* Where the flags of a result are named (the bits of {{UPPER}}_FLAG_*, lowest first). */
+/* The names of a result's flags (the bits of ESBA_FLAG_*, lowest first). */
 static void print_flags(int flags) {
     int bit, first = 1;
     if (flags == 0) return;
