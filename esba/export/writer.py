@@ -32,7 +32,7 @@ from typing import Iterable
 from esba import __version__
 from esba.infra import outputs
 
-from .ccode import FLAGS, TEMPLATES, ExportSpec, fill, flag_meanings, render_source
+from .ccode import FLAGS, TEMPLATES, TOLERANCES, ExportSpec, fill, flag_meanings, render_source
 from .reference import reference_equilibrium
 
 __all__ = ["Export", "export_c", "MANIFEST", "file_names", "foreign_files", "check_out_folder", "EXAMPLE", "STATUS_TABLE", "flag_table", "example_line", "format_line", "default_command"]
@@ -276,6 +276,12 @@ to another stable state. `{name}_equilibrium` notices the end of the branch (its
 shrink to nothing while the Hessian turns singular), kicks the state along the critical mode
 towards the side where the energy falls, minimises the energy just past the fold and goes on from
 the state it lands in; the result is that state taken on to the full load, with `ESBA_SNAPPED`.
+Near a cusp, where two folds are born (the pressure/payload cusp of the paper's actuator lies at
+0.1686 MPa, 1.645 N: esba's `docs/maps.md`), the jump is small: a load path that crosses the tip
+of a fold curve snaps by less than a degree, which esba's Python path trace may not resolve (it
+then says `ok` where this says `ESBA_SNAPPED`); both end at the same state. The Hessian there is
+nearly singular, and Newton's steps stay at its amplified round-off: a state whose gradient is
+below {TOLERANCES[spec.precision]['GRAD_TOL']:g} N mm/rad counts as converged (as in esba's Python solvers, in double).
 `{name}_pressure_for_angle` follows the branch of equilibria in the total angle, through its folds:
 a target that no stable state of the branch meets (between two folds) is `ESBA_UNREACHABLE`, with
 the fold's state as the nearest reachable one. A target held by a stable state past a fold is
