@@ -281,7 +281,8 @@ Near a cusp, where two folds are born (the pressure/payload cusp of the paper's 
 of a fold curve snaps by less than a degree, which esba's Python path trace may not resolve (it
 then says `ok` where this says `ESBA_SNAPPED`); both end at the same state. The Hessian there is
 nearly singular, and Newton's steps stay at its amplified round-off: a state whose gradient is
-below {TOLERANCES[spec.precision]['GRAD_TOL']:g} N mm/rad counts as converged (as in esba's Python solvers, in double).
+below {TOLERANCES[spec.precision]['GRAD_TOL']:g} N mm/rad counts as converged (esba's Python solvers accept
+1e-9 N mm/rad in double precision; single precision's round-off is larger).
 `{name}_pressure_for_angle` follows the branch of equilibria in the total angle, through its folds:
 a target that no stable state of the branch meets (between two folds) is `ESBA_UNREACHABLE`, with
 the fold's state as the nearest reachable one. A target held by a stable state past a fold is
