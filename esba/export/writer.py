@@ -227,9 +227,9 @@ carries `flags`: where its state lies outside the model's range (see Flags below
   total angle `total_angle` (rad). The branch of equilibria is followed in the total angle from the
   equilibrium at P = 0 (or from `from`); a target that no stable state of that branch meets (it lies
   between two folds, below P = 0 or above `max_pressure`) gives `ESBA_UNREACHABLE` with the nearest
-  reachable state in `out`. An answer that the load history at its pressure does not reach (the
-  actuator is multistable there: it snapped past it, see below) is flagged `ESBA_FLAG_MULTISTABLE`;
-  finding that out costs one `{name}_equilibrium` more.
+  reachable state in `out`. An answer (or nearest reachable state) that the load history at its
+  pressure does not reach (the actuator is multistable there: it snapped past it, see below) is
+  flagged `ESBA_FLAG_MULTISTABLE`; finding that out costs one `{name}_equilibrium` more.
 - `{name}_newton(n, params, loads, theta0, out, work)`: Newton from `theta0` at fixed loads, the
   nearest equilibrium, stable (`ESBA_OK`) or not (`ESBA_UNSTABLE`); no load history, so it does not
   see folds: for tracking small changes.

@@ -187,6 +187,8 @@ int {{NAME}}_pressure_for_angle(int n, const {{NAME}}_params *a, const {{NAME}}_
         copy(w->best, w->lo, N);
     }
     w->p[IDX_P] = best_p;
-    finish(w, a, &start, w->best, best_p, out);
+    status = finish(w, a, &start, w->best, best_p, out);
+    /* the nearest state that holds may lie past a snap too */
+    if (have_best && status == ESBA_OK && !on_load_path(w, a, &start, best_p, out)) out->flags |= ESBA_FLAG_MULTISTABLE;
     return ESBA_UNREACHABLE;
 }

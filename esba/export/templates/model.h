@@ -147,8 +147,9 @@ int {{NAME}}_equilibrium(int n, const {{NAME}}_params *params, const {{NAME}}_lo
  * from->loads' pressure and loads' payloads). A target that no stable state of the branch meets
  * (past a fold, below P = 0, above max_pressure) gives ESBA_UNREACHABLE and the nearest reachable
  * state; a state whose Hessian's smallest pivot is within {{HOLD_TOL}} of the largest counts as at
- * the fold, not held. An answer that the load history at its pressure does not reach (inflated,
- * then loaded: {{NAME}}_equilibrium) gets ESBA_FLAG_MULTISTABLE: another stable state exists there. */
+ * the fold, not held. An answer (or nearest reachable state) that the load history at its pressure
+ * does not reach (inflated, then loaded: {{NAME}}_equilibrium) gets ESBA_FLAG_MULTISTABLE: another
+ * stable state exists there. */
 int {{NAME}}_pressure_for_angle(int n, const {{NAME}}_params *params, const {{NAME}}_loads *loads,
                                 {{NAME}}_real total_angle, {{NAME}}_real max_pressure,
                                 const {{NAME}}_state *from, {{NAME}}_result *out, {{NAME}}_work *work);
