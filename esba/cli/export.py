@@ -6,8 +6,6 @@ from __future__ import annotations
 import argparse
 
 from derive.effects import DEFAULT_EFFECTS, DEFAULT_VARIANT, VARIANTS, EffectError, EffectSet
-from esba.infra import outputs
-
 from .arguments import Parser, UsageError, segments_arg
 from .results import EXIT_OK, print_result
 
@@ -28,12 +26,13 @@ def _cmd_export_c(args: argparse.Namespace) -> int:
         effects = EffectSet.parse(args.effects if args.effects is not None else DEFAULT_EFFECTS)
     except EffectError as exc:
         raise UsageError(f"--effects: {exc}") from None
-    folder = outputs.check_folder(args.out, "--out")
     from esba.export.ccode import ExportSpec
     from esba.export.writer import default_command, export_c
 
     spec = ExportSpec(args.segments, effects, args.variant or DEFAULT_VARIANT, "float" if args.float else "double")
-    export = export_c(spec, folder, default_command(spec, args.out))
+    # the folder and the files in it are checked before anything is generated; a folder created for
+    # an export that then fails (an unusable model cache) is removed again
+    export = export_c(spec, args.out, default_command(spec, args.out), force=args.force)
     data = {
         "name": spec.name,
         "folder": str(export.folder),
@@ -55,7 +54,8 @@ def add_export(sub) -> None:
     c.add_argument("--segments", "-n", type=segments_arg, required=True, help="segment count n, 1 to 256")
     c.add_argument("--effects", default=None, help=f"comma-separated effects (default {DEFAULT_EFFECTS}); payload:K for K payloads")
     c.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default {DEFAULT_VARIANT})")
-    c.add_argument("--out", required=True, metavar="DIR", help="folder to write (created when missing; its parent must exist)")
+    c.add_argument("--out", required=True, metavar="DIR", help="folder to write (created when missing; its parent must exist); files in it that esba did not write are not replaced without --force")
     c.add_argument("--float", action="store_true", help="single precision (float) instead of double")
+    c.add_argument("--force", action="store_true", help="replace files of the same names in DIR that esba did not write (a Makefile of yours)")
     c.add_argument("--json", action="store_true", help="print JSON")
     c.set_defaults(func=_cmd_export_c)

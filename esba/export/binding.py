@@ -21,9 +21,9 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from .ccode import ACTUATOR, ExportSpec
+from .ccode import ACTUATOR, FLAGS, ExportSpec
 
-__all__ = ["STATUS", "CResult", "CStiffness", "Library", "structures", "params_of", "loads_of"]
+__all__ = ["STATUS", "FLAGS", "CResult", "CStiffness", "Library", "structures", "params_of", "loads_of"]
 
 #: The status codes of the exported C, by number (``templates/model.h``).
 STATUS = ("ok", "unstable", "snapped", "unreachable", "not_converged", "out_of_domain", "bad_input", "bad_parameters", "bad_size")
@@ -51,6 +51,7 @@ def structures(spec: ExportSpec) -> dict[str, type]:
             ("theta", real * n), ("total_angle", real), ("tip", real * 3), ("pressure", real), ("energy", real),
             ("gradient_norm", real), ("min_pivot", real), ("iterations", ctypes.c_int), ("steps", ctypes.c_int),
             ("snaps", ctypes.c_int), ("snap_ramp", ctypes.c_int), ("snap_at", real), ("snap_from", real), ("snap_to", real),
+            ("flags", ctypes.c_int),
         ]
 
     class Stiffness(ctypes.Structure):
@@ -88,10 +89,16 @@ class CResult:
     snap_at: float
     snap_from: float
     snap_to: float
+    flags: int = 0
 
     @property
     def status_name(self) -> str:
         return STATUS[self.status] if 0 <= self.status < len(STATUS) else f"unknown({self.status})"
+
+    @property
+    def flag_names(self) -> tuple[str, ...]:
+        """The names of the flags set (:data:`esba.export.ccode.FLAGS`), lowest bit first."""
+        return tuple(name for i, name in enumerate(FLAGS) if self.flags & (1 << i))
 
     def values(self) -> list[float]:
         """Every real number of the result (for checks that nothing is NaN)."""
@@ -180,7 +187,7 @@ class Library:
             status=int(status), theta=np.array(list(r.theta), dtype=float), total_angle=float(r.total_angle), tip=np.array(list(r.tip), dtype=float),
             pressure=float(r.pressure), energy=float(r.energy), gradient_norm=float(r.gradient_norm), min_pivot=float(r.min_pivot),
             iterations=int(r.iterations), steps=int(r.steps), snaps=int(r.snaps), snap_ramp=int(r.snap_ramp), snap_at=float(r.snap_at),
-            snap_from=float(r.snap_from), snap_to=float(r.snap_to),
+            snap_from=float(r.snap_from), snap_to=float(r.snap_to), flags=int(r.flags),
         )
 
     # -- calls ------------------------------------------------------------------------------

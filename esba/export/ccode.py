@@ -47,11 +47,12 @@ from derive.effects import DEFAULT_EFFECTS, DEFAULT_VARIANT, EffectError, Effect
 from esba import __version__
 from esba.infra import cache, checks
 from esba.infra.errors import InputError, RunError
-from esba.model import structured
+from esba.model import structured, validity
 from esba.model.generated import Model, load_model
 from esba.model.stability import CRITICAL_TOL
 
-__all__ = ["ExportError", "ExportSpec", "PRECISIONS", "TEMPLATES", "model_functions", "casadi_code", "render_source", "TOLERANCES"]
+__all__ = ["ExportError", "ExportSpec", "PRECISIONS", "TEMPLATES", "FLAGS", "flag_meanings", "model_functions", "casadi_code", "render_source",
+           "TOLERANCES"]
 
 #: The precisions an export may be built in: the C type of every real number.
 PRECISIONS = ("double", "float")
@@ -63,11 +64,34 @@ TEMPLATES = Path(__file__).resolve().parent / "templates"
 #: zero is critical; Newton runs to round-off). float: scaled to single precision's epsilon
 #: (1.2e-7): the gradient of energies of O(100) N mm carries round-off of about 1e-5 N mm/rad, so
 #: angles are good to about 1e-6 rad and a step below 2e-5 rad is round-off.
+#: GRAD_TOL: Newton has converged at this max |dU/dtheta| (N mm/rad), double as esba.solvers.newton's
+#: acceptance, float at its gradient's round-off. LOAD_PATH_TOL: the largest angle difference (rad)
+#: at which the load history reaches the inverse's answer (as pressure_for_target's on_load_path).
 TOLERANCES = {
     "double": {"CRITICAL_TOL": CRITICAL_TOL, "STEP_TOL": 1e-11, "TINY": 1e-8, "JUMP_FLOOR": 1e-6, "H_MIN": 1e-10, "SNAP_PAST": 1e-7, "ANGLE_TOL": 1e-10, "BISECT_TOL": 1e-7, "HOLD_TOL": 1e-6,
-               "SINGULAR_TOL": 1e-10},
-    "float": {"CRITICAL_TOL": 1e-5, "STEP_TOL": 2e-5, "TINY": 1e-4, "JUMP_FLOOR": 1e-3, "H_MIN": 1e-5, "SNAP_PAST": 1e-4, "ANGLE_TOL": 1e-5, "BISECT_TOL": 1e-4, "HOLD_TOL": 1e-4, "SINGULAR_TOL": 1e-5},
+               "SINGULAR_TOL": 1e-10, "GRAD_TOL": 1e-9, "LOAD_PATH_TOL": 1e-6},
+    "float": {"CRITICAL_TOL": 1e-5, "STEP_TOL": 2e-5, "TINY": 1e-4, "JUMP_FLOOR": 1e-3, "H_MIN": 1e-5, "SNAP_PAST": 1e-4, "ANGLE_TOL": 1e-5, "BISECT_TOL": 1e-4, "HOLD_TOL": 1e-4,
+              "SINGULAR_TOL": 1e-5, "GRAD_TOL": 1e-5, "LOAD_PATH_TOL": 1e-3},
 }
+
+#: The flag bits of a result (``out->flags``), lowest first: the checks of
+#: :func:`esba.model.validity.assess` by their names, then the inverse's note that the answer is not
+#: on the load history. ``ESBA_FLAG_<NAME>`` is ``1 << index``.
+FLAGS = ("axial_strain", "radial_strain", "total_bend", "tip_behind_base", "pressure_range", "payload_range", "multistable")
+
+
+def flag_meanings() -> dict[str, str]:
+    """What each flag of :data:`FLAGS` means, with esba.model.validity's thresholds."""
+    limit = validity.STRAIN_LIMIT
+    return {
+        "axial_strain": f"the outer fibre's axial strain 2 n r1 theta_i / L passes +-{limit:g} in a segment (linear elasticity, Section 3.2.2)",
+        "radial_strain": f"the chamber wall's radial strain (Eq. 10, 13) passes +-{limit:g} in a segment",
+        "total_bend": f"the total bend passes +-{validity.MAX_BEND_DEG:g} deg: the actuator would pass through itself (no self-contact)",
+        "tip_behind_base": "the tip is behind the base (x < 0): the actuator would pass through its clamp (no contact)",
+        "pressure_range": f"the pressure is above {validity.FAR_FACTOR * validity.PAPER_MAX_PRESSURE:g} MPa, far outside the paper's experiments",
+        "payload_range": f"a payload is above {validity.FAR_FACTOR * validity.PAPER_MAX_PAYLOAD:g} N, far outside the paper's experiments",
+        "multistable": "pressure_for_angle: the load history at the pressure found (inflated, then loaded) reaches another stable state",
+    }
 
 #: The actuator parameters of the C struct (in the order of ``Actuator.parameters``).
 ACTUATOR = ("L", "r1", "r2", "d", "rho", "E", "M")
@@ -381,6 +405,20 @@ def _values(spec: ExportSpec, model: Model, sizes: dict[str, int], command: str)
         "FABS": "fabs" if real == "double" else "fabsf",
     }
     values.update({key: _c_number(v) for key, v in tol.items()})
+    meanings = flag_meanings()
+    values.update({
+        "STRAIN_LIMIT": _c_number(validity.STRAIN_LIMIT),
+        "MAX_BEND": _c_number(np.radians(validity.MAX_BEND_DEG)),
+        "PRESSURE_LIMIT": _c_number(validity.FAR_FACTOR * validity.PAPER_MAX_PRESSURE),
+        "PAYLOAD_LIMIT": _c_number(validity.FAR_FACTOR * validity.PAPER_MAX_PAYLOAD),
+        "PAYLOAD_FLAG": (
+            f"    {{\n        int k;\n        for (k = 0; k < {k}; ++k) {{\n"
+            "            if (l->payload[k].force > PAYLOAD_LIMIT) flags |= ESBA_FLAG_PAYLOAD_RANGE;\n        }\n    }\n"
+        ) if k else "",
+        "FLAG_DEFINES": "".join(f"#define ESBA_FLAG_{flag.upper()} {1 << i}\n" for i, flag in enumerate(FLAGS)),
+        "FLAG_TABLE": "".join(f" *   ESBA_FLAG_{flag.upper()}: {meanings[flag]}\n" for flag in FLAGS),
+        "FLAG_CASES": "".join(f'    case ESBA_FLAG_{flag.upper()}: return "{flag}";\n' for flag in FLAGS),
+    })
     return values
 
 

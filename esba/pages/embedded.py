@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from esba.export.binding import STATUS
-from esba.export.writer import STATUS_TABLE
+from esba.export.writer import STATUS_TABLE, flag_table
 from esba.infra import outputs
 
 __all__ = ["CONTROL_LOOP", "embedded_page", "write_page"]
@@ -60,9 +60,11 @@ void control_step(void) {
 
     /* The pressure that holds the commanded bend under this payload, at most 0.3 MPa. */
     status = ESBA(pressure_for_angle)(N, &a, &loads, (ESBA(real))commanded_angle(), (ESBA(real))0.3, known ? &now : NULL, &r, &work);
-    if (status == ESBA_OK || status == ESBA_UNREACHABLE) /* unreachable: the nearest bend that holds */
+    /* unreachable: the nearest bend that holds; never a state outside the model's domain (a bend
+     * through the clamp); ESBA_FLAG_MULTISTABLE: held from here, but inflating from zero ends elsewhere */
+    if ((status == ESBA_OK || status == ESBA_UNREACHABLE) && !(r.flags & ESBA_FLAGS_OUTSIDE_MODEL))
         set_pressure(r.pressure);
-    /* any other status: keep the valve where it is */
+    /* anything else: keep the valve where it is */
 }
 """
 
@@ -109,7 +111,9 @@ def embedded_page(data: dict[str, Any], command: str) -> str:
         "## The demo",
         "",
         "Built by `make` from the export alone (n = 3, double), for the Table 1 actuator at 0.12 MPa under a",
-        "2 N horizontal tip payload, and (`-i`) the pressure that bends it to 90 deg under the same payload:",
+        "2 N horizontal tip payload, and (`-i`) the pressure that bends it to 90 deg under the same payload",
+        "(a result's flags follow its status: `multistable` when the load history at that pressure, inflated",
+        "and then loaded, reaches another state, as `esba pressure` notes too):",
         "",
         f"    $ echo '{demo['input']}' | ./demo",
         f"    {demo['output']}",
@@ -233,10 +237,13 @@ def embedded_page(data: dict[str, Any], command: str) -> str:
         f"{100 * snap['at']:.2f} % of the payload, from {snap['from_deg']:.2f} to {snap['to_deg']:.2f} deg, and ended at {snap['total_deg']:.2f} deg.",
         "",
         "`..._pressure_for_angle` follows the branch in the total angle instead (the angle and the pressure",
-        "as unknowns, a bordered Newton step with two O(n) solves), and never answers with a state past a",
-        "fold: a target whose state is unstable (between two folds), needs a pressure below 0 or above the",
-        "limit given is `ESBA_UNREACHABLE`, with the nearest state that holds (the fold's, or the limit's).",
-        "A controller that keeps commanding such a target keeps the actuator at the edge of the stable range.",
+        "as unknowns, a bordered Newton step with two O(n) solves), through its folds: a target whose state",
+        "is unstable (between two folds), needs a pressure below 0 or above the limit given is",
+        "`ESBA_UNREACHABLE`, with the nearest state that holds (the fold's, or the limit's). A controller",
+        "that keeps commanding such a target keeps the actuator at the edge of the stable range. A target",
+        "held by a stable state past a snap is answered, flagged `ESBA_FLAG_MULTISTABLE` (as is a nearest",
+        "state that holds) when the load history at its pressure (what `..._equilibrium` does from the",
+        "straight state) reaches another state: the actuator holds it only when it gets there another way.",
         "",
         "## A minimal control loop",
         "",
@@ -251,6 +258,13 @@ def embedded_page(data: dict[str, Any], command: str) -> str:
         "## Status codes",
         "",
         STATUS_TABLE.rstrip("\n"),
+        "",
+        "## Flags",
+        "",
+        "Beside its status, a result carries `flags`: where its state lies outside the model's range, by the",
+        "rule and thresholds of esba's Python results (`esba.model.validity`), and the inverse's note.",
+        "",
+        flag_table().rstrip("\n"),
         "",
     ]
     return "\n".join(lines)

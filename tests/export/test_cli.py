@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from esba.cli import EXIT_OK, main
+from esba.cli import EXIT_OK, EXIT_USAGE, main
 from esba.export.build import STRICT, run_compiler
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -23,10 +23,55 @@ def test_export_writes_the_folder(tmp_path, capsys):
     data = json.loads(capsys.readouterr().out)
     name = "esba_n2_air_axial_radial_fibres_payload1_paper"
     assert data["name"] == name and data["precision"] == "float"
-    assert sorted(p.name for p in out.iterdir()) == sorted([f"{name}.h", f"{name}.c", "Makefile", "README.md", "demo.c"])
+    assert sorted(p.name for p in out.iterdir()) == sorted([f"{name}.h", f"{name}.c", "Makefile", "README.md", "demo.c", "esba-export.json"])
     assert "esba export c --segments 2 --float --out" in (out / f"{name}.h").read_text()
     assert "typedef float " in (out / f"{name}.h").read_text()
     assert data["example"]["output"] in (out / "README.md").read_text()
+
+
+def _names(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir())
+
+
+def test_files_esba_did_not_write_are_not_replaced_without_force(tmp_path, capsys):
+    """A Makefile of the user's in --out: refused in one line naming it (exit 2), nothing written;
+    --force replaces it; an export into its own folder again needs no --force; a file of the export
+    changed since is the user's again."""
+    out = tmp_path / "ctrl"
+    out.mkdir()
+    (out / "Makefile").write_text("all:\n\techo mine\n")
+    (out / "notes.txt").write_text("kept\n")
+    argv = ["export", "c", "--segments", "2", "--out", str(out)]
+    assert main(argv) == EXIT_USAGE
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "would replace Makefile," in err and "--force" in err
+    assert _names(out) == ["Makefile", "notes.txt"] and "mine" in (out / "Makefile").read_text()
+    assert main([*argv, "--force"]) == EXIT_OK
+    assert "DO NOT MODIFY BY HAND" in (out / "Makefile").read_text() and (out / "notes.txt").read_text() == "kept\n"
+    assert main(argv) == EXIT_OK  # its own files, unchanged since
+    (out / "demo.c").write_text((out / "demo.c").read_text() + "/* my change */\n")
+    (out / "README.md").unlink()
+    assert main(argv) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert "would replace demo.c," in err and "README" not in err
+
+
+def test_a_manifest_that_is_not_esbas_is_not_replaced(tmp_path, capsys):
+    out = tmp_path / "ctrl"
+    out.mkdir()
+    (out / "esba-export.json").write_text('{"mine": true}')
+    assert main(["export", "c", "--segments", "2", "--out", str(out)]) == EXIT_USAGE
+    assert "would replace esba-export.json" in capsys.readouterr().err
+
+
+def test_a_failed_export_leaves_no_folder(tmp_path, capsys, monkeypatch):
+    """An unusable model cache (a file) fails in one line, exit 2, and leaves no empty --out folder."""
+    (tmp_path / "cache").write_text("")
+    monkeypatch.setenv("ESBA_CACHE_DIR", str(tmp_path / "cache"))
+    out = tmp_path / "x"
+    assert main(["export", "c", "--segments", "5", "--out", str(out)]) == EXIT_USAGE
+    assert "ESBA_CACHE_DIR" in capsys.readouterr().err
+    assert not out.exists()
 
 
 def test_export_help_imports_no_numerics():

@@ -6,8 +6,14 @@
  *   ./demo -i    reads lines "total_angle_deg{{LINE_PAYLOADS}}"
  *                and prints "pressure_mpa ... theta_deg ... total_deg ... tip_mm x y status ..."
  *
- * Blank lines and lines starting with # are skipped. The exit code is 0 when every line could be
- * read (whatever the statuses), 1 otherwise. */
+ * A result outside the model's range gets " flags name,name" after its status (the bits of
+ * ESBA_FLAG_* in {{NAME}}.h). Blank lines and lines starting with # are skipped; a line longer
+ * than MAX_LINE bytes, or one that holds a NUL byte, is refused whole (never read in pieces). The
+ * exit code is 0 when every line could be read (whatever the statuses), 1 when a line was refused
+ * or standard input could not be read or standard output not written (a message on stderr). */
+#include <errno.h>
+#include <float.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +22,8 @@
 
 #define DEG (180.0 / 3.14159265358979323846)
 #define MAX_NUMBERS 64
+#define MAX_LINE 4096 /* bytes of a line, its newline not counted */
+#define REAL_MAX {{REAL_MAX}}
 
 /* The numbers of a line (at most MAX_NUMBERS); -1 when something else is on it. */
 static int numbers(const char *line, double *out) {
@@ -33,37 +41,99 @@ static int numbers(const char *line, double *out) {
     }
 }
 
+/* A number as the export's real: beyond its range an infinity (refused by the model as bad input),
+ * never a conversion whose result is undefined. */
+static {{NAME}}_real real_of(double v) {
+    if (v > REAL_MAX) return ({{NAME}}_real)HUGE_VAL;
+    if (v < -REAL_MAX) return ({{NAME}}_real)-HUGE_VAL;
+    return ({{NAME}}_real)v;
+}
+
+/* The next line of in into line (without its newline): 1 read, 0 at the end of the input (or a
+ * read error: ferror tells), TOO_LONG for a line longer than MAX_LINE bytes, NUL_BYTE for one that
+ * holds a NUL byte. A refused line is read to its end, so that the next call starts at the next line. */
+#define TOO_LONG (-1)
+#define NUL_BYTE (-2)
+static int read_line(FILE *in, char *line) {
+    size_t len = 0;
+    int c, seen = 0, verdict = 1;
+    while ((c = getc(in)) != EOF) {
+        seen = 1;
+        if (c == '\n') break;
+        if (verdict != 1) continue;
+        if (c == '\0') verdict = NUL_BYTE;
+        else if (len == MAX_LINE) verdict = TOO_LONG;
+        else line[len++] = (char)c;
+    }
+    line[len] = '\0';
+    return seen ? verdict : 0;
+}
+
+/* The names of a result's flags (the bits of ESBA_FLAG_*, lowest first). */
+static void print_flags(int flags) {
+    int bit, first = 1;
+    if (flags == 0) return;
+    printf(" flags");
+    for (bit = 0; bit < 16; ++bit) {
+        if (flags & (1 << bit)) {
+            printf("%s%s", first ? " " : ",", {{NAME}}_flag_name(1 << bit));
+            first = 0;
+        }
+    }
+}
+
 int main(int argc, char **argv) {
     static {{NAME}}_work work; /* scratch memory of the calls (static: large at big n) */
     {{NAME}}_params params;
     {{NAME}}_loads loads;
     {{NAME}}_result r;
-    char line[1024];
+    static char line[MAX_LINE + 1];
     double v[MAX_NUMBERS];
-    int inverse = argc > 1 && strcmp(argv[1], "-i") == 0, failed = 0, lineno = 0;
+    int inverse = argc > 1 && strcmp(argv[1], "-i") == 0, failed = 0, got, write_errno = 0;
+    unsigned long lineno = 0;
     if (argc > 2 || (argc == 2 && !inverse)) {
         fprintf(stderr, "usage: %s [-i] < lines\n", argv[0]);
         return 2;
     }
     {{NAME}}_default_params(&params);
-    while (fgets(line, sizeof line, stdin) != NULL) {
+    while ((got = read_line(stdin, line)) != 0) {
         int count, status, k;
         const char *p = line;
         ++lineno;
+        if (got == TOO_LONG || got == NUL_BYTE) {
+            if (got == TOO_LONG) fprintf(stderr, "line %lu: longer than %d bytes: refused\n", lineno, MAX_LINE);
+            else fprintf(stderr, "line %lu: holds a NUL byte, not text: refused\n", lineno);
+            failed = 1;
+            continue;
+        }
         while (*p == ' ' || *p == '\t') ++p;
         if (*p == '#' || *p == '\n' || *p == '\r' || *p == '\0') continue;
         count = numbers(line, v);
         {{NAME}}_default_loads(&loads);
 {{READ_LINE}}
         if (inverse) {
-            status = {{NAME}}_pressure_for_angle({{UPPER}}_N, &params, &loads, ({{NAME}}_real)(v[0] / DEG), ({{NAME}}_real)10.0, NULL, &r, &work);
+            status = {{NAME}}_pressure_for_angle({{UPPER}}_N, &params, &loads, real_of(v[0] / DEG), ({{NAME}}_real)10.0, NULL, &r, &work);
             printf("pressure_mpa %.7f ", (double)r.pressure);
         } else {
             status = {{NAME}}_equilibrium({{UPPER}}_N, &params, &loads, NULL, &r, &work);
         }
         printf("theta_deg");
         for (k = 0; k < {{UPPER}}_N; ++k) printf(" %.4f", (double)r.theta[k] * DEG);
-        printf(" total_deg %.4f tip_mm %.3f %.3f status %s\n", (double)r.total_angle * DEG, (double)r.tip[0], (double)r.tip[1], {{NAME}}_status_name(status));
+        printf(" total_deg %.4f tip_mm %.3f %.3f status %s", (double)r.total_angle * DEG, (double)r.tip[0], (double)r.tip[1], {{NAME}}_status_name(status));
+        print_flags(r.flags);
+        printf("\n");
+        if (ferror(stdout)) { /* nothing more can be written */
+            write_errno = errno;
+            break;
+        }
+    }
+    if (ferror(stdin)) {
+        fprintf(stderr, "%s: cannot read standard input after line %lu (%s)\n", argv[0], lineno, strerror(errno));
+        failed = 1;
+    }
+    if (fflush(stdout) != 0 || ferror(stdout) || fclose(stdout) != 0) {
+        fprintf(stderr, "%s: cannot write standard output (%s): results lost\n", argv[0], strerror(write_errno ? write_errno : errno));
+        return 1;
     }
     return failed ? 1 : 0;
 }

@@ -70,6 +70,26 @@ static int admissible(WORK *w, const REAL *theta, REAL pressure, REAL pmax) {
     return w->rel > HOLD_TOL && pressure >= 0 && pressure <= pmax;
 }
 
+/* Whether the load history at the pressure found (inflated with the payloads off, then loaded: what
+ * {{NAME}}_equilibrium does) reaches the answer in out: when it does not, the actuator is multistable
+ * there and the answer is held only when it is reached some other way (past a snap, along the branch).
+ * out keeps its counts of the walk (the history's Newton iterations are added). */
+static int on_load_path(WORK *w, const {{NAME}}_params *a, const {{NAME}}_loads *payloads, REAL pressure, {{NAME}}_result *out) {
+    {{NAME}}_loads at = *payloads;
+    int steps = out->steps, snaps = out->snaps, ramp_id = out->snap_ramp, status;
+    REAL snap_at = out->snap_at, snap_from = out->snap_from, snap_to = out->snap_to;
+    at.pressure = pressure;
+    status = history(w, a, &at, NULL, out);
+    out->steps = steps;
+    out->snaps = snaps;
+    out->snap_ramp = ramp_id;
+    out->snap_at = snap_at;
+    out->snap_from = snap_from;
+    out->snap_to = snap_to;
+    out->iterations = w->iterations;
+    return status == ESBA_OK && max_diff(w->lo, out->theta) <= LOAD_PATH_TOL;
+}
+
 int {{NAME}}_pressure_for_angle(int n, const {{NAME}}_params *a, const {{NAME}}_loads *l, REAL total, REAL pmax, const {{NAME}}_state *from,
                                 {{NAME}}_result *out, WORK *w) {
     {{NAME}}_loads start;
@@ -87,7 +107,7 @@ int {{NAME}}_pressure_for_angle(int n, const {{NAME}}_params *a, const {{NAME}}_
     status = history(w, a, &start, from, out);
     pack(a, &start, RC(1.0), RC(1.0), w->p);
     if (status != ESBA_OK) {
-        finish(w, a, w->lo, start.pressure, out);
+        finish(w, a, &start, w->lo, start.pressure, out);
         return status;
     }
     for (k = 0; k < NP; ++k) w->unit[k] = RC(0.0);
@@ -158,13 +178,17 @@ int {{NAME}}_pressure_for_angle(int n, const {{NAME}}_params *a, const {{NAME}}_
     }
     if (angle == total && adm) {
         w->p[IDX_P] = pressure;
-        return finish(w, a, w->lo, pressure, out);
+        status = finish(w, a, &start, w->lo, pressure, out);
+        if (status == ESBA_OK && !on_load_path(w, a, &start, pressure, out)) out->flags |= ESBA_FLAG_MULTISTABLE;
+        return status;
     }
     if (!have_best) {
         best_p = start.pressure;
         copy(w->best, w->lo, N);
     }
     w->p[IDX_P] = best_p;
-    finish(w, a, w->best, best_p, out);
+    status = finish(w, a, &start, w->best, best_p, out);
+    /* the nearest state that holds may lie past a snap too */
+    if (have_best && status == ESBA_OK && !on_load_path(w, a, &start, best_p, out)) out->flags |= ESBA_FLAG_MULTISTABLE;
     return ESBA_UNREACHABLE;
 }

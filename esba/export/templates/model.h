@@ -40,6 +40,17 @@ extern "C" {
 #define ESBA_BAD_SIZE 8       /* n is not the segment count of this export */
 #endif
 
+/* Flags of a result (out->flags: bits, beside the status), by the rule of esba.model.validity
+ * (whose thresholds this export was written with). The first four (ESBA_FLAGS_OUTSIDE_MODEL) say
+ * that the state lies outside the model's domain, the next two that a load is far outside the
+ * paper's experiments; the last is pressure_for_angle's note:
+{{FLAG_TABLE}} * A status of ESBA_OK with any of ESBA_FLAGS_OUTSIDE_MODEL is an answer of the model (converged,
+ * perhaps stable), not of the actuator. */
+#ifndef ESBA_FLAG_BITS
+#define ESBA_FLAG_BITS
+{{FLAG_DEFINES}}#define ESBA_FLAGS_OUTSIDE_MODEL (ESBA_FLAG_AXIAL_STRAIN | ESBA_FLAG_RADIAL_STRAIN | ESBA_FLAG_TOTAL_BEND | ESBA_FLAG_TIP_BEHIND_BASE)
+#endif
+
 #define {{UPPER}}_N {{N}}               /* segments */
 #define {{UPPER}}_PAYLOADS {{K}}        /* point payloads */
 #define {{UPPER}}_GRAVITY {{GRAVITY}}   /* 1: the actuator's weight is in the model */
@@ -91,6 +102,7 @@ typedef struct {
     {{NAME}}_real snap_at;        /* the first snap's load factor on that ramp (0..1) */
     {{NAME}}_real snap_from;      /* total angle at the fold, rad */
     {{NAME}}_real snap_to;        /* total angle right after the jump, rad */
+    int flags;                  /* ESBA_FLAG_* bits: where the state lies outside the model's range; 0 inside */
 } {{NAME}}_result;
 
 /* What stiffness returns. */
@@ -135,7 +147,9 @@ int {{NAME}}_equilibrium(int n, const {{NAME}}_params *params, const {{NAME}}_lo
  * from->loads' pressure and loads' payloads). A target that no stable state of the branch meets
  * (past a fold, below P = 0, above max_pressure) gives ESBA_UNREACHABLE and the nearest reachable
  * state; a state whose Hessian's smallest pivot is within {{HOLD_TOL}} of the largest counts as at
- * the fold, not held. */
+ * the fold, not held. An answer (or nearest reachable state) that the load history at its pressure
+ * does not reach (inflated, then loaded: {{NAME}}_equilibrium) gets ESBA_FLAG_MULTISTABLE: another
+ * stable state exists there. */
 int {{NAME}}_pressure_for_angle(int n, const {{NAME}}_params *params, const {{NAME}}_loads *loads,
                                 {{NAME}}_real total_angle, {{NAME}}_real max_pressure,
                                 const {{NAME}}_state *from, {{NAME}}_result *out, {{NAME}}_work *work);
@@ -168,6 +182,9 @@ unsigned long {{NAME}}_work_bytes(void);
 
 /* "ok", "unstable", "snapped", ... for a status code. */
 const char *{{NAME}}_status_name(int status);
+
+/* "axial_strain", "total_bend", ... for one ESBA_FLAG_* bit (esba.model.validity's names). */
+const char *{{NAME}}_flag_name(int flag);
 
 #ifdef __cplusplus
 }

@@ -21,6 +21,11 @@
 #define CRITICAL_TOL RC({{CRITICAL_TOL}})
 /* Newton has converged when its step is below this (rad): round-off of the gradient beyond it. */
 #define STEP_TOL RC({{STEP_TOL}})
+/* Newton that ends its iterations without a step below STEP_TOL has still converged when max
+ * |dU/dtheta| is below this (N mm/rad; esba.solvers.newton's acceptance): near a cusp the Hessian is
+ * nearly singular and amplifies the gradient's round-off into steps that never get that small, at
+ * a state that is an equilibrium all the same. */
+#define GRAD_TOL RC({{GRAD_TOL}})
 /* Newton steps below this (rad) are round-off, amplified near a singular Hessian: their ratio says nothing. */
 #define TINY RC({{TINY}})
 /* Largest ratio of a step's second Newton correction to its first (Deuflhard's test that the
@@ -63,6 +68,16 @@
 /* Relative distance kept from the edge of the model's domain (esba.model.generated.DOMAIN_MARGIN). */
 #define DOMAIN_MARGIN RC(1e-6)
 #define PI RC(3.14159265358979323846)
+/* The range in which the paper's model describes the actuator (esba.model.validity, read when this
+ * file was exported): |strain| of the outer fibre or the chamber wall, |total bend| (rad), and the
+ * pressure (MPa) and payload (N) beyond which the model is far outside the paper's experiments. */
+#define STRAIN_LIMIT RC({{STRAIN_LIMIT}})
+#define MAX_BEND RC({{MAX_BEND}})
+#define PRESSURE_LIMIT RC({{PRESSURE_LIMIT}})
+#define PAYLOAD_LIMIT RC({{PAYLOAD_LIMIT}})
+/* pressure_for_angle: the load history at the pressure found reaches the same state when no angle
+ * differs by more than this (rad; esba.analysis.stiffness.pressure_for_target's on_load_path). */
+#define LOAD_PATH_TOL RC({{LOAD_PATH_TOL}})
 
 static int all_finite(const REAL *x, int m) {
     int k;
@@ -291,7 +306,11 @@ static int newton(WORK *w, REAL *theta, const REAL *p, int max_iter, REAL *contr
         if (it > 0 && f == RC(1.0) && size <= RC(1e3) * STEP_TOL && size > RC(0.5) * previous) return 1;
         previous = size;
     }
-    return 0;
+    /* the steps never fell below STEP_TOL: round-off amplified by a nearly singular Hessian (near a
+     * cusp) at a state that is an equilibrium all the same when its gradient is below GRAD_TOL */
+    if (!eval_newton(w, theta, p) || !factor(w, RC(0.0))) return 0;
+    if (w->rel < *low) *low = w->rel;
+    return max_abs(w->g, N) <= GRAD_TOL;
 }
 
 /* A stable state near theta at p (in place): a Newton method whose Hessian is shifted (H + mu I)
@@ -491,10 +510,32 @@ static void zero_result({{NAME}}_result *out) {
     out->iterations = out->steps = out->snaps = 0;
     out->snap_ramp = -1;
     out->snap_at = out->snap_from = out->snap_to = RC(0.0);
+    out->flags = 0;
+}
+
+/* Where theta (with the tip's x, the pressure and the loads' payloads) lies outside the model's
+ * range: the ESBA_FLAG_* bits, by the rules of esba.model.validity.assess. */
+static int range_flags(const {{NAME}}_params *a, const {{NAME}}_loads *l, const REAL *theta, REAL tip_x, REAL pressure) {
+    int k, flags = 0;
+    for (k = 0; k < N; ++k) {
+        /* the outer fibre, 2 r1 from the inextensible layer (Eq. 6), over the segment length L / n */
+        REAL axial = RC(2.0) * a->r1 * RC(N) * theta[k] / a->L;
+        /* the chamber wall: Delta r2 / (r1 - r2), the radius from Eq. (10) (0 where the chamber is closed) */
+        REAL num = a->L * a->r2 * a->r2 + RC(N) * a->r1 * a->r1 * a->r1 * theta[k];
+        REAL den = a->L + RC(N) * (a->d + a->r1) * theta[k];
+        REAL radius = den > 0 ? SQRT((num > 0 ? num : RC(0.0)) / den) : RC(0.0);
+        if (FABS(axial) > STRAIN_LIMIT) flags |= ESBA_FLAG_AXIAL_STRAIN;
+        if (FABS((radius - a->r2) / (a->r1 - a->r2)) > STRAIN_LIMIT) flags |= ESBA_FLAG_RADIAL_STRAIN;
+    }
+    if (FABS(sum(theta)) > MAX_BEND) flags |= ESBA_FLAG_TOTAL_BEND;
+    if (tip_x < 0) flags |= ESBA_FLAG_TIP_BEHIND_BASE;
+    if (pressure > PRESSURE_LIMIT) flags |= ESBA_FLAG_PRESSURE_RANGE;
+    (void)l;
+{{PAYLOAD_FLAG}}    return flags;
 }
 
 /* Fill out from theta at w->p (the full loads); the status of a converged state: stable or not. */
-static int finish(WORK *w, const {{NAME}}_params *a, const REAL *theta, REAL pressure, {{NAME}}_result *out) {
+static int finish(WORK *w, const {{NAME}}_params *a, const {{NAME}}_loads *l, const REAL *theta, REAL pressure, {{NAME}}_result *out) {
     int k, ok;
     for (k = 0; k < N; ++k) out->theta[k] = theta[k];
     out->total_angle = sum(theta);
@@ -512,6 +553,7 @@ static int finish(WORK *w, const {{NAME}}_params *a, const REAL *theta, REAL pre
         out->tip[0] = out->tip[1] = out->tip[2] = out->energy = RC(0.0);
         return ESBA_OUT_OF_DOMAIN;
     }
+    out->flags = range_flags(a, l, theta, out->tip[0], pressure);
     return ok && w->rel > CRITICAL_TOL ? ESBA_OK : ESBA_UNSTABLE;
 }
 
@@ -589,7 +631,7 @@ int {{NAME}}_equilibrium(int n, const {{NAME}}_params *a, const {{NAME}}_loads *
     if (status != ESBA_OK) return status;
     status = history(w, a, l, from, out);
     pack(a, l, RC(1.0), RC(1.0), w->p);
-    verdict = finish(w, a, w->lo, l->pressure, out);
+    verdict = finish(w, a, l, w->lo, l->pressure, out);
     if (status != ESBA_OK) return status;
     if (verdict != ESBA_OK) return verdict;
     return out->snaps > 0 ? ESBA_SNAPPED : ESBA_OK;
@@ -609,7 +651,7 @@ int {{NAME}}_newton(int n, const {{NAME}}_params *a, const {{NAME}}_loads *l, co
         status = near_bound(w, w->lo) ? ESBA_OUT_OF_DOMAIN : ESBA_NOT_CONVERGED;
     }
     pack(a, l, RC(1.0), RC(1.0), w->p);
-    converged = finish(w, a, w->lo, l->pressure, out);
+    converged = finish(w, a, l, w->lo, l->pressure, out);
     return status != ESBA_OK ? status : converged;
 }
 
@@ -740,5 +782,11 @@ const char *{{NAME}}_status_name(int status) {
     case ESBA_BAD_PARAMETERS: return "bad_parameters";
     case ESBA_BAD_SIZE: return "bad_size";
     default: return "unknown";
+    }
+}
+
+const char *{{NAME}}_flag_name(int flag) {
+    switch (flag) {
+{{FLAG_CASES}}    default: return "unknown";
     }
 }
