@@ -283,42 +283,61 @@ def path_bytes(max_steps: int, n: int, traces: int = PATH_TRACES) -> int:
     return int(max_steps) * int(traces) * (POINT_BYTES[0] + POINT_BYTES[1] * int(n))
 
 
-#: After this many seconds a trace says how long its max_steps could take, when that is more than
-#: :data:`FORECAST_AT_LEAST` seconds (as a sweep's size is checked up front; a path's step count
-#: is not known until it runs).
+#: After this many seconds a trace says how long the rest of its interval may take, when that is
+#: more than :data:`FORECAST_AT_LEAST` seconds (as a sweep's size is checked up front; a path's step
+#: count is not known until it runs).
 FORECAST_AFTER = 2.0
 FORECAST_AT_LEAST = 60.0
 
 
 class _Forecast:
-    """Says once, on the ``esba`` logger, how long the rest of a trace's ``max_steps`` could take
-    at the pace of its steps over :data:`FORECAST_AFTER` seconds (a million steps of 1e-6 is minutes).
-    The pace is taken from the end of the first step on: the first pays one-off costs (a model's
-    kernels compiled to C on first use) that the rest do not."""
+    """Says once, on the ``esba`` logger, how long the rest of a trace may take: the parameter
+    distance left to its end (``to``, else the end of its interval it heads for) at the pace it
+    has come nearer that end so far (distance per second, over :data:`FORECAST_AFTER` seconds or
+    more). ``max_steps`` is a cap, not a forecast: a trace that reaches its end in a few hundred
+    steps does not take the time of two thousand. The pace is taken from the end of the first step
+    on: the first pays one-off costs (a model's kernels compiled to C on first use) that the rest do
+    not. A trace that has not come nearer its end yet (it turned back at a fold) says nothing until
+    it has. ``clock`` is the time source (seconds)."""
 
-    def __init__(self, max_steps: int, label: str) -> None:
-        self.max_steps, self.label = max_steps, label
+    def __init__(self, goal: float, label: str, clock: Callable[[], float] | None = None) -> None:
+        self.goal, self.label = float(goal), label
+        self.clock = time.perf_counter if clock is None else clock
         self.t0: float | None = None
         self.s0 = 0
+        self.left0 = math.inf
         self.done = False
 
-    def tick(self, steps: int) -> None:
+    def remaining_s(self, lam: float, now: float) -> float | None:
+        """Seconds the rest may take from ``lam`` at ``now`` (None: no pace yet)."""
+        if self.t0 is None or now <= self.t0:
+            return None
+        left = abs(self.goal - lam)
+        covered = self.left0 - left
+        if not covered > 0:
+            return None
+        return left * (now - self.t0) / covered
+
+    def tick(self, steps: int, lam: float) -> None:
         if self.done or steps == 0:
             return
-        now = time.perf_counter()
+        now = self.clock()
         if self.t0 is None:
-            self.t0, self.s0 = now, steps
+            self.t0, self.s0, self.left0 = now, steps, abs(self.goal - lam)
             return
         elapsed = now - self.t0
         if elapsed < FORECAST_AFTER or steps <= self.s0:
             return
+        rest = self.remaining_s(lam, now)
+        if rest is None:
+            return
         self.done = True
-        rest = (self.max_steps - steps) * elapsed / (steps - self.s0)
         if rest >= FORECAST_AT_LEAST:
             minutes = f"{rest / 60:.0f} min" if rest < 3600 else f"{rest / 3600:.1f} h"
             _log.warning(
-                "%s: %d steps in %.0f s; up to max_steps = %d it may take another %s (a smaller --max-steps or a larger --ds-max bounds it; Ctrl-C stops it)",
-                self.label or "the branch", steps - self.s0, elapsed, self.max_steps, minutes,
+                "%s: %d steps in %.0f s, %.3g of the parameter's %.3g to go covered; at that pace it may take another %s "
+                "(a larger --ds-max speeds it; Ctrl-C stops it)",
+                self.label or "the branch", steps - self.s0, elapsed, self.left0 - abs(self.goal - lam), self.left0, minutes,
             )
 
 
@@ -420,10 +439,10 @@ def trace(
         events.append((lambda lam, th: float(np.sum(th)) - total_event, f"the total angle of {float(opts.stop_total_angle_deg):g} deg"))
     beyond = None
     steps = 0
-    clock = _Forecast(opts.max_steps, label)
+    clock = _Forecast(to if to is not None else (hi if first.tangent[-1] >= 0 else lo), label)
     while steps < opts.max_steps:
-        clock.tick(steps)
         a = points[-1]
+        clock.tick(steps, a.lam)
         # a trace that starts on an end of its interval and heads out of it stops there
         outward = (a.lam <= lo and a.tangent[-1] < 0) or (a.lam >= hi and a.tangent[-1] > 0)
         if outward and steps == 0 and (lo < hi):
