@@ -53,8 +53,9 @@ from esba.model.validity import Finding, assess
 from esba.paths.continuation import PathOptions, SpecialPoint
 from esba.paths.loading import Jump
 from esba.solvers.minimise import LINEAR_SOLVERS, minimise
+from esba.solvers.newton import state as compiled_state
 
-from .equilibria import AUTO_MAX_SEGMENTS, MULTISTABILITY, Multistability, check_multistability, not_looked
+from .equilibria import AUTO_MAX_SEGMENTS, MULTISTABILITY, Multistability, SOLVE_CHECK, check_multistability, not_looked, state_of
 from .history import DEFAULT_HISTORY, HistoryError, LoadHistory, _unloaded, history_name, history_steps, load_history
 
 __all__ = [
@@ -459,11 +460,38 @@ def evaluate(
     resolution.check_resolvable(scene, pressure, options.stationarity_tol, DEFAULT_OPTIONS.stationarity_tol)
     theta = _angles("theta", theta, scene.segments)
     full = scene.parameters(pressure)
-    lbx = model.lower_bounds(full)
-    pv = model.param_vector(full)
+    return _assemble(
+        scene, model, theta, pressure, full, model.param_vector(full), model.lower_bounds(full), options,
+        status=status, success=success, iterations=iterations, steps=steps, solve_time_s=solve_time_s, message=message,
+        notes=notes, jumps=jumps, branch_points=branch_points, certificate=certificate,
+    )
+
+
+def _assemble(
+    scene: Scene,
+    model: Model,
+    theta: np.ndarray,
+    pressure: float,
+    full: dict[str, float],
+    pv: np.ndarray,
+    lbx: np.ndarray,
+    options: SolverOptions,
+    *,
+    status: str,
+    success: bool,
+    iterations: int,
+    steps: int,
+    solve_time_s: float,
+    message: str,
+    notes: Sequence[str],
+    jumps: Sequence[Jump],
+    branch_points: Sequence[SpecialPoint],
+    certificate: str,
+) -> Equilibrium:
+    """:func:`evaluate` on checked inputs (``full``, ``pv`` and ``lbx`` the parameters at ``pressure``)."""
     if np.any(theta < lbx):
         raise EquilibriumError(f"theta={np.degrees(theta).round(3).tolist()} deg lies outside the model's domain (Eq. 10)")
-    state = model.state(theta, pv)
+    state = compiled_state(model, theta, pv)
     gnorm = float(np.max(np.abs(state["gradient"])))
     finite = bool(np.all(np.isfinite(state["hessian"])) and np.isfinite(gnorm) and np.isfinite(state["energy"]))
     eig = np.sort(np.linalg.eigvalsh(state["hessian"])) if finite else np.full(scene.segments, np.nan)
@@ -605,10 +633,14 @@ def solve(
             message = f"IPOPT did not converge: {final.status}"
     iterations = final.iterations + (history.iterations if history is not None else 0)
     steps = 1 + (history.points if history is not None else 0)
-    result = evaluate(
+    result = _assemble(
         scene,
+        model,
         final.theta,
         pressure,
+        full,
+        pv_full,
+        lbx,
         options,
         status=status,
         success=success,
@@ -651,4 +683,5 @@ def _multistability(scene: Scene, model: Model, result: Equilibrium, how: str, h
         why = "it buckled at a branch point onto this branch and followed it"
     else:
         why = "it followed one stable branch from the straight, unloaded state"
-    return check_multistability(scene, model, result.pressure, result.theta, how, why)
+    known = state_of(result.theta, result.tip, result.energy, result.eigenvalues, result.gradient_norm, SOLVE_CHECK.critical_tol, "the load history's state")
+    return check_multistability(scene, model, result.pressure, result.theta, how, why, known)
