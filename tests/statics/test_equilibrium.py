@@ -348,3 +348,34 @@ def test_many_segments_converge_toward_the_limit(n):
     _assert_equilibrium(r)
     r8 = solve(MAIN_JOB.replace(segments=8))
     assert abs(r.total_angle_deg - r8.total_angle_deg) < 0.3
+
+
+def test_a_state_the_history_reached_is_certified_without_ipopt_when_its_gradient_and_hessian_show_a_minimiser(monkeypatch):
+    """Issue 31: at the end of the load history the exact gradient and Hessian certify a strict local
+    minimiser (max |dU/dtheta| <= tol, inside the domain, Hessian positive definite), so the default
+    solve calls IPOPT no time (main: once per solve, ~0.2-0.4 ms of its ~1.4 ms). Where they do not
+    (a tol below round-off, a theta0 start) and with certify="ipopt", IPOPT certifies as before, and
+    both certificates give the same state."""
+    from esba.statics import equilibrium as module
+
+    calls = []
+    real = module.minimise
+    monkeypatch.setattr(module, "minimise", lambda *a, **k: calls.append(1) or real(*a, **k))
+    window = Scene(pressure=0.17, payloads=(Payload(2.0, 90.0),))
+    for scene in (MAIN_JOB, window, MAIN_JOB.replace(segments=10)):
+        direct = solve(scene)
+        assert calls == [] and direct.ok and direct.status == "Solve_Succeeded" and direct.iterations > 0
+        assert direct.certificate.startswith("Solve_Succeeded from the exact gradient and Hessian at the path's end")
+        assert direct.gradient_norm <= SolverOptions().tol and direct.eigenvalues[0] > 0
+        ipopt = solve(scene, SolverOptions(certify="ipopt"))
+        assert calls == [1] and ipopt.certificate.startswith("IPOPT Solve_Succeeded")
+        np.testing.assert_allclose(direct.theta, ipopt.theta, rtol=0, atol=1e-12)
+        assert direct.steps == ipopt.steps - 1
+        calls.clear()
+    strict = solve(MAIN_JOB, SolverOptions(tol=1e-20, stationarity_tol=1e-7))  # below round-off: IPOPT decides
+    assert calls == [1] and strict.certificate.startswith("IPOPT")
+    calls.clear()
+    solve(MAIN_JOB, theta0=[0.1, 0.2, 0.3])
+    assert calls == [1]
+    with pytest.raises(SolverOptionsError, match="certify='sometimes'"):
+        SolverOptions(certify="sometimes")
