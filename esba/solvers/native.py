@@ -120,11 +120,12 @@ class Kernel:
     n : int
         The model's segment count (what ``auto`` decides by).
     after : int
-        With ``auto`` and a library not yet in the cache: run interpreted, and compile at the
-        ``after``-th run in this process (0: at once). A kernel that a process calls a few times
-        (a test, one solve) costs no compiler time; one it calls often (a loop of solves, a search)
-        is compiled once and cached for every later process. Which runs are compiled is decided by
-        the count of runs, never by time: the same calls give the same numbers.
+        With ``auto``: run interpreted, and at the ``after``-th run in this process load the
+        library from the cache, or compile it (0: at once). A kernel that a process calls a few
+        times (one ``esba solve``, a test) costs no compiler time and no library check (a child
+        process per library); one it calls often (a loop of solves, a search) is compiled once and
+        cached for every later process. Which runs are compiled is decided by the count of runs,
+        never by time: the same calls give the same numbers.
     """
 
     def __init__(self, fun: ca.Function, compile: str = "auto", n: int = 0, after: int = 0):
@@ -145,6 +146,9 @@ class Kernel:
             self._try_compile(compile, n, after)
 
     def _try_compile(self, mode: str, n: int, after: int = 0) -> None:
+        if mode == "auto" and after > 0:
+            self._after = after  # compiled (or loaded from the cache) once it has run ``after`` times here
+            return
         cc = compiler()
         if cc is None:
             if mode == "always":
@@ -155,9 +159,6 @@ class Kernel:
         lib = cache.root() / "compiled" / f"esba_kernel_{key}.so"
         have = _usable(lib)
         if not worth_compiling(n, have, mode):
-            return
-        if not have and mode == "auto" and after > 0:
-            self._after = after  # compiled once it has run ``after`` times in this process
             return
         name = f"esba_kernel_{key}"
         named = _renamed(self.fun, name)

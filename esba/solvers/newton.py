@@ -257,7 +257,7 @@ def correction_kernel(model: Model) -> Kernel:
     to C when it pays (:class:`esba.solvers.native.Kernel`): one Newton step in about a microsecond
     at small n, where a call through CasADi costs tens. The kernels of a solve are compiled up to
     :data:`SOLVE_COMPILE_MAX_N` segments, once a process has run them
-    :data:`esba.solvers.native.HOT_RUNS` times (or at once when the cache has them)."""
+    :data:`esba.solvers.native.HOT_RUNS` times (then loaded from the cache, or compiled)."""
     return model.derived("correction_kernel", lambda: Kernel(packed(newton_correction(model)), _mode(model), model.n, HOT_RUNS), persist=False)
 
 
