@@ -28,14 +28,16 @@ The search (:class:`EquilibriaOptions`):
   bend by at most ``max_step_deg`` and stays inside the lower bound; an equilibrium that Newton
   reaches beyond ``max_bend_deg`` is counted (``outside``), not listed.
 * **the starts**: the load-history state (inflate, then load; ``solve`` passes the state its own
-  history reached and deflates it from the first round), the straight state theta = 0, the exact
+  history reached and deflates it from the first round instead), the straight state theta = 0, the exact
   unloaded state when the scene gives a target angle, ``theta_starts`` given by the caller, and
   ``starts`` constant-curvature shapes whose total bends span the domain evenly.
 * **rounds**: every start runs ``max_iter`` deflated Newton steps against all equilibria found so
-  far, all starts at once (one call of a compiled CasADi graph: the steps unrolled around the
-  kernel, mapped over the starts; a start that has converged stops moving); what converges is new
-  (distinct starts that reach the same equilibrium count once). The rounds go on until one finds
-  nothing new (beyond :data:`ROUND_ROOTS` equilibria found, in NumPy, one kernel call a step).
+  far (a CasADi graph of ``max_iter`` calls of one step Function around the kernel; a start that
+  has converged stops moving), each start one C call once the kernel is hot (:func:`round_kernel`),
+  else all starts in one call of CasADi's interpreter; what converges is new (distinct starts that
+  reach the same equilibrium count once, the first start in order keeps it). The rounds go on until
+  one finds nothing new (beyond :data:`ROUND_ROOTS` equilibria found, in NumPy, one kernel call a
+  step).
 * **the completeness check**: a second search from fresh starts (constant curvature half-way
   between the first starts, and shapes curved more towards the base or towards the tip over the
   same total bends), deflated by everything found. ``complete`` says whether it found nothing new
@@ -798,7 +800,7 @@ def _with_time(res: Equilibria, seconds: float) -> Equilibria:
 
 #: The search ``solve`` makes by default: fewer starts and iterations than :func:`equilibria`, no
 #: completeness check, no barriers, no history of its own (the state it reached is deflated from
-#: the first round); up to n = 8 it costs about as much as the solve (docs/performance.md).
+#: the first round); each start's round is one C call of microseconds once hot (docs/performance.md).
 SOLVE_CHECK = EquilibriaOptions(starts=9, max_iter=15, history=False, check=False, connect=False)
 #: ``multistability="auto"`` checks up to this many segments: beyond it the search costs
 #: several solves (docs/performance.md, the solve benchmark's "multistability check" rows).
