@@ -699,9 +699,10 @@ def _certify(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, o
     without IPOPT: after the Newton polish (``options.polish``), max |dU/dtheta| <= ``options.tol``,
     every angle strictly inside its domain bound (not within :func:`near_domain_bound` of it) and
     the Hessian positive definite beyond ``options.critical_tol`` (a *stable* verdict). These are
-    the first-order conditions IPOPT would accept there without an iteration (its 0-iteration
-    ``Solve_Succeeded`` from such a start, on an unscaled gradient at most as strict), and the
-    second-order ones it does not check: together, a strict local minimiser. Returns (the point,
+    the first-order conditions IPOPT would accept there without an iteration (its ``Solve_Succeeded``
+    after 0 iterations: IPOPT divides the gradient by a scale of at least 1 before comparing it with
+    ``tol``, so this test is at least as strict), and the second-order ones it does not check:
+    together, a strict local minimiser. Returns (the point,
     its state, the certificate), or None when a condition fails (IPOPT then certifies, as it did
     for every solve before)."""
     point = polish(model, theta, pv, lbx, 4) if options.polish else np.asarray(theta, dtype=float)
