@@ -265,6 +265,9 @@ def multistability_rows(ns: Sequence[int] = MULTISTABILITY_NS, repeat: int = 11,
 
         found = check()
         full = equilibria(scene)
+        if _warm_calls(n) > 1:  # the check's and the search's kernels hot, as solve()'s are
+            warm(check, _warm_calls(n) // 10)
+            warm(lambda: equilibria(scene), 3)
         out.append(
             {
                 "scene": label,
