@@ -421,22 +421,25 @@ def _deflated_newton(kernel, pv: np.ndarray, starts: np.ndarray, roots: np.ndarr
 ROUND_ROOTS = 16
 
 
-def _round_function(model: Model, opts: EquilibriaOptions) -> "ca.Function":
+def _round_function(model: Model, opts: EquilibriaOptions, sx: bool = False) -> "ca.Function":
     """One deflation round from one start: (start n, roots n x K, mask 1 x K, p, lb) -> (theta, |g|,
     iterations), ``opts.max_iter`` deflated Newton steps around the O(n) kernel (as
     :func:`_deflated_newton`; a converged start stops moving); a CasADi graph of ``max_iter`` calls
-    of one step Function, so that its C code (and gcc's time) is that of one step."""
+    of one step Function, so that its C code (and gcc's time) is that of one step. ``sx``: the step
+    with the kernel inlined, scalar by scalar (what C runs fastest); else a graph of matrix
+    operations around a call of the kernel (what CasADi's interpreter runs fastest)."""
     import casadi as ca
 
     def build():
         n, npar = model.n, len(model.parameters)
         kernel = newton_correction(model)
-        x = ca.SX.sym("theta", n)
-        count = ca.SX.sym("iterations")
-        roots = ca.SX.sym("roots", n, ROUND_ROOTS)
-        mask = ca.SX.sym("mask", 1, ROUND_ROOTS)
-        pv = ca.SX.sym("p", npar)
-        low = ca.SX.sym("lb")
+        sym = ca.SX.sym if sx else ca.MX.sym
+        x = sym("theta", n)
+        count = sym("iterations")
+        roots = sym("roots", n, ROUND_ROOTS)
+        mask = sym("mask", 1, ROUND_ROOTS)
+        pv = sym("p", npar)
+        low = sym("lb")
         cap = math.radians(opts.max_step_deg) / math.sqrt(n)
         p, sigma = opts.power, opts.shift
         g, step, _ = kernel(x, pv)
@@ -463,7 +466,7 @@ def _round_function(model: Model, opts: EquilibriaOptions) -> "ca.Function":
         g_end, _, _ = kernel(xs, pv_mx)
         return ca.Function("esba_deflation_round", [x0, roots_mx, mask_mx, pv_mx, low_mx], [xs, ca.mmax(ca.fabs(g_end)), active])
 
-    return model.derived("deflation_round", build, settings=_round_settings(opts), persist=False)
+    return model.derived("deflation_round", build, settings=(*_round_settings(opts), sx), persist=False)
 
 
 def _round_settings(opts: EquilibriaOptions) -> tuple:
@@ -476,7 +479,7 @@ def round_kernel(model: Model, opts: EquilibriaOptions) -> Kernel:
     (:func:`esba.solvers.newton.correction_kernel`): a start's round is then one C call of
     microseconds, where CasADi's interpreter takes hundreds."""
     mode = "auto" if model.n <= SOLVE_COMPILE_MAX_N else "never"
-    return model.derived("deflation_round_kernel", lambda: Kernel(packed(_round_function(model, opts)), mode, model.n, HOT_RUNS), settings=_round_settings(opts), persist=False)
+    return model.derived("deflation_round_kernel", lambda: Kernel(packed(_round_function(model, opts, sx=True)), mode, model.n, HOT_RUNS), settings=_round_settings(opts), persist=False)
 
 
 def _compiled_round(model: Model, pv, starts: np.ndarray, roots: np.ndarray, lb: float, opts: EquilibriaOptions) -> tuple[np.ndarray, np.ndarray, int]:
