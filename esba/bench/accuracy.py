@@ -256,15 +256,15 @@ def tolerance_benchmark(
 ) -> list[dict]:
     """IPOPT's ``tol`` against solve time, iterations and the tip error at a fixed n.
 
-    Polishing is off (it would take every tolerance to round-off) and the stationarity check is
-    loosened, so each row shows what IPOPT alone returns; the error is against the tightest
+    Polishing is off (it would take every tolerance to round-off), IPOPT always certifies
+    (``certify="ipopt"``) and the stationarity check is loosened, so each row shows what IPOPT alone returns; the error is against the tightest
     solve (tol = 1e-12 with polishing) of the same n.
     """
     scene = CASES[case].replace(segments=n)
-    tight = solve(scene, SolverOptions(tol=1e-12, polish=True))
+    tight = solve(scene, SolverOptions(tol=1e-12, polish=True, certify="ipopt"))
     rows = []
     for tol in tolerances:
-        opts = SolverOptions(tol=tol, polish=False, stationarity_tol=1e6)
+        opts = SolverOptions(tol=tol, polish=False, stationarity_tol=1e6, certify="ipopt")
         t, r = _solve_time(scene, repeat, opts)
         rows.append(
             {

@@ -15,6 +15,8 @@ section of ``docs/performance.md`` with :mod:`esba.pages.performance`):
 * loading a model ready to call (n = 100): executing the generated Python file against esba's
   cached form;
 * the command line's wall time (``esba solve --no-plot``, ``esba --help``) in a fresh interpreter;
+* the default ``solve()`` in the bistable window (P = 0.17 MPa under the 2 N horizontal tip payload,
+  n = 3) and ``equilibria()`` at n = 3 and 10 for both scenes, with the targets of issue 31;
 * the multistability check of ``solve()`` (:func:`esba.statics.equilibria.check_multistability`) and
   the full search of every equilibrium (:func:`esba.statics.equilibria.equilibria`: the load history,
   the completeness check, the barriers) for n = 3, 16, 100, for the Table 2 scene and in the bistable
@@ -43,7 +45,7 @@ from esba.statics.equilibrium import pressure_for_angle, solve
 from .accuracy import naive_solve
 from .timing import growth_exponent, median_time
 
-__all__ = ["SOLVE_NS", "MULTISTABILITY_NS", "solve_benchmark", "multistability_rows"]
+__all__ = ["SOLVE_NS", "MULTISTABILITY_NS", "EQUILIBRIA_NS", "TARGETS", "solve_benchmark", "multistability_rows", "warm"]
 
 #: Segment counts of the solve rows (the growth is fitted from 16 to 128).
 SOLVE_NS = (3, 16, 64, 100, 128)
@@ -51,6 +53,38 @@ SOLVE_NS = (3, 16, 64, 100, 128)
 MULTISTABILITY_NS = (3, 16, 100)
 #: The naive BFGS is timed up to this n (one run beyond 16: it may take seconds).
 NAIVE_MAX_N = 128
+#: Segment counts of the equilibria() rows of the main table.
+EQUILIBRIA_NS = (3, 10)
+#: The bistable window: P = 0.17 MPa under the 2 N horizontal tip payload.
+WINDOW = Scene(pressure=0.17, payloads=(Payload(2.0, 90.0),))
+WINDOW_LABEL = "P = 0.17 MPa, 2 N"
+#: The targets of issue 31 (seconds, on a quiet machine, where the naive script takes
+#: :data:`QUIET_NAIVE_S` at n = 3): the call of a row of the main table, and its target.
+TARGETS = (
+    ("solve(), Table 2 scene, n = 3", 1e-3),
+    (f"solve(), {WINDOW_LABEL} (multistable), n = 3", 1.5e-3),
+    ("equilibria(), Table 2 scene, n = 3", 20e-3),
+    (f"equilibria(), {WINDOW_LABEL}, n = 3", 20e-3),
+    ("equilibria(), Table 2 scene, n = 10", 200e-3),
+    (f"equilibria(), {WINDOW_LABEL}, n = 10", 200e-3),
+)
+#: The naive script's time at n = 3 on a quiet machine when the targets were set (issue 31).
+QUIET_NAIVE_S = 4.53e-3
+
+
+def warm(fn: Callable[[], object], calls: int) -> None:
+    """Call ``fn`` ``calls`` times: a warm process, whose kernels have been compiled (or loaded from
+    the cache) once they have run :data:`esba.solvers.native.HOT_RUNS` times."""
+    for _ in range(calls):
+        fn()
+
+
+def _warm_calls(n: int) -> int:
+    """Calls of solve() that make its kernels hot (compiled up to SOLVE_COMPILE_MAX_N segments)."""
+    from esba.solvers.native import HOT_RUNS
+    from esba.solvers.newton import SOLVE_COMPILE_MAX_N
+
+    return HOT_RUNS + 10 if n <= SOLVE_COMPILE_MAX_N else 1
 
 
 def _compiled_ramp(scene: Scene, tmp: str) -> Callable[[], object] | None:
@@ -116,6 +150,7 @@ def solve_benchmark(ns: Sequence[int] = SOLVE_NS, repeat: int = 11, progress=Non
         for n in ns:
             scene = MAIN_JOB.replace(segments=int(n))
             r = solve(scene)
+            warm(lambda: solve(scene), _warm_calls(n))
             esba_s = median_time(lambda: solve(scene), repeat)
             naive_s, naive_result = None, None
             if n <= NAIVE_MAX_N:
@@ -129,6 +164,10 @@ def solve_benchmark(ns: Sequence[int] = SOLVE_NS, repeat: int = 11, progress=Non
             rows.append({"call": f"solve(), Table 2 scene, n = {n}", "n": n, "esba_s": esba_s, "naive_s": naive_s, "compiled_s": compiled_s, "ok": r.ok,
                          "naive_result": naive_result})
             say(f"solve n = {n}")
+        rows.append(_window_row(repeat))
+        say("solve, multistable")
+        rows += _equilibria_rows(repeat)
+        say("equilibria")
     scene = Scene(segments=3)
 
     def stiffness():
@@ -166,7 +205,42 @@ def solve_benchmark(ns: Sequence[int] = SOLVE_NS, repeat: int = 11, progress=Non
     multistability = multistability_rows(repeat=repeat, progress=say)
     solve_rows = [r for r in rows if r["call"].startswith("solve()") and 16 <= r["n"] <= 128]
     growth = growth_exponent([r["n"] for r in solve_rows], [r["esba_s"] for r in solve_rows]) if len(solve_rows) >= 2 else None
-    return {"rows": rows, "growth_16_128": growth, "multistability": multistability}
+    naive3 = next((r["naive_s"] for r in rows if r["call"] == "solve(), Table 2 scene, n = 3"), None)
+    load = None if naive3 is None else naive3 / QUIET_NAIVE_S
+    by_call = {r["call"]: r for r in rows}
+    targets = [{"call": call, "target_s": target, "esba_s": by_call[call]["esba_s"], "load": load} for call, target in TARGETS if call in by_call]
+    return {"rows": rows, "growth_16_128": growth, "multistability": multistability, "targets": targets}
+
+
+def _window_row(repeat: int) -> dict:
+    """The default solve() in the bistable window (n = 3, the check finds the other stable state), and
+    the naive script on the same scene."""
+    r = solve(WINDOW)
+    warm(lambda: solve(WINDOW), _warm_calls(3))
+    esba_s = median_time(lambda: solve(WINDOW), repeat)
+    model, pv = r.model, r.model.param_vector(r.parameters)
+    res = naive_solve(model, pv, 3)
+    error = float(np.linalg.norm(model.tip(res.x, WINDOW.actuator.L)[:2] - r.tip[:2]))
+    naive_s = median_time(lambda: naive_solve(model, pv, 3), repeat)
+    return {"call": f"solve(), {WINDOW_LABEL} (multistable), n = 3", "n": 3, "esba_s": esba_s, "naive_s": naive_s, "compiled_s": None, "ok": r.ok and bool(r.multistable),
+            "naive_result": {"converged": bool(res.success) and error < 1e-3, "tip_error_mm": error, "iterations": int(res.nit)}}
+
+
+def _equilibria_rows(repeat: int) -> list[dict]:
+    """equilibria() of the Table 2 scene and of the bistable window at EQUILIBRIA_NS (warm: its
+    kernels compiled once they have run HOT_RUNS times)."""
+    from esba.statics.equilibria import equilibria
+
+    out = []
+    for label, base in (("Table 2 scene", MAIN_JOB), (WINDOW_LABEL, WINDOW)):
+        for n in EQUILIBRIA_NS:
+            scene = base.replace(segments=int(n))
+            res = equilibria(scene)
+            warm(lambda: equilibria(scene), 3)
+            esba_s = median_time(lambda: equilibria(scene), max(3, repeat // 2))
+            out.append({"call": f"equilibria(), {label}, n = {n}", "n": int(n), "esba_s": esba_s, "naive_s": None, "compiled_s": None, "ok": bool(res.complete),
+                        "states": len(res.states)})
+    return out
 
 
 def multistability_rows(ns: Sequence[int] = MULTISTABILITY_NS, repeat: int = 11, progress=None) -> list[dict]:
@@ -179,10 +253,11 @@ def multistability_rows(ns: Sequence[int] = MULTISTABILITY_NS, repeat: int = 11,
     say = progress or (lambda msg: None)
     out = []
     never = SolverOptions(multistability="never")
-    scenes = (("Table 2 scene", MAIN_JOB), ("P = 0.17 MPa, 2 N", Scene(pressure=0.17, payloads=(Payload(2.0, 90.0),))))
+    scenes = (("Table 2 scene", MAIN_JOB), (WINDOW_LABEL, WINDOW))
     for (label, base), n in ((sc, n) for sc in scenes for n in ns):
         scene = base.replace(segments=int(n))
         r = solve(scene, never)
+        warm(lambda: solve(scene, never), _warm_calls(n))
         model = r.model
 
         def check():
@@ -190,6 +265,9 @@ def multistability_rows(ns: Sequence[int] = MULTISTABILITY_NS, repeat: int = 11,
 
         found = check()
         full = equilibria(scene)
+        if _warm_calls(n) > 1:  # the check's and the search's kernels hot, as solve()'s are
+            warm(check, _warm_calls(n) // 10)
+            warm(lambda: equilibria(scene), 3)
         out.append(
             {
                 "scene": label,

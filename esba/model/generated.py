@@ -316,8 +316,15 @@ class Model:
         ``points`` (as the single-purpose methods return them).
         """
         p = params if isinstance(params, np.ndarray) else self.param_vector(params)
-        fun = self.derived("state", self._build_state, builder_files=(__file__,))
-        u, terms, g, h, tip, points = fun(np.asarray(theta, dtype=float), p)
+        u, terms, g, h, tip, points = self.state_function()(np.asarray(theta, dtype=float), p)
+        return self.state_dict(u, terms, g, h, tip, points)
+
+    def state_function(self) -> ca.Function:
+        """(theta, p) -> U, its terms, gradient, Hessian, tip, points: what :meth:`state` calls."""
+        return self.derived("state", self._build_state, builder_files=(__file__,))
+
+    def state_dict(self, u, terms, g, h, tip, points) -> dict[str, np.ndarray | float | dict]:
+        """The outputs of :meth:`state_function` as :meth:`state` returns them."""
         return {
             "energy": float(u),
             "terms": dict(zip(self.terms, map(float, np.asarray(terms).ravel()))),

@@ -166,7 +166,7 @@ def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = 
         "the model (cold, SymPy, done once per n and then cached; the n = 1 row also pays for importing",
         "SymPy once); load = build its CasADi Functions from the freshly written file (warm; later loads",
         "read CasADi's serialised Functions from the model cache, see performance.md); solve = one equilibrium",
-        "with `esba.statics.equilibrium.solve` (the load path followed, the end state certified by IPOPT; median);",
+        "with `esba.statics.equilibrium.solve` (the load path followed, the end state certified a minimiser; median);",
         "Hessian condition = largest / smallest eigenvalue of the Hessian at the equilibrium.",
         "",
     ]
@@ -262,7 +262,7 @@ def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = 
         "Naive: `scipy.optimize.minimize(U, zeros(n), method=\"BFGS\")` with finite-difference",
         "gradients, on the same generated energy at the same pressure. esba: `esba.statics.equilibrium.solve`",
         "(the load ramp as one compiled Newton continuation on the exact gradient and Hessian, a path",
-        "trace where it meets a fold, one IPOPT solve that certifies the end state, the stability",
+        "trace where it meets a fold, the certificate of the end state (IPOPT's when needed), the stability",
         "check), and the same without continuation (one IPOPT solve from the unloaded state).",
         "",
         "| n | naive | U evaluations | naive says converged | naive tip error (mm) | esba solve | naive / esba | esba, one IPOPT solve | naive / that |",
@@ -278,8 +278,8 @@ def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = 
     lines += [
         "",
         "One solve at a time, the naive script is not far behind at small n: a few dozen energy",
-        "evaluations cost little more than esba's fixed costs per call (IPOPT's set-up, the certifying",
-        "solve, the stability check). What the naive script lacks is shown by its error column"
+        "evaluations cost little more than esba's fixed costs per call (the certificate, the multistability",
+        "check, the stability verdict). What the naive script lacks is shown by its error column"
         + (
             ": " + ", ".join(f"at n = {r['n']} it stops {r['naive_tip_error_mm']:.2g} mm from the equilibrium" + ("" if r["naive_success"] else " (and says so)") for r in wrong)
             if wrong

@@ -283,42 +283,61 @@ def path_bytes(max_steps: int, n: int, traces: int = PATH_TRACES) -> int:
     return int(max_steps) * int(traces) * (POINT_BYTES[0] + POINT_BYTES[1] * int(n))
 
 
-#: After this many seconds a trace says how long its max_steps could take, when that is more than
-#: :data:`FORECAST_AT_LEAST` seconds (as a sweep's size is checked up front; a path's step count
-#: is not known until it runs).
+#: After this many seconds a trace says how long the rest of its interval may take, when that is
+#: more than :data:`FORECAST_AT_LEAST` seconds (as a sweep's size is checked up front; a path's step
+#: count is not known until it runs).
 FORECAST_AFTER = 2.0
 FORECAST_AT_LEAST = 60.0
 
 
 class _Forecast:
-    """Says once, on the ``esba`` logger, how long the rest of a trace's ``max_steps`` could take
-    at the pace of its steps over :data:`FORECAST_AFTER` seconds (a million steps of 1e-6 is minutes).
-    The pace is taken from the end of the first step on: the first pays one-off costs (a model's
-    kernels compiled to C on first use) that the rest do not."""
+    """Says once, on the ``esba`` logger, how long the rest of a trace may take: the parameter
+    distance left to its end (``to``, else the end of its interval it heads for) at the pace it
+    has come nearer that end so far (distance per second, over :data:`FORECAST_AFTER` seconds or
+    more). ``max_steps`` is a cap, not a forecast: a trace that reaches its end in a few hundred
+    steps does not take the time of two thousand. The pace is taken from the end of the first step
+    on: the first pays one-off costs (a model's kernels compiled to C on first use) that the rest do
+    not. A trace that has not come nearer its end yet (it turned back at a fold) says nothing until
+    it has. ``clock`` is the time source (seconds)."""
 
-    def __init__(self, max_steps: int, label: str) -> None:
-        self.max_steps, self.label = max_steps, label
+    def __init__(self, goal: float, label: str, clock: Callable[[], float] | None = None) -> None:
+        self.goal, self.label = float(goal), label
+        self.clock = time.perf_counter if clock is None else clock
         self.t0: float | None = None
         self.s0 = 0
+        self.left0 = math.inf
         self.done = False
 
-    def tick(self, steps: int) -> None:
+    def remaining_s(self, lam: float, now: float) -> float | None:
+        """Seconds the rest may take from ``lam`` at ``now`` (None: no pace yet)."""
+        if self.t0 is None or now <= self.t0:
+            return None
+        left = abs(self.goal - lam)
+        covered = self.left0 - left
+        if not covered > 0:
+            return None
+        return left * (now - self.t0) / covered
+
+    def tick(self, steps: int, lam: float) -> None:
         if self.done or steps == 0:
             return
-        now = time.perf_counter()
+        now = self.clock()
         if self.t0 is None:
-            self.t0, self.s0 = now, steps
+            self.t0, self.s0, self.left0 = now, steps, abs(self.goal - lam)
             return
         elapsed = now - self.t0
         if elapsed < FORECAST_AFTER or steps <= self.s0:
             return
+        rest = self.remaining_s(lam, now)
+        if rest is None:
+            return
         self.done = True
-        rest = (self.max_steps - steps) * elapsed / (steps - self.s0)
         if rest >= FORECAST_AT_LEAST:
             minutes = f"{rest / 60:.0f} min" if rest < 3600 else f"{rest / 3600:.1f} h"
             _log.warning(
-                "%s: %d steps in %.0f s; up to max_steps = %d it may take another %s (a smaller --max-steps or a larger --ds-max bounds it; Ctrl-C stops it)",
-                self.label or "the branch", steps - self.s0, elapsed, self.max_steps, minutes,
+                "%s: %d steps in %.0f s, %.3g of the parameter's %.3g to go covered; at that pace it may take another %s "
+                "(a larger --ds-max speeds it; Ctrl-C stops it)",
+                self.label or "the branch", steps - self.s0, elapsed, self.left0 - abs(self.goal - lam), self.left0, minutes,
             )
 
 
@@ -420,10 +439,10 @@ def trace(
         events.append((lambda lam, th: float(np.sum(th)) - total_event, f"the total angle of {float(opts.stop_total_angle_deg):g} deg"))
     beyond = None
     steps = 0
-    clock = _Forecast(opts.max_steps, label)
+    clock = _Forecast(to if to is not None else (hi if first.tangent[-1] >= 0 else lo), label)
     while steps < opts.max_steps:
-        clock.tick(steps)
         a = points[-1]
+        clock.tick(steps, a.lam)
         # a trace that starts on an end of its interval and heads out of it stops there
         outward = (a.lam <= lo and a.tangent[-1] < 0) or (a.lam >= hi and a.tangent[-1] > 0)
         if outward and steps == 0 and (lo < hi):
@@ -695,6 +714,11 @@ def _spectrum_of(problem: PathProblem, theta: np.ndarray, lam: np.ndarray, known
 
 #: Upper bound of Natural's counts (each step is unrolled into the compiled graph).
 MAX_NATURAL_STEPS = 1_000
+#: A natural ramp refused with every Hessian it met positive definite is run once more with this
+#: many times its steps (no fold on the way, only steps too long for its Newton iterations: a
+#: strongly bent branch under a load ramp); 16 steps are a C call of tens of microseconds, where
+#: the pseudo-arclength trace that follows a refusal takes a millisecond.
+FINER = 4
 
 
 @dataclass(frozen=True)
@@ -703,7 +727,8 @@ class Natural:
     ``newton`` Newton corrections (``final`` more at the end), O(n) per step and one compiled call
     per ramp (:func:`esba.solvers.newton.natural_function`). It cannot pass a fold: the branch it
     returns is accepted by :class:`esba.solvers.newton.Acceptance` (stationary, positive definite
-    all the way, every step contracting) or ``stopped == "refused"`` with the reason.
+    all the way, every step contracting) or ``stopped == "refused"`` with the reason. A ramp refused
+    while positive definite all the way is run once more with :data:`FINER` times the steps.
 
     >>> Natural().steps
     4
@@ -797,6 +822,12 @@ def natural_branch(problem: PathProblem, theta0: np.ndarray, lam0: float, to: fl
     """:func:`continuation` with :class:`Natural` on checked inputs (``theta0`` the equilibrium at ``lam0``)."""
     model = problem.model
     run = run_natural(model, theta0, problem.params(lam0), problem.dp, to - lam0, alg.steps, alg.newton, alg.final)
+    finite = bool(np.all(np.isfinite(run.theta)) and np.all(np.isfinite(run.states)))
+    if alg.steps < MAX_NATURAL_STEPS and finite and alg.acceptance.why_not(run.gradient_norm, run.min_pivot, run.contraction, True, run.jump) and run.min_pivot > alg.acceptance.critical_tol:
+        # refused with every Hessian it met positive definite: its steps were too long for Newton to
+        # contract, or a corrector went farther than its predictor; FINER times the steps, same rule
+        alg = replace(alg, steps=min(alg.steps * FINER, MAX_NATURAL_STEPS))
+        run = run_natural(model, theta0, problem.params(lam0), problem.dp, to - lam0, alg.steps, alg.newton, alg.final)
     lam = lam0 + (to - lam0) * np.arange(alg.steps + 1) / alg.steps
     theta = np.vstack([theta0[None, :], run.states])
     theta[-1] = run.theta

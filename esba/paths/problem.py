@@ -33,7 +33,7 @@ from esba.infra.errors import InputError
 from esba.model.closed_form import pressure_for_angle
 from esba.model.generated import Model, domain_lower_bound
 from esba.model.scene import Scene, SceneError
-from esba.solvers.native import Kernel
+from esba.solvers.native import Kernel, packed
 
 __all__ = ["PathError", "PathProblem", "PARAMETERS", "ghl_function", "fold_function"]
 
@@ -155,12 +155,8 @@ def _packed_kernel(model: Model, which: str):
 
     def build():
         fun = ghl_function(model) if which == "ghl" else fold_function(model)
-        ins = [ca.MX.sym(fun.name_in(i), fun.sparsity_in(i)) for i in range(fun.n_in())]
-        z = ca.vertcat(*[ca.vec(a) for a in ins])
-        outs = fun(*ins)
-        packed = ca.Function(f"esba_path_{which}_packed", [z], [ca.vertcat(*[ca.vec(ca.densify(o)) for o in outs])])
         mode = "auto" if model.n <= DENSE_COMPILE_MAX_N else "never"
-        return Kernel(packed, mode, model.n)
+        return Kernel(packed(fun, f"esba_path_{which}_packed"), mode, model.n)
 
     return model.derived(f"path_{which}_kernel", build, persist=False)
 

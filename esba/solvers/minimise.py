@@ -28,7 +28,7 @@ import numpy as np
 
 from esba.model.generated import Model
 
-from .newton import newton_correction
+from .newton import correction_kernel
 
 __all__ = ["Minimum", "minimise", "ipopt_solver", "LINEAR_SOLVERS"]
 
@@ -98,20 +98,23 @@ class Minimum:
 def polish(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, steps: int = 4) -> np.ndarray:
     """A few Newton steps on the exact Hessian while it is positive definite, inside the domain and
     each step reduces max |dU/dtheta| (one call per step: g, the step and the smallest pivot, solved
-    in O(n) from the Hessian's structure, :func:`esba.solvers.newton.newton_correction`)."""
-    correction = newton_correction(model)
-    g, step, pivot = (v.full().ravel() for v in correction(theta, pv))
+    in O(n) from the Hessian's structure, :func:`esba.solvers.newton.correction_kernel`)."""
+    kernel = correction_kernel(model)
+    n = len(theta)
+    z = np.concatenate([theta, np.asarray(pv, dtype=float).ravel()])
+    out = kernel(z)
     for _ in range(steps):
-        gnorm = float(np.max(np.abs(g)))
-        if not gnorm >= 1e-13 or not pivot[0] > 0:  # stationary to round-off, not finite, or not convex here
+        gnorm = float(np.max(np.abs(out[:n])))
+        if not gnorm >= 1e-13 or not out[2 * n] > 0:  # stationary to round-off, not finite, or not convex here
             break
-        new = theta - step
+        new = theta - out[n : 2 * n]
         if np.any(new <= lbx) or not np.all(np.isfinite(new)):
             break
-        g2, step2, pivot2 = (v.full().ravel() for v in correction(new, pv))
-        if not float(np.max(np.abs(g2))) < gnorm:
+        z[:n] = new
+        out2 = kernel(z)
+        if not float(np.max(np.abs(out2[:n]))) < gnorm:
             break
-        theta, g, step, pivot = new, g2, step2, pivot2
+        theta, out = new, out2
     return theta
 
 

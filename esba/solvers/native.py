@@ -43,7 +43,7 @@ import numpy as np
 from esba.infra import cache
 from esba.infra.errors import InputError
 
-__all__ = ["Kernel", "compiler", "compile_library", "worth_compiling", "COMPILE_MODES", "AUTO_COMPILE_MAX_N"]
+__all__ = ["Kernel", "packed", "HOT_RUNS", "compiler", "compile_library", "worth_compiling", "COMPILE_MODES", "AUTO_COMPILE_MAX_N"]
 
 _log = logging.getLogger("esba.solvers.native")
 
@@ -54,6 +54,10 @@ COMPILE_MODES = ("auto", "always", "never")
 #: the cache): at n = 100 gcc takes about 3 s at -O0 for a corrector step 2.6x faster than CasADi's
 #: interpreter (MEASUREMENTS.md: compile time grows with the generated code).
 AUTO_COMPILE_MAX_N = 128
+#: The ``after`` of the kernels of a solve and of the search for equilibria (:class:`Kernel`): the
+#: runs of an interpreted kernel after which it is compiled (about a hundred solves, or a search of
+#: every equilibrium at n = 3; a first run then costs no compiler time).
+HOT_RUNS = 200
 #: Up to this n kernels are compiled with -O1 (well under a second at n = 3, 13 s at n = 100 for a
 #: corrector step 2.6x faster than -O0's); above it with -O0 (3.4 s at n = 100).
 O1_MAX_N = 128
@@ -115,9 +119,16 @@ class Kernel:
         ``auto`` (compiled when :func:`worth_compiling` says so), ``always`` or ``never``.
     n : int
         The model's segment count (what ``auto`` decides by).
+    after : int
+        With ``auto``: run interpreted, and at the ``after``-th run in this process load the
+        library from the cache, or compile it (0: at once). A kernel that a process calls a few
+        times (one ``esba solve``, a test) costs no compiler time and no library check (a child
+        process per library); one it calls often (a loop of solves, a search) is compiled once and
+        cached for every later process. Which runs are compiled is decided by the count of runs,
+        never by time: the same calls give the same numbers.
     """
 
-    def __init__(self, fun: ca.Function, compile: str = "auto", n: int = 0):
+    def __init__(self, fun: ca.Function, compile: str = "auto", n: int = 0, after: int = 0):
         if compile not in COMPILE_MODES:
             raise InputError(f"compile={compile!r}: allowed are {', '.join(COMPILE_MODES)}")
         if fun.n_in() != 1 or fun.n_out() != 1:
@@ -127,10 +138,17 @@ class Kernel:
         self.size_out = fun.nnz_out(0)
         self.compiled = False
         self._local = threading.local()
+        self._n = n
+        self._after = 0  # > 0: compile at this run (counted in _runs), unless the cache had it
+        self._runs = 0
+        self._lock = threading.Lock()
         if compile != "never":
-            self._try_compile(compile, n)
+            self._try_compile(compile, n, after)
 
-    def _try_compile(self, mode: str, n: int) -> None:
+    def _try_compile(self, mode: str, n: int, after: int = 0) -> None:
+        if mode == "auto" and after > 0:
+            self._after = after  # compiled (or loaded from the cache) once it has run ``after`` times here
+            return
         cc = compiler()
         if cc is None:
             if mode == "always":
@@ -162,6 +180,18 @@ class Kernel:
         self._sizes = (named.sz_arg(), named.sz_res(), named.sz_iw(), named.sz_w())
         self.compiled = True
 
+    def count(self, runs: int = 1) -> None:
+        """Count ``runs`` more interpreted runs (:meth:`run` counts its own; a caller that ran the
+        same Function another way, e.g. mapped over many inputs, counts them here); at the
+        ``after``-th, compile (a one-off cost, then cached)."""
+        with self._lock:
+            if not self._after:
+                return
+            self._runs += runs
+            if self._runs >= self._after:
+                self._after = 0
+                self._try_compile("auto", self._n)
+
     def _buffers(self):
         b = getattr(self._local, "b", None)
         if b is None:
@@ -183,6 +213,8 @@ class Kernel:
 
     def run(self, z: np.ndarray) -> np.ndarray:
         """The output vector for ``z``, in a buffer the next call overwrites (copy what you keep)."""
+        if not self.compiled and self._after:
+            self.count()
         if not self.compiled:
             with np.errstate(all="ignore"):
                 return np.asarray(self.fun(z), dtype=float).ravel()
@@ -191,6 +223,16 @@ class Kernel:
         if self._c(args, res, iw, w, 0) != 0:
             out[:] = np.nan
         return out
+
+
+def packed(fun: ca.Function, name: str | None = None) -> ca.Function:
+    """``fun`` with its inputs packed into one vector and its outputs into another (each input and
+    output column-major, densified, in order): what a :class:`Kernel` takes."""
+    ins = [ca.MX.sym(fun.name_in(i), fun.sparsity_in(i)) for i in range(fun.n_in())]
+    z = ca.vertcat(*[ca.vec(a) for a in ins])
+    outs = fun(*ins)
+    outs = outs if isinstance(outs, (list, tuple)) else [outs]
+    return ca.Function(name or f"{fun.name()}_packed", [z], [ca.vertcat(*[ca.vec(ca.densify(o)) for o in outs])])
 
 
 def _renamed(fun: ca.Function, name: str) -> ca.Function:

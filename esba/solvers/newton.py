@@ -52,6 +52,7 @@ from esba.model import structured
 from esba.model.generated import Model, domain_lower_bound
 from esba.model.stability import CRITICAL_TOL
 from esba.model.structured import matvec_sx, pivots_sx, solve_sx
+from esba.solvers.native import HOT_RUNS, Kernel, packed
 
 __all__ = [
     "Acceptance",
@@ -62,11 +63,16 @@ __all__ = [
     "NaturalRun",
     "run_natural",
     "natural_function",
+    "natural_kernel",
     "natural_expression",
     "newton_parts",
     "parts_function",
     "correction_function",
     "newton_correction",
+    "correction_kernel",
+    "SOLVE_COMPILE_MAX_N",
+    "state_kernel",
+    "state",
     "bordered_function",
     "bordered_layout",
     "critical_function",
@@ -87,6 +93,10 @@ TINY = 1e-10
 #: the predictor followed (stepped over a fold onto another stable branch, with every pivot positive
 #: and its Newton iteration contracting).
 JUMP = 1.0
+#: The kernels of a solve and of the search for equilibria are compiled up to this n: gcc's time
+#: grows with the generated Hessian (seconds at n = 10, a minute at n = 32), a solve's share in
+#: these kernels falls (at n = 16 a solve takes 1.6 ms).
+SOLVE_COMPILE_MAX_N = 16
 #: Newton iterations of one call of the bordered corrector (a corrector that needs more calls again).
 BORDERED_ITERATIONS = 4
 
@@ -242,6 +252,38 @@ def newton_correction(model: Model) -> ca.Function:
     return model.derived("newton_correction", build, builder_files=(__file__, structured.__file__))
 
 
+def correction_kernel(model: Model) -> Kernel:
+    """:func:`newton_correction` packed, (theta, p) -> [g, H^-1 g, smallest relative pivot], compiled
+    to C when it pays (:class:`esba.solvers.native.Kernel`): one Newton step in about a microsecond
+    at small n, where a call through CasADi costs tens. The kernels of a solve are compiled up to
+    :data:`SOLVE_COMPILE_MAX_N` segments, once a process has run them
+    :data:`esba.solvers.native.HOT_RUNS` times (then loaded from the cache, or compiled)."""
+    return model.derived("correction_kernel", lambda: Kernel(packed(newton_correction(model)), _mode(model), model.n, HOT_RUNS), persist=False)
+
+
+def _mode(model: Model) -> str:
+    """How the kernels of a solve run: compiled when they pay (``auto``) up to :data:`SOLVE_COMPILE_MAX_N` segments."""
+    return "auto" if model.n <= SOLVE_COMPILE_MAX_N else "never"
+
+
+def state_kernel(model: Model) -> Kernel:
+    """:meth:`esba.model.generated.Model.state_function` packed, compiled to C when it pays (up to
+    :data:`NATURAL_COMPILE_MAX_N` segments: its outputs are n x n)."""
+
+    def build() -> Kernel:
+        return Kernel(packed(model.state_function()), _mode(model), model.n, HOT_RUNS)
+
+    return model.derived("state_kernel", build, persist=False)
+
+
+def state(model: Model, theta: np.ndarray, pv: np.ndarray) -> dict:
+    """:meth:`esba.model.generated.Model.state` through :func:`state_kernel` (the same numbers to round-off)."""
+    n, k = model.n, len(model.terms)
+    out = state_kernel(model)(np.concatenate([np.asarray(theta, dtype=float).ravel(), np.asarray(pv, dtype=float).ravel()]))
+    a = 1 + k + n
+    return model.state_dict(out[0], out[1 : 1 + k], out[1 + k : a], out[a : a + n * n].reshape(n, n, order="F"), out[a + n * n : a + n * n + 3], out[a + n * n + 3 :].reshape(2, n + 1, order="F"))
+
+
 # ---------------------------------------------------------------------------------------------
 # natural-parameter continuation
 
@@ -336,15 +378,32 @@ class NaturalRun:
 
 def run_natural(model: Model, theta0: np.ndarray, p0: np.ndarray, dp: np.ndarray, lam1: float, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL) -> NaturalRun:
     """Ramp lambda from 0 to ``lam1`` from the equilibrium ``theta0`` at lambda = 0 (see the module)."""
-    fun = natural_function(model, steps, newton, final)
+    kernel = natural_kernel(model, steps, newton, final)
+    n = model.n
+    z = np.concatenate([np.asarray(theta0, dtype=float).ravel(), np.asarray(p0, dtype=float).ravel(), np.asarray(dp, dtype=float).ravel(), [float(lam1)]])
     with np.errstate(invalid="ignore"):
-        theta, g, low, worst, states, jump = fun(np.asarray(theta0, dtype=float), p0, dp, float(lam1))
-    theta = theta.full().ravel()
-    g = g.full().ravel()
+        out = kernel(z)
+    theta, g = out[:n], out[n : 2 * n]
+    low, worst = out[2 * n], out[2 * n + 1]
+    states = out[2 * n + 2 : 2 * n + 2 + n * steps].reshape(steps, n)  # column-major n x steps: a row per step
+    jump = out[2 * n + 2 + n * steps]
     gnorm = float(np.max(np.abs(g)))
     if not gnorm < math.inf:
         gnorm = math.inf
-    return NaturalRun(theta, gnorm, float(low), float(worst), states.full().T, float(jump))
+    return NaturalRun(theta, gnorm, float(low), float(worst), states, float(jump))
+
+
+
+
+def natural_kernel(model: Model, steps: int = STEPS, newton: int = NEWTON, final: int = FINAL) -> Kernel:
+    """:func:`natural_function` packed (input [theta0, p0, dp, lam1], output [theta, g, min_pivot,
+    contraction, states (n x steps, column-major), jump]), compiled to C when it pays (see
+    :func:`correction_kernel`): a solve's load ramp in one C call."""
+
+    def build() -> Kernel:
+        return Kernel(packed(natural_function(model, steps, newton, final)), _mode(model), model.n, HOT_RUNS)
+
+    return model.derived("natural_kernel", build, settings=(steps, newton, final), persist=False)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -28,14 +28,16 @@ The search (:class:`EquilibriaOptions`):
   bend by at most ``max_step_deg`` and stays inside the lower bound; an equilibrium that Newton
   reaches beyond ``max_bend_deg`` is counted (``outside``), not listed.
 * **the starts**: the load-history state (inflate, then load; ``solve`` passes the state its own
-  history reached and deflates it from the first round), the straight state theta = 0, the exact
+  history reached and deflates it from the first round instead), the straight state theta = 0, the exact
   unloaded state when the scene gives a target angle, ``theta_starts`` given by the caller, and
   ``starts`` constant-curvature shapes whose total bends span the domain evenly.
 * **rounds**: every start runs ``max_iter`` deflated Newton steps against all equilibria found so
-  far, all starts at once (one call of a compiled CasADi graph: the steps unrolled around the
-  kernel, mapped over the starts; a start that has converged stops moving); what converges is new
-  (distinct starts that reach the same equilibrium count once). The rounds go on until one finds
-  nothing new (beyond :data:`ROUND_ROOTS` equilibria found, in NumPy, one kernel call a step).
+  far (a CasADi graph of ``max_iter`` calls of one step Function around the kernel; a start that
+  has converged stops moving), each start one C call once the kernel is hot (:func:`round_kernel`),
+  else all starts in one call of CasADi's interpreter; what converges is new (distinct starts that
+  reach the same equilibrium count once, the first start in order keeps it). The rounds go on until
+  one finds nothing new (beyond :data:`ROUND_ROOTS` equilibria found, in NumPy, one kernel call a
+  step).
 * **the completeness check**: a second search from fresh starts (constant curvature half-way
   between the first starts, and shapes curved more towards the base or towards the tip over the
   same total bends), deflated by everything found. ``complete`` says whether it found nothing new
@@ -77,11 +79,13 @@ from esba.model.generated import Model
 from esba.model.scene import Scene, SceneError
 from esba.model.stability import CRITICAL_TOL, stability_verdict
 from esba.model.validity import assess
-from esba.solvers.newton import newton_correction
+from esba.solvers.native import HOT_RUNS, Kernel, packed
+from esba.solvers.newton import SOLVE_COMPILE_MAX_N, correction_kernel, newton_correction
+from esba.solvers.newton import state as compiled_state
 
 from .history import load_history
 
-__all__ = ["EquilibriaOptions", "EquilibriaOptionsError", "Equilibria", "State", "Barrier", "equilibria", "search"]
+__all__ = ["EquilibriaOptions", "EquilibriaOptionsError", "Equilibria", "State", "Barrier", "equilibria", "search", "state_of", "round_kernel"]
 
 
 class EquilibriaOptionsError(InputError):
@@ -453,57 +457,90 @@ def _deflated_newton(kernel, pv: np.ndarray, starts: np.ndarray, roots: np.ndarr
 ROUND_ROOTS = 16
 
 
-def _round_function(model: Model, opts: EquilibriaOptions, lb: float, columns: int):
-    """One deflation round compiled: (starts n x m, roots n x K, mask 1 x K, p) -> (theta, |g|, iterations),
-    ``opts.max_iter`` deflated Newton steps unrolled around the O(n) kernel (as :func:`_deflated_newton`,
-    a converged column stops moving), mapped over the m columns; a CasADi graph, one call from Python."""
+def _round_function(model: Model, opts: EquilibriaOptions, sx: bool = False) -> "ca.Function":
+    """One deflation round from one start: (start n, roots n x K, mask 1 x K, p, lb) -> (theta, |g|,
+    iterations), ``opts.max_iter`` deflated Newton steps around the O(n) kernel (as
+    :func:`_deflated_newton`; a converged start stops moving); a CasADi graph of ``max_iter`` calls
+    of one step Function, so that its C code (and gcc's time) is that of one step. ``sx``: the step
+    with the kernel inlined, scalar by scalar (what C runs fastest); else a graph of matrix
+    operations around a call of the kernel (what CasADi's interpreter runs fastest)."""
     import casadi as ca
 
     def build():
         n, npar = model.n, len(model.parameters)
         kernel = newton_correction(model)
-        x0 = ca.MX.sym("theta", n)
-        roots = ca.MX.sym("roots", n, ROUND_ROOTS)
-        mask = ca.MX.sym("mask", 1, ROUND_ROOTS)
-        pv = ca.MX.sym("p", npar)
-        low = ca.MX.sym("lb")
+        sym = ca.SX.sym if sx else ca.MX.sym
+        x = sym("theta", n)
+        count = sym("iterations")
+        roots = sym("roots", n, ROUND_ROOTS)
+        mask = sym("mask", 1, ROUND_ROOTS)
+        pv = sym("p", npar)
+        low = sym("lb")
         cap = math.radians(opts.max_step_deg) / math.sqrt(n)
         p, sigma = opts.power, opts.shift
-        x = x0
-        active = ca.MX(0)
+        g, step, _ = kernel(x, pv)
+        gnorm = ca.mmax(ca.fabs(g))
+        delta = -step
+        e = ca.repmat(x, 1, ROUND_ROOTS) - roots
+        d2 = ca.fmax(ca.sum1(e * e), 1e-300)
+        w = mask * (-p * d2 ** (-p / 2 - 1)) / (d2 ** (-p / 2) + sigma)
+        denom = 1 - ca.dot(ca.mtimes(e, w.T), delta)
+        delta = delta / ca.if_else(ca.fabs(denom) > 1e-12, denom, 1.0)
+        scale = ca.fmin(1.0, cap / ca.fmax(ca.norm_2(delta), 1e-300))
+        frac = ca.if_else(delta < 0, 0.9 * (x - low) / ca.fmax(-delta, 1e-300), 1e300)
+        scale = ca.fmin(scale, ca.mmin(frac))
+        moving = gnorm > opts.tol
+        one = ca.Function("esba_deflation_step", [x, count, roots, mask, pv, low], [ca.if_else(moving, x + scale * delta, x), count + moving])
+        x0 = ca.MX.sym("theta", n)
+        roots_mx = ca.MX.sym("roots", n, ROUND_ROOTS)
+        mask_mx = ca.MX.sym("mask", 1, ROUND_ROOTS)
+        pv_mx = ca.MX.sym("p", npar)
+        low_mx = ca.MX.sym("lb")
+        xs, active = x0, ca.MX(0)
         for _ in range(opts.max_iter):
-            g, step, _ = kernel(x, pv)
-            gnorm = ca.mmax(ca.fabs(g))
-            delta = -step
-            e = ca.repmat(x, 1, ROUND_ROOTS) - roots
-            d2 = ca.fmax(ca.sum1(e * e), 1e-300)
-            w = mask * (-p * d2 ** (-p / 2 - 1)) / (d2 ** (-p / 2) + sigma)
-            denom = 1 - ca.dot(ca.mtimes(e, w.T), delta)
-            delta = delta / ca.if_else(ca.fabs(denom) > 1e-12, denom, 1.0)
-            scale = ca.fmin(1.0, cap / ca.fmax(ca.norm_2(delta), 1e-300))
-            frac = ca.if_else(delta < 0, 0.9 * (x - low) / ca.fmax(-delta, 1e-300), 1e300)
-            scale = ca.fmin(scale, ca.mmin(frac))
-            moving = gnorm > opts.tol
-            x = ca.if_else(moving, x + scale * delta, x)
-            active = active + moving
-        g, _, _ = kernel(x, pv)
-        one = ca.Function("esba_deflation_round", [x0, roots, mask, pv, low], [x, ca.mmax(ca.fabs(g)), active])
-        return one.map(columns, "serial")
+            xs, active = one(xs, active, roots_mx, mask_mx, pv_mx, low_mx)
+        g_end, _, _ = kernel(xs, pv_mx)
+        return ca.Function("esba_deflation_round", [x0, roots_mx, mask_mx, pv_mx, low_mx], [xs, ca.mmax(ca.fabs(g_end)), active])
 
-    return model.derived("deflation_round", build, settings=(opts.max_iter, opts.max_step_deg, opts.power, opts.shift, opts.tol, ROUND_ROOTS, columns), persist=False)
+    return model.derived("deflation_round", build, settings=(*_round_settings(opts), sx), persist=False)
+
+
+def _round_settings(opts: EquilibriaOptions) -> tuple:
+    return (opts.max_iter, opts.max_step_deg, opts.power, opts.shift, opts.tol, ROUND_ROOTS)
+
+
+def round_kernel(model: Model, opts: EquilibriaOptions) -> Kernel:
+    """:func:`_round_function` with its inputs and outputs packed, compiled to C when a compiler is
+    found (:class:`esba.solvers.native.Kernel`, cached on disk), as the kernels of a solve are
+    (:func:`esba.solvers.newton.correction_kernel`): a start's round is then one C call of
+    microseconds, where CasADi's interpreter takes hundreds."""
+    mode = "auto" if model.n <= SOLVE_COMPILE_MAX_N else "never"
+    return model.derived("deflation_round_kernel", lambda: Kernel(packed(_round_function(model, opts, sx=True)), mode, model.n, HOT_RUNS), settings=_round_settings(opts), persist=False)
 
 
 def _compiled_round(model: Model, pv, starts: np.ndarray, roots: np.ndarray, lb: float, opts: EquilibriaOptions) -> tuple[np.ndarray, np.ndarray, int]:
-    """:func:`_deflated_newton` as one call of :func:`_round_function` (up to :data:`ROUND_ROOTS` roots)."""
+    """:func:`_deflated_newton` with up to :data:`ROUND_ROOTS` roots: each start one call of
+    :func:`round_kernel` (C), or every start in one call of the interpreted graph mapped over them."""
     m, n = starts.shape
-    fun = _round_function(model, opts, lb, m)
     padded = np.zeros((n, ROUND_ROOTS))
     mask = np.zeros((1, ROUND_ROOTS))
     padded[:, : len(roots)] = np.asarray(roots).T if len(roots) else 0.0
     mask[0, : len(roots)] = 1.0
-    x, gnorm, active = fun(starts.T, padded, mask, pv, lb)
-    x = np.asarray(x).reshape(n, m).T
-    gnorm = np.asarray(gnorm).ravel()
+    kernel = round_kernel(model, opts)
+    if not kernel.compiled:
+        kernel.count(m)
+    if kernel.compiled:
+        z = np.concatenate([np.zeros(n), padded.ravel(order="F"), mask.ravel(), np.asarray(pv, dtype=float).ravel(), [lb]])
+        out = np.empty((m, n + 2))
+        for k in range(m):
+            z[:n] = starts[k]
+            out[k] = kernel.run(z)
+        x, gnorm, active = out[:, :n], out[:, n], out[:, n + 1]
+    else:
+        fun = model.derived("deflation_round_map", lambda: _round_function(model, opts).map(m, "serial"), settings=(*_round_settings(opts), m), persist=False)
+        x, gnorm, active = fun(starts.T, padded, mask, pv, lb)
+        x = np.asarray(x).reshape(n, m).T
+        gnorm = np.asarray(gnorm).ravel()
     done = np.isfinite(gnorm) & (gnorm <= opts.tol) & np.all(np.isfinite(x), axis=1)
     return x, done, int(np.sum(np.asarray(active)))
 
@@ -562,33 +599,42 @@ def _fresh_starts(n: int, lb: float, hi_total: float, count: int) -> np.ndarray:
     return np.array(rows)
 
 
-def _polish(kernel, pv, theta: np.ndarray, steps: int = 3) -> np.ndarray:
+def _polish(model: Model, pv, theta: np.ndarray, steps: int = 3) -> np.ndarray:
     """A few plain Newton steps (the search stops at ``tol``; this takes it to round-off)."""
+    kernel = correction_kernel(model)
+    n = len(theta)
+    z = np.concatenate([theta, np.asarray(pv, dtype=float).ravel()])
     for _ in range(steps):
-        _, newton, _ = kernel(theta, pv)
-        step = np.asarray(newton).ravel()
+        step = kernel.run(z)[n : 2 * n]
         if not np.all(np.isfinite(step)):
             break
-        theta = theta - step
-    return theta
+        z[:n] -= step
+    return z[:n].copy()
 
 
 def _state(model: Model, pv: np.ndarray, theta: np.ndarray, critical_tol: float, found: str, scene: Scene, pressure: float) -> State:
-    st = model.state(theta, pv)
-    eig = np.sort(np.linalg.eigvalsh(st["hessian"]))
+    st = compiled_state(model, theta, pv)
+    return state_of(theta, st["tip"], st["energy"], np.sort(np.linalg.eigvalsh(st["hessian"])), float(np.max(np.abs(st["gradient"]))), critical_tol, found,
+                    assess(scene, theta, pressure, np.asarray(st["tip"], dtype=float)))
+
+
+def state_of(theta: np.ndarray, tip: np.ndarray, energy: float, eigenvalues: np.ndarray, gradient_norm: float, critical_tol: float, found: str,
+             validity: tuple = ()) -> State:
+    """A :class:`State` from what is known at an equilibrium (its tip pose, energy, ascending Hessian
+    eigenvalues and max |dU/dtheta|, and where it leaves the model's domain): its stability and Morse index."""
+    eig = np.asarray(eigenvalues, dtype=float)
     verdict = stability_verdict(eig, critical_tol)
     scale = max(float(np.max(np.abs(eig))), 1e-300)
     index = int(np.sum(eig < -critical_tol * scale))
-    tip = np.asarray(st["tip"], dtype=float)
-    return State(theta, tip[:2].copy(), float(tip[2]), float(st["energy"]), eig, index, verdict, float(np.max(np.abs(st["gradient"]))), found,
-                 assess(scene, theta, pressure, tip))
+    tip = np.asarray(tip, dtype=float)
+    return State(np.asarray(theta, dtype=float), tip[:2].copy(), float(tip[2]), float(energy), eig, index, verdict, float(gradient_norm), found, tuple(validity))
 
 
 def _descend(model: Model, pv: np.ndarray, theta: np.ndarray, lb: float, tol: float, max_iter: int = 300) -> np.ndarray | None:
     """Steepest descent on U to a minimum: saddle-free Newton steps (|H|^-1 g) with an Armijo line search."""
     x = theta.copy()
     for _ in range(max_iter):
-        st = model.state(x, pv)
+        st = compiled_state(model, x, pv)
         g, h, u = st["gradient"], st["hessian"], st["energy"]
         lam, vec = np.linalg.eigh(h)
         big = max(float(np.max(np.abs(lam))), 1e-300)
@@ -660,12 +706,14 @@ def search(
     model: Model | None = None,
     reached: np.ndarray | None = None,
     known_equilibrium: bool = False,
+    known_state: State | None = None,
 ) -> Equilibria:
     """The search of :func:`equilibria` at a given pressure, from the method's starts, ``theta_starts``
     and ``reached``, the state a load history reached (:func:`equilibria` traces the default one,
     ``solve`` passes the state its history reached); ``history_state`` indexes it. With
     ``known_equilibrium`` (``reached`` is a certified equilibrium) it is deflated from the first
-    round instead of being a start."""
+    round instead of being a start, and ``known_state``, its :class:`State` when the caller has it
+    (a solve's certified result), is not evaluated again."""
     t0 = time.perf_counter()
     model = scene.model() if model is None else model
     n = model.n
@@ -673,10 +721,11 @@ def search(
     pv = model.param_vector(full)
     lb, lo_total, hi_total = _domain(scene, model, full, options)
     kernel = newton_correction(model)
-    extra = ([] if reached is None else [np.asarray(reached, dtype=float).ravel()]) + [np.asarray(t, dtype=float).ravel() for t in theta_starts]
+    known = reached is not None and known_equilibrium
+    extra = ([] if reached is None or known else [np.asarray(reached, dtype=float).ravel()]) + [np.asarray(t, dtype=float).ravel() for t in theta_starts]
     starts = _first_starts(n, lb, hi_total, options.starts, extra)
     found = _Found([], [])
-    if reached is not None and known_equilibrium:  # deflate it from the start: the search looks for the others
+    if known:  # deflate it from the start (not a start itself): the search looks for the others
         found.thetas.append(np.asarray(reached, dtype=float).ravel().copy())
         found.labels.append("the load history's state")
     _rounds(model, kernel, pv, starts, found, "first search", lb, hi_total, options)
@@ -689,8 +738,11 @@ def search(
         complete = check_found == 0
     states = []
     outside = 0
-    for theta, label in zip(found.thetas, found.labels):
-        theta = _polish(kernel, pv, theta)
+    for k, (theta, label) in enumerate(zip(found.thetas, found.labels)):
+        if k == 0 and known and known_state is not None:
+            states.append(known_state)
+            continue
+        theta = _polish(model, pv, theta)
         total = float(np.sum(theta))
         if total > hi_total + 1e-9 or np.any(theta <= lb):
             outside += 1
@@ -789,7 +841,7 @@ def _with_time(res: Equilibria, seconds: float) -> Equilibria:
 
 #: The search ``solve`` makes by default: fewer starts and iterations than :func:`equilibria`, no
 #: completeness check, no barriers, no history of its own (the state it reached is deflated from
-#: the first round); up to n = 8 it costs about as much as the solve (docs/performance.md).
+#: the first round); each start's round is one C call of microseconds once hot (docs/performance.md).
 SOLVE_CHECK = EquilibriaOptions(starts=9, max_iter=15, history=False, check=False, connect=False)
 #: ``multistability="auto"`` checks up to this many segments: beyond it the search costs
 #: several solves (docs/performance.md, the solve benchmark's "multistability check" rows).
@@ -853,13 +905,13 @@ def not_looked(why: str) -> Multistability:
     return Multistability(False, message=f"not checked for other stable states: {why}")
 
 
-def check_multistability(scene: Scene, model: Model, pressure: float, reached: np.ndarray, history: str, why: str) -> Multistability:
+def check_multistability(scene: Scene, model: Model, pressure: float, reached: np.ndarray, history: str, why: str, known_state: State | None = None) -> Multistability:
     """The :data:`SOLVE_CHECK` search around a solve's result, and the one line that says what it found.
 
     ``history`` names the load history, ``why`` says why it reached ``reached`` (it followed one
-    branch, it snapped at a fold).
+    branch, it snapped at a fold); ``known_state`` is its :class:`State` when the caller has it.
     """
-    res = search(scene, pressure, SOLVE_CHECK, (), model, reached, known_equilibrium=True)
+    res = search(scene, pressure, SOLVE_CHECK, (), model, reached, known_equilibrium=True, known_state=known_state)
     stable = res.stable
     k = None
     for j, s in enumerate(stable):

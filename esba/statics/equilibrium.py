@@ -10,10 +10,14 @@ quasi-static load snaps: :mod:`esba.paths.loading` finds the state it lands in, 
 where it jumped and from which state to which (:attr:`Equilibrium.jumps`). A straight actuator
 that buckles at a branch point goes on along the stable bent branch, and the result says so.
 
-IPOPT (``casadi.nlpsol``, :mod:`esba.solvers.minimise`) stays the solver of record: the path supplies
-its start, IPOPT certifies the minimiser with the generated exact gradient and Hessian and the
-model's domain as bounds on theta (the square root of Eq. 10 and L + n (d + r1) theta_i > 0), and
-a few Newton steps polish the stationarity to round-off.
+The state the path reaches is certified a minimiser. A few Newton steps polish its stationarity
+to round-off; when the exact gradient and Hessian there show a strict local minimiser to IPOPT's
+tolerance (max |dU/dtheta| <= ``tol``, every angle strictly inside the model's domain, the Hessian
+positive definite: the first-order conditions IPOPT would accept there without iterating, and the
+second-order ones it does not check), that is the certificate; otherwise IPOPT (``casadi.nlpsol``,
+:mod:`esba.solvers.minimise`), the solver of record, starts there and certifies the minimiser with
+the generated exact gradient and Hessian and the model's domain as bounds on theta (the square
+root of Eq. 10 and L + n (d + r1) theta_i > 0). ``SolverOptions(certify="ipopt")`` calls IPOPT always.
 
 Every result carries a stability verdict from the Hessian's eigenvalues (``stable`` /
 ``unstable`` / ``critical``), IPOPT's return status, iterations and time. A solve that fails,
@@ -24,8 +28,10 @@ Examples
 --------
 >>> from esba.model.scene import MAIN_JOB
 >>> r = solve(MAIN_JOB)
->>> r.ok, r.stability, r.certificate.split(":")[0]
-(True, 'stable', 'IPOPT Solve_Succeeded')
+>>> r.ok, r.stability, r.status, r.certificate.split(",")[0]
+(True, 'stable', 'Solve_Succeeded', "Solve_Succeeded from the exact gradient and Hessian at the path's end")
+>>> solve(MAIN_JOB, SolverOptions(certify="ipopt")).certificate.split(":")[0]
+'IPOPT Solve_Succeeded'
 >>> [round(t, 2) for t in r.theta_deg]
 [-3.29, 7.17, 21.44]
 >>> [round(v, 2) for v in r.tip_mm]
@@ -53,9 +59,10 @@ from esba.model.stability import STABILITY, stability_verdict, stability_verdict
 from esba.model.validity import Finding, assess
 from esba.paths.continuation import PathOptions, SpecialPoint
 from esba.paths.loading import Jump
-from esba.solvers.minimise import LINEAR_SOLVERS, minimise
+from esba.solvers.minimise import LINEAR_SOLVERS, Minimum, minimise, polish
+from esba.solvers.newton import state as compiled_state
 
-from .equilibria import AUTO_MAX_SEGMENTS, MULTISTABILITY, Multistability, check_multistability, not_looked
+from .equilibria import AUTO_MAX_SEGMENTS, MULTISTABILITY, Multistability, SOLVE_CHECK, check_multistability, not_looked, state_of
 from .history import DEFAULT_HISTORY, HistoryError, LoadHistory, _unloaded, history_name, history_steps, load_history
 
 __all__ = [
@@ -75,6 +82,9 @@ __all__ = [
     "Multistability",
 ]
 
+
+#: The values of ``SolverOptions.certify``.
+CERTIFY = ("auto", "ipopt")
 
 #: Upper bounds of the counts in SolverOptions (IPOPT keeps its iteration limit in a 32-bit int,
 #: and each count multiplies the work of one solve).
@@ -136,6 +146,11 @@ class SolverOptions:
     multistability : str
         Look for other stable states of the scene (:func:`esba.statics.equilibria.check_multistability`):
         ``auto`` (when n <= 8, where the search costs about a solve), ``always`` or ``never``.
+    certify : str
+        How the state the load history reached is certified: ``auto``, from the exact gradient and
+        Hessian there when they show a strict local minimiser to ``tol`` (the conditions IPOPT would
+        accept without iterating, and positive definiteness), else by IPOPT; ``ipopt``, always by
+        IPOPT (warm-started there). A solve from ``theta0`` or without continuation always calls IPOPT.
 
     Examples
     --------
@@ -159,6 +174,7 @@ class SolverOptions:
     samples_per_segment: int = 20
     history: Any = DEFAULT_HISTORY
     multistability: str = "auto"
+    certify: str = "auto"
 
     def __post_init__(self) -> None:
         _check_pos("tol", self.tol, 1.0)
@@ -181,6 +197,8 @@ class SolverOptions:
             object.__setattr__(self, "history", steps)  # hashable, as the frozen options are
         if self.multistability not in MULTISTABILITY:
             raise SolverOptionsError(f"multistability={self.multistability!r}: allowed are {', '.join(MULTISTABILITY)}")
+        if self.certify not in CERTIFY:
+            raise SolverOptionsError(f"certify={self.certify!r}: allowed are {', '.join(CERTIFY)}")
 
 
 DEFAULT_OPTIONS = SolverOptions()
@@ -229,14 +247,16 @@ class Equilibrium(Report):
     stability : str
         ``stable``, ``critical`` or ``unstable`` (see :func:`stability_verdict`).
     status : str
-        IPOPT's return status of the certifying solve, or ``Continuation_Failed`` / ``At_Bound`` /
-        ``Not_Stationary``.
+        The certifying step's status: IPOPT's return status, ``Solve_Succeeded`` too when the exact
+        gradient and Hessian certified the state without IPOPT (see ``certificate``); or
+        ``Continuation_Failed`` / ``At_Bound`` / ``Not_Stationary``.
     success : bool
         The solver converged to a stationary point inside the domain.
     iterations : int
         Newton corrector iterations along the load history plus IPOPT iterations.
     steps : int
-        Points traced along the load history plus IPOPT solves (1 without continuation).
+        Points traced along the load history plus IPOPT solves (1 without continuation; 0 when the
+        exact gradient and Hessian certified the state).
     solve_time_s : float
         Wall time of the whole solve, s (the multistability check's own time is in
         ``multistability.search_time_s``).
@@ -250,7 +270,9 @@ class Equilibrium(Report):
     branch_points : tuple of SpecialPoint
         Branch points the load history went through along a stable crossing branch (buckling).
     certificate : str
-        What certified the returned state: IPOPT's status from the path's end, and how far it moved.
+        What certified the returned state as a minimiser, in one line: the gradient's size, the margin
+        to the domain bound and the Hessian's smallest eigenvalue at the path's end (no IPOPT call
+        needed), or IPOPT's status from there and how far it moved the state.
     validity : tuple of Finding
         Where the result leaves the range the paper's model describes (strains past 1, a bend past
         360 deg, the tip behind the base, loads far outside the paper's): see :mod:`esba.model.validity`.
@@ -474,11 +496,41 @@ def evaluate(
     resolution.check_resolvable(scene, pressure, options.stationarity_tol, DEFAULT_OPTIONS.stationarity_tol)
     theta = _angles("theta", theta, scene.segments)
     full = scene.parameters(pressure)
-    lbx = model.lower_bounds(full)
-    pv = model.param_vector(full)
+    return _assemble(
+        scene, model, theta, pressure, full, model.param_vector(full), model.lower_bounds(full), options,
+        status=status, success=success, iterations=iterations, steps=steps, solve_time_s=solve_time_s, message=message,
+        notes=notes, jumps=jumps, branch_points=branch_points, certificate=certificate,
+    )
+
+
+def _assemble(
+    scene: Scene,
+    model: Model,
+    theta: np.ndarray,
+    pressure: float,
+    full: dict[str, float],
+    pv: np.ndarray,
+    lbx: np.ndarray,
+    options: SolverOptions,
+    *,
+    status: str,
+    success: bool,
+    iterations: int,
+    steps: int,
+    solve_time_s: float,
+    message: str,
+    notes: Sequence[str],
+    jumps: Sequence[Jump],
+    branch_points: Sequence[SpecialPoint],
+    certificate: str,
+    state: dict | None = None,
+) -> Equilibrium:
+    """:func:`evaluate` on checked inputs (``full``, ``pv`` and ``lbx`` the parameters at ``pressure``;
+    ``state`` the model's state at ``theta`` when it is known)."""
     if np.any(theta < lbx):
         raise EquilibriumError(f"theta={np.degrees(theta).round(3).tolist()} deg lies outside the model's domain (Eq. 10)")
-    state = model.state(theta, pv)
+    if state is None:
+        state = compiled_state(model, theta, pv)
     gnorm = float(np.max(np.abs(state["gradient"])))
     finite = bool(np.all(np.isfinite(state["hessian"])) and np.isfinite(gnorm) and np.isfinite(state["energy"]))
     eig = np.sort(np.linalg.eigvalsh(state["hessian"])) if finite else np.full(scene.segments, np.nan)
@@ -592,23 +644,29 @@ def solve(
     message = history.message if history is not None else ""
     loaded = bool(np.any(pv_full != _unloaded(model, pv_full)))
     traced = (history is not None and history.ramps) or (known_unloaded is not None and theta0 is None and not loaded)
-    final = minimise(
-        model,
-        theta,
-        pv_full,
-        lbx,
-        tol=options.tol,
-        max_iter=options.max_iter,
-        linear_solver=options.linear_solver,
-        polish_steps=4 if options.polish else 0,
-        warm=bool(traced),
-    )
-    moved = float(np.max(np.abs(final.theta - theta)))
     if history is not None and history.ramps:
         start_from = "the path's end"
     else:
         start_from = "the known unloaded state" if known_unloaded is not None and theta0 is None else "the start"
-    certificate = f"IPOPT {final.status}: {final.iterations} iterations from {start_from}, which it moved by {moved:.2g} rad"
+    direct = _certify(model, theta, pv_full, lbx, options, start_from) if traced and not message and options.certify == "auto" else None
+    if direct is not None:
+        final, state, certificate = direct
+        ipopt_solves = 0
+    else:
+        final = minimise(
+            model,
+            theta,
+            pv_full,
+            lbx,
+            tol=options.tol,
+            max_iter=options.max_iter,
+            linear_solver=options.linear_solver,
+            polish_steps=4 if options.polish else 0,
+            warm=bool(traced),
+        )
+        state, ipopt_solves = None, 1
+        certificate = f"IPOPT {final.status}: {final.iterations} iterations from {start_from}, which it moved by {float(np.max(np.abs(final.theta - theta))):.2g} rad"
+    moved = float(np.max(np.abs(final.theta - theta)))
     notes = history.notes(model, pv_full, pressure) if history is not None else []
     if history is not None and history.ramps and final.success and moved > 1e-6:
         notes.append(f"IPOPT moved the path's end by {moved:.3g} rad: the certified state is not the one the path reached")
@@ -619,11 +677,15 @@ def solve(
         if not success:
             message = f"IPOPT did not converge: {final.status}"
     iterations = final.iterations + (history.iterations if history is not None else 0)
-    steps = 1 + (history.points if history is not None else 0)
-    result = evaluate(
+    steps = ipopt_solves + (history.points if history is not None else 0)
+    result = _assemble(
         scene,
+        model,
         final.theta,
         pressure,
+        full,
+        pv_full,
+        lbx,
         options,
         status=status,
         success=success,
@@ -635,6 +697,7 @@ def solve(
         jumps=history.jumps if history is not None else (),
         branch_points=history.branch_points if history is not None else (),
         certificate=certificate,
+        state=state,
     )
     if history is not None:
         how = history_name(options.history)
@@ -644,6 +707,38 @@ def solve(
         how = "none (one IPOPT solve at the full load)"
     multistability = _multistability(scene, model, result, how, history, options)
     return replace(result, history=how, multistability=multistability)
+
+
+def _certify(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, options: SolverOptions, start_from: str) -> tuple[Minimum, dict, str] | None:
+    """The certificate of a state the load history reached, from the exact gradient and Hessian there,
+    without IPOPT: after the Newton polish (``options.polish``), max |dU/dtheta| <= ``options.tol``,
+    every angle strictly inside its domain bound (not within :func:`near_domain_bound` of it) and
+    the Hessian positive definite beyond ``options.critical_tol`` (a *stable* verdict). These are
+    the first-order conditions IPOPT would accept there without an iteration (its ``Solve_Succeeded``
+    after 0 iterations: IPOPT divides the gradient by a scale of at least 1 before comparing it with
+    ``tol``, so this test is at least as strict), and the second-order ones it does not check:
+    together, a strict local minimiser. Returns (the point,
+    its state, the certificate), or None when a condition fails (IPOPT then certifies, as it did
+    for every solve before)."""
+    point = polish(model, theta, pv, lbx, 4) if options.polish else np.asarray(theta, dtype=float)
+    state = compiled_state(model, point, pv)
+    h, g = state["hessian"], state["gradient"]
+    if not (np.all(np.isfinite(h)) and np.all(np.isfinite(g)) and np.isfinite(state["energy"])):
+        return None
+    gnorm = float(np.max(np.abs(g)))
+    if not gnorm <= options.tol or np.any(point <= lbx) or near_domain_bound(point, lbx):
+        return None
+    eig = np.sort(np.linalg.eigvalsh(h))
+    if stability_verdict(eig, options.critical_tol) != "stable":
+        return None
+    margin = float(np.min(point - lbx))
+    certificate = (
+        f"Solve_Succeeded from the exact gradient and Hessian at {start_from}, no IPOPT iteration needed: "
+        f"max |dU/dtheta| = {gnorm:.2g} N mm/rad <= tol = {options.tol:g}, every angle {margin:.3g} rad or more inside its bound (Eq. 10), "
+        f"Hessian positive definite (smallest eigenvalue {eig[0]:.4g} N mm/rad^2): a strict local minimiser; "
+        f"the Newton polish moved it by {float(np.max(np.abs(point - theta))):.2g} rad"
+    )
+    return Minimum(point, "Solve_Succeeded", True, 0), state, certificate
 
 
 def _multistability(scene: Scene, model: Model, result: Equilibrium, how: str, history: LoadHistory | None, options: SolverOptions) -> Multistability:
@@ -666,4 +761,6 @@ def _multistability(scene: Scene, model: Model, result: Equilibrium, how: str, h
         why = "it buckled at a branch point onto this branch and followed it"
     else:
         why = "it followed one stable branch from the straight, unloaded state"
-    return check_multistability(scene, model, result.pressure, result.theta, how, why)
+    known = state_of(result.theta, result.tip, result.energy, result.eigenvalues, result.gradient_norm, SOLVE_CHECK.critical_tol, "the load history's state",
+                     tuple(result.validity))
+    return check_multistability(scene, model, result.pressure, result.theta, how, why, known)

@@ -91,17 +91,47 @@ def test_palc_accepts_its_options(payload_problem):
     np.testing.assert_allclose(fine.theta[-1], coarse.theta[-1], atol=1e-9)
 
 
-def test_the_forecast_of_a_long_trace_leaves_out_the_first_step(monkeypatch, caplog):
+def test_the_forecast_of_a_long_trace_leaves_out_the_first_step(caplog):
     """The first step pays one-off costs (kernels compiled on first use): the pace is taken after it."""
-    import types
-
     from esba.paths import continuation
 
     clock = iter([100.0, 103.0])  # step 1 ends at 100 s (a compile); 30 more steps take 3 s
-    monkeypatch.setattr(continuation, "time", types.SimpleNamespace(perf_counter=lambda: next(clock)))
-    forecast = continuation._Forecast(2000, "the branch")
+    forecast = continuation._Forecast(1.0, "the branch", clock=lambda: next(clock))
     with caplog.at_level("WARNING", logger=continuation._log.name):
-        forecast.tick(1)
-        forecast.tick(31)
+        forecast.tick(1, 0.0)  # one step in at lambda = 0 (its first step took 100 s)
+        forecast.tick(31, 0.04)  # 0.04 of 1 in 3 s: 0.96 left takes 72 s
     (record,) = caplog.records
-    assert "30 steps in 3 s" in record.getMessage() and "another 3 min" in record.getMessage()  # 1969 steps at 0.1 s
+    assert "30 steps in 3 s" in record.getMessage() and "another 1 min" in record.getMessage()
+
+
+def test_the_forecast_is_the_distance_left_at_the_pace_so_far_not_max_steps(caplog):
+    """A trace that covers its range in k equal steps (a fake clock, one second a step) forecasts
+    the time of the steps it has left, proportional to the parameter distance left, whatever its
+    max_steps; on main it forecast (max_steps - steps) steps at that pace ("another 37 min" for a
+    run of 7 s)."""
+    from esba.paths import continuation
+
+    k, lo, hi = 400, 0.0, 0.3
+    for done in (50, 100, 200, 300):
+        now = [0.0]
+        forecast = continuation._Forecast(hi, "pressure", clock=lambda: now[0])
+        forecast.tick(1, lo + (hi - lo) / k)  # the pace is taken from the end of the first step
+        now[0] = done - 1.0
+        lam = lo + (hi - lo) * done / k
+        rest = forecast.remaining_s(lam, now[0])
+        assert rest == pytest.approx(k - done, rel=1e-9)  # the steps left, one second each
+        assert rest == pytest.approx((hi - lam) / ((hi - lo) / k), rel=1e-9)  # proportional to the distance left
+    # a trace heading down to its end, and one that has turned back at a fold, say nothing alarming
+    now = [0.0]
+    down = continuation._Forecast(-1.0, "down", clock=lambda: now[0])
+    down.tick(1, 0.0)
+    assert down.remaining_s(-0.5, 10.0) == pytest.approx(10.0)
+    assert down.remaining_s(0.1, 10.0) is None
+    # no warning when the rest is short, however large max_steps is
+    now = [0.0]
+    short = continuation._Forecast(hi, "pressure", clock=lambda: now[0])
+    with caplog.at_level("WARNING", logger=continuation._log.name):
+        short.tick(1, 0.0)
+        now[0] = 7.0
+        short.tick(200, 0.2)
+    assert not caplog.records and short.done

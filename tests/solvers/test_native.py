@@ -63,3 +63,30 @@ def test_kernels_take_one_vector_in_and_out():
         Kernel(ca.Function("f", [z, ca.SX.sym("w")], [z]))
     with pytest.raises(InputError, match="compile='sometimes'"):
         Kernel(ca.Function("f", [z], [z]), "sometimes")
+
+
+def test_a_kernel_with_after_runs_interpreted_then_compiles_at_that_run(tmp_path, monkeypatch):
+    """``after``: interpreted (no compiler time) for the first runs, compiled at the after-th run;
+    decided by the count, never by time, and the same numbers to round-off."""
+    import casadi as ca
+
+    from esba.solvers.native import Kernel, compiler
+
+    if compiler() is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv("ESBA_CACHE_DIR", str(tmp_path))
+    z = ca.SX.sym("z", 2)
+    fun = ca.Function("k_after", [z], [ca.vertcat(ca.sin(z[0]) * z[1], z[0] + z[1])])
+    k = Kernel(fun, "auto", 3, after=3)
+    x = np.array([0.3, 2.0])
+    first = [k(x) for _ in range(2)]
+    assert not k.compiled
+    third = k(x)
+    assert k.compiled and k(x) is not None
+    np.testing.assert_allclose(third, first[0], rtol=1e-15, atol=0)
+    again = Kernel(fun, "auto", 3, after=2)  # the next process loads it from the cache at its 2nd run
+    again(x)
+    assert not again.compiled
+    again(x)
+    assert again.compiled and len(list(tmp_path.rglob("*.so"))) == 1
+    k.count(5)  # counting a compiled kernel's runs does nothing

@@ -267,3 +267,62 @@ def test_the_detached_curled_branch_at_omega_121():
     assert float(down.lam.min()) > 1.5  # the branch turns back at the fold: F = 0 is never reached
     r = solve(res.scene)
     assert r.multistable is True and float(np.max(np.abs(r.other_stable_states[0].theta - curled.theta))) <= 1e-6
+
+
+# ---------------------------------------------------------------------------------------------
+# the work the default solve does (issue 31: its multistability check should cost almost nothing)
+
+
+def test_the_solve_check_deflates_the_reached_state_and_does_not_start_from_it_or_evaluate_it_again(monkeypatch):
+    """The check's search runs SOLVE_CHECK.starts + 1 starts (theta = 0 and the constant-curvature
+    shapes) per round; the state the solve reached is deflated from the first round, not a start
+    as well (a start on a deflated root goes nowhere), and its State comes from the solve's result
+    (no second evaluation). On main it ran one start more and evaluated the reached state again."""
+    from esba.statics import equilibria as module
+
+    evaluated = []
+    real = module._state
+    monkeypatch.setattr(module, "_state", lambda *a, **k: evaluated.append(a[2]) or real(*a, **k))
+    runs = []
+    real_rounds = module._rounds
+    monkeypatch.setattr(module, "_rounds", lambda model, kernel, pv, starts, *a, **k: runs.append(len(starts)) or real_rounds(model, kernel, pv, starts, *a, **k))
+    one = solve(Scene(pressure=0.1, payloads=TWO_N))  # one stable state
+    assert one.multistable is False
+    assert runs == [module.SOLVE_CHECK.starts + 1] and evaluated == []
+    evaluated.clear(), runs.clear()
+    two = solve(Scene(pressure=0.17, payloads=TWO_N))  # the bistable window: the near state and the saddle
+    assert two.multistable is True and runs == [module.SOLVE_CHECK.starts + 1]
+    assert len(evaluated) == 2 and all(float(np.max(np.abs(t - two.theta))) > 1e-3 for t in evaluated)
+    assert np.array_equal(two.multistability.stable[two.multistability.reached].theta, two.theta)
+
+
+def test_the_round_graph_calls_one_step_function_per_newton_iteration():
+    """A deflation round is max_iter calls of one step Function (its C code, and gcc's time, are one
+    step's), not max_iter inlined copies of the step's operations (main: about 40 nodes a step, so
+    the round of equilibria()'s 60 steps took gcc 20 s at n = 3)."""
+    import dataclasses
+
+    from esba.statics import equilibria as module
+
+    model = Scene(pressure=0.1).model()
+    for sx in (False, True):  # the interpreter's graph and the compiled one
+        size = {k: module._round_function(model, dataclasses.replace(module.SOLVE_CHECK, max_iter=k), sx).n_instructions() for k in (15, 60)}
+        assert size[60] - size[15] <= 2 * 45  # at most two instructions a step
+
+
+def test_the_multistable_scenes_load_ramp_is_natural_continuation_not_a_trace():
+    """At 0.17 MPa under 2 N the load ramp stays on one stable branch, strongly bent: 4 natural steps
+    are refused (a corrector went 1.28 times as far as its predictor), 16 are accepted by the same
+    rule. The solve takes that finer ramp (a C call) instead of the adaptive trace (on main: 16
+    pseudo-arclength points, a millisecond), and reaches the same state."""
+    from esba.statics.history import load_history
+
+    scene = Scene(pressure=0.17, payloads=TWO_N)
+    model = scene.model()
+    pv = model.param_vector(scene.parameters(0.17))
+    h = load_history(model, 0.17, pv, None, SolverOptions())
+    assert [r.algorithm for _, r in h.ramps] == ["Natural", "Natural"] and not h.message
+    traced = load_history(model, 0.17, pv, None, SolverOptions(fast=False))
+    assert float(np.max(np.abs(h.theta - traced.theta))) <= SAME_STATE
+    r = solve(scene)
+    assert r.ok and r.steps <= 1 + 5 + 17 and math.isclose(r.total_angle_deg, 212.8414878, abs_tol=1e-6)
