@@ -1,0 +1,165 @@
+"""The actuator's surfaces along whole segments, and the closest point of each segment to an obstacle.
+
+The model bends the inextensible layer: segment i is a circular arc of length L/n turning by
+theta_i (Eq. 1-2), starting at the joint point P_i with heading phi_i = theta_1 + ... + theta_{i-1}.
+Its point at the fraction sigma in [0, 1] of the segment is
+
+    p_i(sigma) = P_i + (L/n) sigma R(phi_i) [sinc(sigma theta_i), versinc(sigma theta_i)],
+
+heading phi_i + sigma theta_i (the same smooth forms as ``derive.smooth``: exact at theta_i = 0). The
+surface at offset o is q = p - o nu, with nu = (-sin phi, cos phi) the normal towards the inside
+of the bend: o = 0 is the layer (``inner``), o = 2 r1 the dorsal surface (``outer``). Along a segment
+
+    q'(sigma) = (L/n + o theta_i) t,    q''(sigma) = (L/n + o theta_i) theta_i nu,
+
+with t = (cos phi, sin phi). The gap of an obstacle along a segment, d(sigma) = distance(q(sigma)),
+has at most one interior local minimum (a line or a circle against an arc of less than a turn);
+:func:`closest_points` finds it exactly (a grid, then Newton on d' = 0). With the joints, those
+are all the points where the body can first touch a convex obstacle.
+
+Examples
+--------
+>>> import numpy as np
+>>> from esba.model.contact.obstacles import Cylinder
+>>> th = np.full(3, np.pi / 6)
+>>> q = surface_points(th, 135.0, 0.0, np.array([[0.0, 0.5, 1.0]] * 3))
+>>> [round(float(v), 4) for v in q[2, 2]]   # the tip of the layer (chain_tip gives the same)
+[103.1324, 59.5435]
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from .obstacles import Obstacle
+
+__all__ = ["surface_points", "surface_derivatives", "closest_points", "offset_of", "symbolic_surface", "GRID"]
+
+#: Grid points per segment on which the interior minimum of a gap is first bracketed.
+GRID = 17
+
+#: Where the series branch of sinc hands over to sin(u)/u (``derive.smooth.SINC_SWITCH``).
+SINC_SWITCH = 0.1
+
+
+def offset_of(side: str, r1: float) -> float:
+    """The offset of a surface from the layer, mm: 0 for ``inner``, 2 r1 for ``outer``."""
+    return 0.0 if side == "inner" else 2.0 * float(r1)
+
+
+def _frames(theta: np.ndarray, L: float) -> tuple[np.ndarray, np.ndarray]:
+    """Joint points P_i (n, 2) and headings phi_i (n,) at the start of each segment."""
+    n = theta.size
+    phi = np.concatenate([[0.0], np.cumsum(theta)[:-1]])
+    sinc = np.sinc(theta / np.pi)
+    versinc = 0.5 * theta * np.sinc(theta / (2.0 * np.pi)) ** 2
+    seg = L / n
+    dx = seg * (np.cos(phi) * sinc - np.sin(phi) * versinc)
+    dy = seg * (np.sin(phi) * sinc + np.cos(phi) * versinc)
+    starts = np.column_stack([np.concatenate([[0.0], np.cumsum(dx)[:-1]]), np.concatenate([[0.0], np.cumsum(dy)[:-1]])])
+    return starts, phi
+
+
+def surface_points(theta: Any, L: float, offset: float, sigma: np.ndarray) -> np.ndarray:
+    """Points of the surface at ``offset`` at fractions ``sigma`` (n, m) of each segment, shape (n, m, 2)."""
+    theta = np.asarray(theta, dtype=float).ravel()
+    n = theta.size
+    starts, phi0 = _frames(theta, L)
+    sigma = np.asarray(sigma, dtype=float)
+    u = sigma * theta[:, None]
+    cx = (L / n) * sigma * np.sinc(u / np.pi)
+    cy = (L / n) * sigma * 0.5 * u * np.sinc(u / (2.0 * np.pi)) ** 2
+    c, s = np.cos(phi0)[:, None], np.sin(phi0)[:, None]
+    head = phi0[:, None] + u
+    x = starts[:, :1] + c * cx - s * cy + offset * np.sin(head)
+    y = starts[:, 1:] + s * cx + c * cy - offset * np.cos(head)
+    return np.stack([x, y], axis=-1)
+
+
+def surface_derivatives(theta: Any, L: float, offset: float, sigma: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """q, q' and q'' (each (n, m, 2)) along each segment at fractions ``sigma`` (n, m)."""
+    theta = np.asarray(theta, dtype=float).ravel()
+    n = theta.size
+    q = surface_points(theta, L, offset, sigma)
+    _, phi0 = _frames(theta, L)
+    head = phi0[:, None] + np.asarray(sigma) * theta[:, None]
+    speed = (L / n + offset * theta)[:, None, None]
+    t = np.stack([np.cos(head), np.sin(head)], axis=-1)
+    nu = np.stack([-np.sin(head), np.cos(head)], axis=-1)
+    return q, speed * t, speed * theta[:, None, None] * nu
+
+
+def closest_points(theta: Any, L: float, offset: float, obstacle: Obstacle, newton_steps: int = 12) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per segment: the fraction of its interior local minimum of the gap, whether it has one, and the gap there.
+
+    Returns ``sigma`` (n,), ``interior`` (n, bool) and ``gap`` (n,). A segment without an interior
+    minimum (its gap is least at a joint) gets sigma = 1/2 (a true point of the body, whose gap
+    is then above a joint's) and ``interior`` False.
+    """
+    theta = np.asarray(theta, dtype=float).ravel()
+    n = theta.size
+    grid = np.broadcast_to(np.linspace(0.0, 1.0, GRID), (n, GRID))
+    d = obstacle.distance(surface_points(theta, L, offset, grid))
+    inner = d[:, 1:-1]
+    is_min = (inner <= d[:, :-2]) & (inner <= d[:, 2:])
+    masked = np.where(is_min, inner, np.inf)
+    j = np.argmin(masked, axis=1) + 1
+    found = np.isfinite(masked[np.arange(n), j - 1])
+    h = 1.0 / (GRID - 1)
+    lo, hi = (j - 1) * h, (j + 1) * h
+    sigma = j * h
+    for _ in range(newton_steps):
+        q, q1, q2 = surface_derivatives(theta, L, offset, sigma[:, None])
+        _, g, hess = obstacle.derivatives(q[:, 0])
+        d1 = np.einsum("ij,ij->i", g, q1[:, 0])
+        d2 = np.einsum("ij,ijk,ik->i", q1[:, 0], hess, q1[:, 0]) + np.einsum("ij,ij->i", g, q2[:, 0])
+        step = np.where(d2 > 0, d1 / np.where(d2 > 0, d2, 1.0), 0.0)
+        sigma = np.clip(sigma - step, lo, hi)
+    q, q1, _ = surface_derivatives(theta, L, offset, sigma[:, None])
+    _, g, _ = obstacle.derivatives(q[:, 0])
+    d1 = np.einsum("ij,ij->i", g, q1[:, 0])
+    scale = np.abs(L / n + offset * theta)
+    interior = found & (sigma > 1e-9) & (sigma < 1.0 - 1e-9) & (np.abs(d1) <= 1e-9 * np.maximum(scale, 1.0))
+    sigma = np.where(interior, sigma, 0.5)
+    gap = obstacle.distance(surface_points(theta, L, offset, sigma[:, None]))[:, 0]
+    return sigma, interior, gap
+
+
+# ---------------------------------------------------------------------------------------------
+# the same surface on CasADi symbols
+
+
+def _sinc(u: Any) -> Any:
+    """sin(u)/u with a series branch at 0, as ``derive.smooth.sinc`` (both branches finite, exact derivatives)."""
+    u2 = u * u
+    series = 1 - u2 / 6 * (1 - u2 / 20 * (1 - u2 / 42 * (1 - u2 / 72)))
+    w = u + ca.if_else(u2 < SINC_SWITCH**2, 1, 0)
+    return ca.if_else(ca.fabs(u) < SINC_SWITCH, series, ca.sin(w) / w)
+
+
+def _versinc(u: Any) -> Any:
+    return u / 2 * _sinc(u / 2) ** 2
+
+
+def symbolic_surface(theta: Any, L: Any, offset: Any, sigma: Any) -> tuple[list, list]:
+    """The surface at ``offset`` on CasADi symbols: the joint points 1..n and the points at
+    ``sigma[i]`` of each segment, as lists of 2-vectors (x, y)."""
+    n = theta.shape[0]
+    x = y = 0
+    phi = 0
+    joints, inside = [], []
+    seg = L / n
+    for i in range(n):
+        t, sg = theta[i], sigma[i]
+        u = sg * t
+        cx, cy = seg * sg * _sinc(u), seg * sg * _versinc(u)
+        head = phi + u
+        inside.append((x + ca.cos(phi) * cx - ca.sin(phi) * cy + offset * ca.sin(head), y + ca.sin(phi) * cx + ca.cos(phi) * cy - offset * ca.cos(head)))
+        cx, cy = seg * _sinc(t), seg * _versinc(t)
+        x, y = x + ca.cos(phi) * cx - ca.sin(phi) * cy, y + ca.sin(phi) * cx + ca.cos(phi) * cy
+        phi = phi + t
+        joints.append((x + offset * ca.sin(phi), y - offset * ca.cos(phi)))
+    return joints, inside
