@@ -24,7 +24,7 @@ Examples
 >>> th = np.full(3, np.pi / 6)
 >>> q = surface_points(th, 135.0, 0.0, np.array([[0.0, 0.5, 1.0]] * 3))
 >>> [round(float(v), 4) for v in q[2, 2]]   # the tip of the layer (chain_tip gives the same)
-[103.1324, 59.5435]
+[85.9437, 85.9437]
 """
 
 from __future__ import annotations
