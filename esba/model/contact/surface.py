@@ -63,33 +63,35 @@ def _frames(theta: np.ndarray, L: float) -> tuple[np.ndarray, np.ndarray]:
     return starts, phi
 
 
-def surface_points(theta: Any, L: float, offset: float, sigma: np.ndarray) -> np.ndarray:
-    """Points of the surface at ``offset`` at fractions ``sigma`` (n, m) of each segment, shape (n, m, 2)."""
-    theta = np.asarray(theta, dtype=float).ravel()
+def _along(theta: np.ndarray, L: float, offset: float, sigma: np.ndarray, starts: np.ndarray, phi0: np.ndarray, derivatives: bool):
     n = theta.size
-    starts, phi0 = _frames(theta, L)
-    sigma = np.asarray(sigma, dtype=float)
     u = sigma * theta[:, None]
     cx = (L / n) * sigma * np.sinc(u / np.pi)
     cy = (L / n) * sigma * 0.5 * u * np.sinc(u / (2.0 * np.pi)) ** 2
     c, s = np.cos(phi0)[:, None], np.sin(phi0)[:, None]
     head = phi0[:, None] + u
-    x = starts[:, :1] + c * cx - s * cy + offset * np.sin(head)
-    y = starts[:, 1:] + s * cx + c * cy - offset * np.cos(head)
-    return np.stack([x, y], axis=-1)
+    sh, ch = np.sin(head), np.cos(head)
+    q = np.stack([starts[:, :1] + c * cx - s * cy + offset * sh, starts[:, 1:] + s * cx + c * cy - offset * ch], axis=-1)
+    if not derivatives:
+        return q
+    speed = (L / n + offset * theta)[:, None, None]
+    t = np.stack([ch, sh], axis=-1)
+    nu = np.stack([-sh, ch], axis=-1)
+    return q, speed * t, speed * theta[:, None, None] * nu
+
+
+def surface_points(theta: Any, L: float, offset: float, sigma: np.ndarray) -> np.ndarray:
+    """Points of the surface at ``offset`` at fractions ``sigma`` (n, m) of each segment, shape (n, m, 2)."""
+    theta = np.asarray(theta, dtype=float).ravel()
+    starts, phi0 = _frames(theta, L)
+    return _along(theta, L, offset, np.asarray(sigma, dtype=float), starts, phi0, False)
 
 
 def surface_derivatives(theta: Any, L: float, offset: float, sigma: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """q, q' and q'' (each (n, m, 2)) along each segment at fractions ``sigma`` (n, m)."""
     theta = np.asarray(theta, dtype=float).ravel()
-    n = theta.size
-    q = surface_points(theta, L, offset, sigma)
-    _, phi0 = _frames(theta, L)
-    head = phi0[:, None] + np.asarray(sigma) * theta[:, None]
-    speed = (L / n + offset * theta)[:, None, None]
-    t = np.stack([np.cos(head), np.sin(head)], axis=-1)
-    nu = np.stack([-np.sin(head), np.cos(head)], axis=-1)
-    return q, speed * t, speed * theta[:, None, None] * nu
+    starts, phi0 = _frames(theta, L)
+    return _along(theta, L, offset, np.asarray(sigma, dtype=float), starts, phi0, True)
 
 
 def closest_points(theta: Any, L: float, offset: float, obstacle: Obstacle, newton_steps: int = 12) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -101,8 +103,9 @@ def closest_points(theta: Any, L: float, offset: float, obstacle: Obstacle, newt
     """
     theta = np.asarray(theta, dtype=float).ravel()
     n = theta.size
+    starts, phi0 = _frames(theta, L)
     grid = np.broadcast_to(np.linspace(0.0, 1.0, GRID), (n, GRID))
-    d = obstacle.distance(surface_points(theta, L, offset, grid))
+    d = obstacle.distance(_along(theta, L, offset, grid, starts, phi0, False))
     inner = d[:, 1:-1]
     is_min = (inner <= d[:, :-2]) & (inner <= d[:, 2:])
     masked = np.where(is_min, inner, np.inf)
@@ -112,19 +115,23 @@ def closest_points(theta: Any, L: float, offset: float, obstacle: Obstacle, newt
     lo, hi = (j - 1) * h, (j + 1) * h
     sigma = j * h
     for _ in range(newton_steps):
-        q, q1, q2 = surface_derivatives(theta, L, offset, sigma[:, None])
+        q, q1, q2 = _along(theta, L, offset, sigma[:, None], starts, phi0, True)
         _, g, hess = obstacle.derivatives(q[:, 0])
         d1 = np.einsum("ij,ij->i", g, q1[:, 0])
         d2 = np.einsum("ij,ijk,ik->i", q1[:, 0], hess, q1[:, 0]) + np.einsum("ij,ij->i", g, q2[:, 0])
         step = np.where(d2 > 0, d1 / np.where(d2 > 0, d2, 1.0), 0.0)
-        sigma = np.clip(sigma - step, lo, hi)
-    q, q1, _ = surface_derivatives(theta, L, offset, sigma[:, None])
+        new = np.clip(sigma - step, lo, hi)
+        done = float(np.max(np.abs(new - sigma))) <= 1e-15
+        sigma = new
+        if done:
+            break
+    q, q1, _ = _along(theta, L, offset, sigma[:, None], starts, phi0, True)
     _, g, _ = obstacle.derivatives(q[:, 0])
     d1 = np.einsum("ij,ij->i", g, q1[:, 0])
     scale = np.abs(L / n + offset * theta)
     interior = found & (sigma > 1e-9) & (sigma < 1.0 - 1e-9) & (np.abs(d1) <= 1e-9 * np.maximum(scale, 1.0))
     sigma = np.where(interior, sigma, 0.5)
-    gap = obstacle.distance(surface_points(theta, L, offset, sigma[:, None]))[:, 0]
+    gap = obstacle.distance(_along(theta, L, offset, sigma[:, None], starts, phi0, False))[:, 0]
     return sigma, interior, gap
 
 

@@ -22,7 +22,7 @@ Examples
 >>> from esba.model.contact import HalfPlane
 >>> r = solve_contact(Scene(pressure=0.1, obstacles=(HalfPlane(at=(135.0, 0.0)),)))
 >>> r.ok, [c.where for c in r.contacts], round(r.contacts[0].force, 4)
-(True, ['tip'], 0.3069)
+(True, ['tip'], 1.8298)
 >>> r.kkt.complementarity < 1e-8
 True
 """
