@@ -98,8 +98,9 @@ def closest_points(theta: Any, L: float, offset: float, obstacle: Obstacle, newt
     """Per segment: the fraction of its interior local minimum of the gap, whether it has one, and the gap there.
 
     Returns ``sigma`` (n,), ``interior`` (n, bool) and ``gap`` (n,). A segment without an interior
-    minimum (its gap is least at a joint) gets sigma = 1/2 (a true point of the body, whose gap
-    is then above a joint's) and ``interior`` False.
+    minimum (its gap is least at a joint) gets the end where its gap is least (then its point is
+    that joint's: a contact that slides off the end of a segment keeps its constraint continuous)
+    and ``interior`` False.
     """
     theta = np.asarray(theta, dtype=float).ravel()
     n = theta.size
@@ -130,7 +131,7 @@ def closest_points(theta: Any, L: float, offset: float, obstacle: Obstacle, newt
     d1 = np.einsum("ij,ij->i", g, q1[:, 0])
     scale = np.abs(L / n + offset * theta)
     interior = found & (sigma > 1e-9) & (sigma < 1.0 - 1e-9) & (np.abs(d1) <= 1e-9 * np.maximum(scale, 1.0))
-    sigma = np.where(interior, sigma, 0.5)
+    sigma = np.where(interior, sigma, np.where(d[:, 0] < d[:, -1], 0.0, 1.0))
     gap = obstacle.distance(_along(theta, L, offset, sigma[:, None], starts, phi0, False))[:, 0]
     return sigma, interior, gap
 

@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
+from scipy.optimize import nnls
 
 from esba.infra import checks
 from esba.infra.errors import InputError
@@ -48,9 +49,14 @@ from esba.solvers.minimise import LINEAR_SOLVERS
 
 from .nlp import ContactNLP, contact_nlp
 
-__all__ = ["ContactOptions", "ContactOptionsError", "Displacement", "Contact", "KKT", "ContactState", "ContactEquilibrium", "solve_contact"]
+__all__ = ["ContactOptions", "ContactOptionsError", "ContactProblem", "Displacement", "Contact", "KKT", "ContactState", "ContactEquilibrium", "solve_contact"]
 
 INF = float("inf")
+
+#: The distance (mm) within which the surface counts as lying on an obstacle in :meth:`ContactEquilibrium.contact_length`.
+WRAP_MM = 0.1
+#: Samples per segment of that length.
+WRAP_SAMPLES = 200
 
 
 class ContactOptionsError(InputError):
@@ -253,12 +259,24 @@ class ContactEquilibrium:
         return sum((c.force_vector for c in self.contacts), np.zeros(2))
 
     @property
-    def contact_length(self) -> float:
+    def contact_span(self) -> float:
         """The length of the actuator between its first and last contact, mm (0 with one or none)."""
         if len(self.contacts) < 2:
             return 0.0
         s = [c.s for c in self.contacts]
         return (max(s) - min(s)) * self.scene.actuator.L
+
+    def contact_length(self, within_mm: float = WRAP_MM) -> float:
+        """The length of the touching surfaces that lies within ``within_mm`` of an obstacle, mm: how
+        far the actuator wraps an object (the model's arcs touch a cylinder at points; this is the
+        length that lies on it to that tolerance)."""
+        n, L = self.scene.segments, self.scene.actuator.L
+        sigma = np.broadcast_to(np.linspace(0.0, 1.0, WRAP_SAMPLES + 1)[:-1] + 0.5 / WRAP_SAMPLES, (n, WRAP_SAMPLES))
+        near = np.zeros((n, WRAP_SAMPLES), dtype=bool)
+        for o in self.scene.obstacles:
+            q = surface_points(self.theta, L, offset_of(o.resolved_side(), self.scene.actuator.r1), sigma)
+            near |= o.distance(q) <= within_mm
+        return float(np.sum(near)) * L / (n * WRAP_SAMPLES)
 
     @property
     def total_angle_deg(self) -> float:
@@ -270,7 +288,8 @@ class ContactEquilibrium:
             "total_angle_deg": self.total_angle_deg, "tip_mm": [float(self.tip[0]), float(self.tip[1])],
             "tip_angle_deg": math.degrees(float(self.tip[2])), "energy_nmm": self.energy,
             "contacts": [c.to_dict() for c in self.contacts],
-            "total_contact_force_n": self.total_force.tolist(), "contact_length_mm": self.contact_length,
+            "total_contact_force_n": self.total_force.tolist(), "contact_span_mm": self.contact_span,
+            f"contact_length_within_{WRAP_MM:g}mm": self.contact_length(),
             "gaps_elsewhere_mm": list(self.gaps), "kkt": self.kkt.to_dict(),
             "obstacles": [o.to_dict() for o in self.scene.obstacles],
             "displacement": None if self.displacement is None else {"x": self.displacement.x, "y": self.displacement.y},
@@ -294,17 +313,17 @@ def _pack(pv: np.ndarray, scene: Scene, offsets: Sequence[float], sigma: np.ndar
 
 
 def _closest(scene: Scene, theta: np.ndarray, offsets: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
-    L = scene.actuator.L
+    L, n = scene.actuator.L, scene.segments
     found = [closest_points(theta, L, offsets[k], o) for k, o in enumerate(scene.obstacles)]
-    return np.array([f[0] for f in found]), np.array([f[1] for f in found])
+    return np.array([f[0] for f in found]).reshape(-1, n), np.array([f[1] for f in found], dtype=bool).reshape(-1, n)
 
 
-class _Problem:
+class ContactProblem:
     """One scene's contact NLP with its bounds: the pieces every solve of a sweep shares."""
 
     def __init__(self, scene: Scene, options: ContactOptions, displacement: Displacement | None):
-        if not scene.obstacles:
-            raise SceneError("solve_contact: the scene has no obstacles (use esba.statics.equilibrium.solve)")
+        if not scene.obstacles and displacement is None:
+            raise SceneError("solve_contact: the scene has no obstacles and no prescribed displacement (use esba.statics.equilibrium.solve)")
         self.scene, self.options = scene, options
         self.model: Model = scene.model()
         self.nlp: ContactNLP = contact_nlp(self.model, tuple(o.kind for o in scene.obstacles), options.tol, options.max_iter, options.linear_solver)
@@ -312,6 +331,10 @@ class _Problem:
         self.offsets = [offset_of(s, scene.actuator.r1) for s in self.sides]
         self.K, self.n = len(scene.obstacles), scene.segments
         self.m = 2 * self.n * self.K
+        self.set_displacement(displacement)
+
+    def set_displacement(self, displacement: Displacement | None) -> None:
+        """Prescribe the tip (or free it): the bounds of the last two constraints."""
         self.displacement = displacement
         fixed = displacement or Displacement()
         self.fixed = np.array([fixed.x is not None, fixed.y is not None])
@@ -341,42 +364,113 @@ class _Problem:
             if not success:
                 return theta, lam, sigma, status, success, iterations, outer
             new, interior = _closest(self.scene, theta, self.offsets)
-            gaps = np.array([o.distance(_points(self.scene, theta, self.offsets[k], new[k])) for k, o in enumerate(self.scene.obstacles)])
+            gaps = np.array([o.distance(_points(self.scene, theta, self.offsets[k], new[k])) for k, o in enumerate(self.scene.obstacles)]).reshape(-1, self.n)
             near = interior & (gaps < 1e-3 * self.scene.actuator.L)
             moved = float(np.max(np.abs(new - sigma)[near], initial=0.0))
-            if moved <= 1e-10 and float(np.min(gaps)) >= -opts.gap_tol:
-                polished = _newton(self, pv, theta, lam, sigma, lbx, steps=4)
+            forces = _multipliers(self, pv, theta, lam, sigma)
+            if moved <= 1e-10 and float(np.min(gaps, initial=INF)) >= -opts.gap_tol:
+                polished = _newton(self, pv, theta, forces, sigma, lbx, steps=4)
                 if polished[3]:
-                    theta, lam, sigma = polished[:3]
-                return theta, lam, sigma, status, success, iterations, outer
+                    theta, forces, sigma = polished[:3]
+                return theta, forces, sigma, status, success, iterations, outer
+            # IPOPT found the active set at the old closest points; Newton on it, the points moving
+            # with theta and the least gap's curvature in the Hessian, converges quadratically
+            polished = _newton(self, pv, theta, forces, sigma, lbx, steps=20)
+            if polished[3]:
+                return (*polished[:3], status, success, iterations, outer)
             sigma = new
         return theta, lam, sigma, "Closest_Points_Not_Converged", False, iterations, opts.max_outer
 
 
-def _newton(prob: _Problem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, lbx: np.ndarray,
-            steps: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+def _envelope_curvature(prob: ContactProblem, theta: np.ndarray, p: np.ndarray, force: np.ndarray, active: np.ndarray) -> np.ndarray:
+    """The Lagrangian's Hessian term of the least gaps at active interior contacts: sum of
+    lambda g_theta,sigma g_theta,sigma^T / g_sigma,sigma (the least gap min_sigma g is more concave than g at fixed sigma)."""
+    n, K = prob.n, prob.K
+    _, dss, dxs = (np.asarray(v, dtype=float) for v in prob.nlp.interior(theta, p))
+    dss, dxs = dss.ravel(), dxs.reshape(K * n, n)
+    out = np.zeros((n, n))
+    for k in range(K):
+        for i in range(n):
+            j = k * 2 * n + n + i
+            if active[j] and dss[k * n + i] > 0:
+                v = dxs[k * n + i]
+                out += force[j] * np.outer(v, v) / dss[k * n + i]
+    return out
+
+
+def _multipliers(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """The contact forces as the non-negative least-squares solution of dU/dtheta = J^T lambda over
+    the points that touch (gap <= 1e-6 mm), the prescribed coordinates' multipliers free.
+
+    IPOPT's multipliers of a degenerate contact (many points touching with no force, as the whole
+    layer lies on the probe at P = 0) are barrier values of order mu / gap; this gives the forces
+    that hold the equilibrium, 0 where none is needed, and the same forces as IPOPT where they are unique."""
+    m = prob.m
+    p = _pack(pv, prob.scene, prob.offsets, sigma)
+    g, jac, grad = (np.asarray(v, dtype=float) for v in prob.nlp.terms(theta, p, lam)[:3])
+    g, grad = g.ravel(), grad.ravel()
+    touching = np.flatnonzero(g[:m] <= 1e-6)
+    fixed = np.flatnonzero(prob.fixed) + m
+    cols = [jac[touching].T, jac[fixed].T, -jac[fixed].T]
+    a = np.hstack(cols) if touching.size + fixed.size else np.zeros((prob.n, 0))
+    if a.shape[1] == 0:
+        return np.zeros_like(lam)
+    x, _ = nnls(a, grad)
+    out = np.zeros_like(lam)
+    out[touching] = -x[:touching.size]
+    out[fixed] = -(x[touching.size:touching.size + fixed.size] - x[touching.size + fixed.size:])
+    return out
+
+
+def _newton(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, lbx: np.ndarray,
+            steps: int = 8, active: np.ndarray | None = None, checked: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
     """Newton on the KKT system of the active set of ``lam`` (the contacts with force, the prescribed
-    coordinates): stationarity and gap = 0 there, the other multipliers 0; the closest points moved
-    with it. True when it converged to round-off with every check of a KKT point met (gaps >= 0
-    elsewhere, forces >= 0); the caller falls back to IPOPT otherwise."""
+    coordinates), or of ``active`` (a mask of the m + 2 constraints): stationarity and gap = 0 there,
+    the other multipliers 0; the closest points moved with it. True when it converged to round-off
+    and, when ``checked``, with every check of a KKT point met (gaps >= 0 elsewhere, forces >= 0);
+    the caller falls back to IPOPT otherwise."""
     opts, m = prob.options, prob.m
     lam = lam.copy()
-    active = np.concatenate([-lam[:m] > opts.force_tol, prob.fixed])
+    if active is None:
+        active = np.concatenate([-lam[:m] > opts.force_tol, prob.fixed])
     lam[~active] = 0.0
+    n, m2 = prob.n, 2 * prob.n
+    active = active.copy()
+    for j in np.flatnonzero(active[:m]):  # an interior point at the end of its segment is its joint's twin
+        k, local = divmod(j, m2)
+        if local >= n:
+            i = local - n
+            twin = k * m2 + i if sigma[k][i] >= 1.0 - 1e-12 else (k * m2 + i - 1 if sigma[k][i] <= 1e-12 and i > 0 else -1)
+            if twin >= 0 and active[twin]:
+                lam[twin] += lam[j]
+                lam[j] = 0.0
+                active[j] = False
     idx = np.flatnonzero(active)
-    n = prob.n
+    interior = np.array([j % m2 >= n for j in idx[idx < m]], dtype=bool)
+    target = np.concatenate([np.zeros(m), prob.targets])
+    converged = False
     for _ in range(steps):
         p = _pack(pv, prob.scene, prob.offsets, sigma)
         g, jac, grad, hess, hess_g, _ = (np.asarray(v, dtype=float) for v in prob.nlp.terms(theta, p, lam))
         g = g.ravel()
-        target = np.concatenate([np.zeros(m), prob.targets])
         r1 = grad.ravel() + jac.T @ lam
         r2 = (g - target)[idx]
         res = max(float(np.max(np.abs(r1))), float(np.max(np.abs(r2), initial=0.0)))
         if res <= 1e-11 * max(1.0, float(np.max(np.abs(grad)))):
-            break
+            if not interior.any():
+                converged = True
+                break
+            new, _ = _closest(prob.scene, theta, prob.offsets)  # an interior contact: its point moves with theta
+            if float(np.max(np.abs(new - sigma))) <= 1e-12:
+                converged = True
+                break
+            sigma = new
+            continue
         a = jac[idx]
-        kkt = np.block([[hess + hess_g, a.T], [a, np.zeros((idx.size, idx.size))]])
+        lagrangian = hess + hess_g
+        if interior.any():
+            lagrangian = lagrangian + _envelope_curvature(prob, theta, p, -lam[:m], active[:m])
+        kkt = np.block([[lagrangian, a.T], [a, np.zeros((idx.size, idx.size))]])
         try:
             step = np.linalg.solve(kkt, -np.concatenate([r1, r2]))
         except np.linalg.LinAlgError:
@@ -385,17 +479,32 @@ def _newton(prob: _Problem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, 
         lam[idx] = lam[idx] + step[n:]
         if not np.all(np.isfinite(theta)) or np.any(theta <= lbx):
             return theta, lam, sigma, False
-        sigma, _ = _closest(prob.scene, theta, prob.offsets)
-    else:
+        if interior.any():
+            sigma, _ = _closest(prob.scene, theta, prob.offsets)
+    if not converged:
         return theta, lam, sigma, False
+    sigma, _ = _closest(prob.scene, theta, prob.offsets)
+    if not checked:
+        return theta, lam, sigma, True
     p = _pack(pv, prob.scene, prob.offsets, sigma)
-    g = np.asarray(prob.nlp.terms(theta, p, lam)[0], dtype=float).ravel()[:m]
-    ok = bool(np.all(g >= -opts.gap_tol) and np.all(-lam[:m] >= -opts.force_tol))
+    g = np.asarray(prob.nlp.terms(theta, p, lam)[0], dtype=float).ravel()
+    ok = bool(np.all(g[:m] >= -opts.gap_tol) and np.all(-lam[:m] >= -opts.force_tol)) and float(np.max(np.abs(g[m:] - prob.targets)[prob.fixed], initial=0.0)) <= opts.gap_tol
     return theta, lam, sigma, ok
 
 
 def _points(scene: Scene, theta: np.ndarray, offset: float, sigma: np.ndarray) -> np.ndarray:
     return surface_points(theta, scene.actuator.L, offset, sigma[:, None])[:, 0]
+
+
+def _merged(contacts: list[Contact]) -> list[Contact]:
+    """Contacts in order along the length, one per point (a joint's and its segment's end point are one)."""
+    out: list[Contact] = []
+    for c in sorted(contacts, key=lambda c: (c.obstacle, c.s)):
+        if out and out[-1].obstacle == c.obstacle and abs(out[-1].s - c.s) <= 1e-12:
+            prev = out.pop()
+            c = Contact(c.obstacle, c.kind, c.surface, c.s, c.where, c.point, prev.force + c.force, c.direction, min(prev.gap, c.gap))
+        out.append(c)
+    return sorted(out, key=lambda c: c.s)
 
 
 def _resolve(scene: Scene, pressure: float | None) -> float:
@@ -447,7 +556,11 @@ def solve_contact(
         raise SceneError(f"scene={checks.quote(scene)}: expected an esba.model.scene.Scene")
     if displacement is not None and not isinstance(displacement, Displacement):
         raise ContactOptionsError(f"displacement={checks.quote(displacement)}: expected a Displacement")
-    prob = problem if problem is not None else _Problem(scene, options, displacement)
+    if problem is None:
+        prob = ContactProblem(scene, options, displacement)
+    else:
+        prob = problem
+        prob.set_displacement(displacement)
     pressure = _resolve(scene, pressure)
     t0 = time.perf_counter()
     model = prob.model
@@ -477,7 +590,7 @@ def solve_contact(
     return _result(prob, pv, pressure, theta, lam, sigma, status, success, iterations, outer, time.perf_counter() - t0, lbx)
 
 
-def _result(prob: _Problem, pv: np.ndarray, pressure: float, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, status: str,
+def _result(prob: ContactProblem, pv: np.ndarray, pressure: float, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, status: str,
             success: bool, iterations: int, outer: int, elapsed: float, lbx: np.ndarray) -> ContactEquilibrium:
     scene, opts, n, K = prob.scene, prob.options, prob.n, prob.K
     p = _pack(pv, scene, prob.offsets, sigma)
@@ -487,17 +600,8 @@ def _result(prob: _Problem, pv: np.ndarray, pressure: float, theta: np.ndarray, 
     force = -lam[:m]
     gap = g[:m]
     stationarity = float(np.max(np.abs(grad + jac.T @ lam)))
-    # the least gap's curvature at an interior contact: -g_ts g_ts^T / g_ss, times -lambda
-    ds, dss, dxs = (np.asarray(v, dtype=float) for v in prob.nlp.interior(theta, p))
-    dss, dxs = dss.ravel(), dxs.reshape(K * n, n)
-    lagrangian = hess + hess_g
     active = force > opts.force_tol
-    for k in range(K):
-        for i in range(n):
-            j = k * 2 * n + n + i
-            if active[j] and dss[k * n + i] > 0:
-                v = dxs[k * n + i]
-                lagrangian = lagrangian + force[j] * np.outer(v, v) / dss[k * n + i]
+    lagrangian = hess + hess_g + _envelope_curvature(prob, theta, p, force, active)
     rows = [jac[j] for j in range(m) if active[j]]
     if prob.displacement is not None:
         rows += [jac[m + c] for c, v in enumerate((prob.displacement.x, prob.displacement.y)) if v is not None]
@@ -514,9 +618,9 @@ def _result(prob: _Problem, pv: np.ndarray, pressure: float, theta: np.ndarray, 
     grazing = int(np.sum((gap <= opts.gap_tol) & ~active))
     kkt = KKT(
         stationarity=stationarity,
-        min_gap=float(np.min(gap)),
-        min_force=float(np.min(force)),
-        complementarity=float(np.max(np.abs(force * gap))),
+        min_gap=float(np.min(gap, initial=INF)) if m else INF,
+        min_force=float(np.min(force, initial=INF)) if m else INF,
+        complementarity=float(np.max(np.abs(force * gap), initial=0.0)),
         reduced_eigenvalues=eig,
         active=len(rows),
         grazing=grazing,
@@ -535,14 +639,19 @@ def _result(prob: _Problem, pv: np.ndarray, pressure: float, theta: np.ndarray, 
                 where = "tip" if i == n - 1 else f"joint {i + 1}"
             else:
                 i, frac = local - n, float(sigma[k][local - n])
-                where = f"inside segment {i + 1}"
+                if frac >= 1.0 - 1e-12:
+                    where = "tip" if i == n - 1 else f"joint {i + 1}"
+                elif frac <= 1e-12:
+                    where = f"joint {i}" if i else "base"
+                else:
+                    where = f"inside segment {i + 1}"
             q = surface_points(theta, L, prob.offsets[k], np.array([[frac]] * n))[i, 0]
             _, normal, _ = o.derivatives(q[None, :])
             contacts.append(Contact(k, o.kind, prob.sides[k], (i + frac) / n, where, (float(q[0]), float(q[1])), float(force[j]),
                                     (float(normal[0, 0]), float(normal[0, 1])), float(gap[j])))
         rest = [gap[j] for j in idx if not active[j]]
         gaps.append(float(min(rest)) if rest else float("nan"))
-    contacts.sort(key=lambda c: c.s)
+    contacts = _merged(contacts)
     reaction = None
     if prob.displacement is not None:
         reaction = -lam[m:m + 2] * np.array([prob.displacement.x is not None, prob.displacement.y is not None])

@@ -120,7 +120,7 @@ def _build(model: Model, kinds: tuple[str, ...], tol: float, max_iter: int, line
         ds = ca.diag(ca.jacobian(gi, sg))
         dss = ca.diag(ca.jacobian(ds, sg))
         dxs = ca.jacobian(ds, x)
-    else:  # pragma: no cover - a contact NLP has an obstacle
+    else:  # no obstacle: only a prescribed displacement
         ds = dss = ca.SX(0, 1)
         dxs = ca.SX(0, n)
     interior = ca.Function("contact_interior", [x, p], [ds, dss, dxs], ["theta", "p"], ["d_sigma", "d_sigma2", "d_theta_sigma"])
