@@ -192,6 +192,9 @@ class KKT:
     ``reduced_eigenvalues`` of the Lagrangian's Hessian on the tangent space of the ``active``
     constraints (N mm/rad^2; all > 0: stable on the constrained set); ``grazing``: points that touch
     with no force (at an event: touch or lift-off), left out of the tangent space.
+    ``dead_load_eigenvalues``: of the same Hessian on every direction, i.e. with each contact force
+    and reaction replaced by a dead load of its size: negative ones mark where a force-controlled
+    load would not hold the state (negative stiffness) while the constraint does.
     """
 
     stationarity: float
@@ -202,12 +205,19 @@ class KKT:
     active: int
     grazing: int
     stability: str
+    dead_load_eigenvalues: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def dead_load_stable(self) -> bool:
+        """The state would hold under dead loads of the same forces (no negative stiffness)."""
+        return stability_verdict(self.dead_load_eigenvalues) == "stable" if self.dead_load_eigenvalues.size else True
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "stationarity_nmm": self.stationarity, "min_gap_mm": self.min_gap, "min_force_n": self.min_force,
             "complementarity_nmm": self.complementarity, "reduced_eigenvalues": [float(v) for v in self.reduced_eigenvalues],
             "active": self.active, "grazing": self.grazing, "stability": self.stability,
+            "dead_load_eigenvalues": [float(v) for v in self.dead_load_eigenvalues], "dead_load_stable": self.dead_load_stable,
         }
 
 
@@ -625,6 +635,7 @@ def _result(prob: ContactProblem, pv: np.ndarray, pressure: float, theta: np.nda
         active=len(rows),
         grazing=grazing,
         stability=verdict,
+        dead_load_eigenvalues=np.sort(np.linalg.eigvalsh(0.5 * (hess + hess_g + (hess + hess_g).T))),
     )
     contacts, gaps = [], []
     L = scene.actuator.L
