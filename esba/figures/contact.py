@@ -54,9 +54,10 @@ def _shapes(ax: Axes, path: ContactPath, picks: Sequence[int]) -> None:
     cmap = __import__("matplotlib").colormaps["viridis"]
     L = path.points[0].scene.actuator.L
     draw_obstacles(ax, path.points[0], 0.8 * L)
+    biggest = max([c.force for i in picks for c in path.points[i].contacts] + [1e-9])
     for k, i in enumerate(picks):
         p = path.points[i]
-        draw_contact_shape(ax, p, cmap(k / max(len(picks) - 1, 1)), label=f"{p.pressure:.3g} MPa")
+        draw_contact_shape(ax, p, cmap(k / max(len(picks) - 1, 1)), label=f"{p.pressure:.3g} MPa", arrows=0.2 * L / biggest)
     ax.legend(fontsize=7, loc="best")
 
 
@@ -76,7 +77,7 @@ def blocked_figure(path: ContactPath) -> Figure:
     a.set_title(f"blocked force, n = {path.points[0].scene.segments}, frictionless flat probe at the tip", fontsize=9)
     a.grid(alpha=0.3)
     _shapes(b, path, _picks(len(path.points)))
-    b.set_title("the layer against the probe (arrows: contact force)", fontsize=9)
+    b.set_title("the layer against the probe (arrows: contact force, to scale)", fontsize=9)
     return fig
 
 
