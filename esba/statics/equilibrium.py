@@ -259,6 +259,10 @@ class Equilibrium:
     multistability : Multistability or None
         The other stable states of the scene, which one the history reached and why, or why
         ``solve`` did not look (:mod:`esba.statics.equilibria`); None for :func:`evaluate`.
+    contact : ContactEquilibrium or None
+        For a scene with obstacles, the constrained solve (:mod:`esba.statics.contact`): its
+        contacts, gaps and KKT numbers. ``gradient_norm`` is then the Lagrangian's stationarity and
+        ``eigenvalues`` those of the reduced Hessian on the active constraints' tangent space.
     """
 
     scene: Scene
@@ -285,6 +289,7 @@ class Equilibrium:
     validity: tuple[Finding, ...] = ()
     history: str = ""
     multistability: Multistability | None = None
+    contact: Any = None
 
     @property
     def multistable(self) -> bool | None:
@@ -358,6 +363,7 @@ class Equilibrium:
             "history": self.history,
             "multistable": self.multistable,
             "multistability": None if self.multistability is None else self.multistability.to_dict(),
+            "contact": None if self.contact is None else {k: v for k, v in self.contact.to_dict().items() if k in CONTACT_KEYS},
             "iterations": self.iterations,
             "steps": self.steps,
             "gradient_norm": self.gradient_norm,
@@ -556,6 +562,8 @@ def solve(
         theta0 = _angles("theta0", theta0, scene.segments, bounded=True)
     if unloaded is not None:
         unloaded = _angles("unloaded", unloaded, scene.segments)
+    if scene.obstacles:
+        return _solve_with_contact(scene, options, pressure)
     model = scene.model()  # loaded (or generated) before the clock starts
     t_start = time.perf_counter()
     n = scene.segments
@@ -629,6 +637,31 @@ def solve(
         how = "none (one IPOPT solve at the full load)"
     multistability = _multistability(scene, model, result, how, history, options)
     return replace(result, history=how, multistability=multistability)
+
+
+#: What ``Equilibrium.to_dict`` keeps of a contact solve (its shape and angles are the result's own).
+CONTACT_KEYS = ("contacts", "total_contact_force_n", "contact_span_mm", "gaps_elsewhere_mm", "kkt", "obstacles", "outer_passes")
+
+
+def _solve_with_contact(scene: Scene, options: SolverOptions, pressure: float | None) -> Equilibrium:
+    """A scene with obstacles: the constrained equilibrium along the load history from rest
+    (:func:`esba.statics.contact.solve_contact`), as an :class:`Equilibrium` with its ``contact``."""
+    from .contact import ContactOptions, solve_contact
+
+    rc = solve_contact(scene, ContactOptions(tol=options.tol, max_iter=options.max_iter, linear_solver=options.linear_solver,
+                                             critical_tol=options.critical_tol, samples_per_segment=options.samples_per_segment), pressure=pressure)
+    model = scene.model()
+    pv = model.param_vector(scene.parameters(rc.pressure))
+    state = model.state(rc.theta, pv)
+    how = f"inflate-then-load with contact, from rest ({ContactOptions().ramp_steps} steps each)"
+    return Equilibrium(
+        scene=scene, model=model, pressure=rc.pressure, theta=rc.theta, tip=rc.tip, centreline=rc.centreline,
+        energy=rc.energy, terms=state["terms"], gradient_norm=rc.kkt.stationarity, eigenvalues=rc.kkt.reduced_eigenvalues,
+        stability=rc.kkt.stability, status=rc.status, success=rc.success, iterations=rc.iterations, steps=rc.outer,
+        solve_time_s=rc.solve_time_s, message=rc.message, certificate=f"IPOPT with gap >= 0 constraints, then Newton on the active set: {rc.status}",
+        validity=assess(scene, rc.theta, rc.pressure, rc.tip), history=how,
+        multistability=not_looked("a scene with obstacles: the search for other states is of the free actuator"), contact=rc,
+    )
 
 
 def _multistability(scene: Scene, model: Model, result: Equilibrium, how: str, history: LoadHistory | None, options: SolverOptions) -> Multistability:

@@ -270,9 +270,9 @@ class Cylinder(Obstacle):
     def rest_distance(self, L: float, r1: float) -> float:
         c = np.asarray(self.centre)
         nearest = np.array([min(max(c[0], 0.0), L), min(max(c[1], -2.0 * r1), 0.0)])
-        inside = 0.0 <= c[0] <= L and -2.0 * r1 <= c[1] <= 0.0
-        gap = float(np.linalg.norm(c - nearest))
-        return -self.radius if inside else gap - self.radius
+        if 0.0 <= c[0] <= L and -2.0 * r1 <= c[1] <= 0.0:  # the axis inside the band: as deep as it is from the band's edge, plus R
+            return -self.radius - float(min(c[0], L - c[0], -c[1], c[1] + 2.0 * r1))
+        return float(np.linalg.norm(c - nearest)) - self.radius
 
     def describe(self) -> str:
         return f"cylinder of radius {self.radius:g} at [{self.centre[0]:g}, {self.centre[1]:g}]"

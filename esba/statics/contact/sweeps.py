@@ -10,7 +10,7 @@ active set, checked; IPOPT where that fails), and locates every contact event be
   rises; the actuator bends into an S against it. The blocked force is the contact force.
 * :func:`grasp`: a cylinder of radius R at a given centre; the contact force and contact length
   against pressure and the pressure at which it first touches.
-* :func:`tester_path`: the tip's horizontal coordinate prescribed at a fixed pressure, the reaction
+* :func:`displacement_path`: the tip's horizontal coordinate prescribed at a fixed pressure, the reaction
   force read, through the negative stiffness that a force-controlled ramp (:func:`force_ramp`) snaps across.
 
 Examples
@@ -37,7 +37,7 @@ from esba.paths.events import ContactEvent, locate_event
 
 from .equilibrium import ContactEquilibrium, ContactOptions, ContactProblem, Displacement, _closest, _newton, _pack, solve_contact
 
-__all__ = ["ContactPath", "contact_path", "blocked_force", "grasp", "tester_path", "force_ramp", "ForceRamp", "MAX_POINTS"]
+__all__ = ["ContactPath", "contact_path", "blocked_force", "grasp", "displacement_path", "force_ramp", "ForceRamp", "MAX_POINTS"]
 
 #: The most points a contact path takes (each a solve).
 MAX_POINTS = 10_000
@@ -243,7 +243,7 @@ def force_ramp(scene: Scene, pressure: float, forces: Sequence[float], jump_mm: 
     return ForceRamp(forces, np.array(ys), tuple(jumps))
 
 
-def tester_path(scene: Scene, pressure: float, tip_y: Sequence[float], options: ContactOptions | None = None) -> ContactPath:
+def displacement_path(scene: Scene, pressure: float, tip_y: Sequence[float], options: ContactOptions | None = None) -> ContactPath:
     """The tip's horizontal coordinate prescribed through ``tip_y`` (mm) at ``pressure``, x free (a
     frictionless tester); each point's ``reaction`` is the force the tester applies. ``scene``'s
     payloads are removed (the tester replaces them); its obstacles stay."""
