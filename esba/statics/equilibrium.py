@@ -653,7 +653,7 @@ def _solve_with_contact(scene: Scene, options: SolverOptions, pressure: float | 
     model = scene.model()
     pv = model.param_vector(scene.parameters(rc.pressure))
     state = model.state(rc.theta, pv)
-    how = f"inflate-then-load with contact, from rest ({ContactOptions().ramp_steps} steps each)"
+    how = "inflate-then-load with contact, from rest (steps halved where one fails or passes through an obstacle)"
     return Equilibrium(
         scene=scene, model=model, pressure=rc.pressure, theta=rc.theta, tip=rc.tip, centreline=rc.centreline,
         energy=rc.energy, terms=state["terms"], gradient_norm=rc.kkt.stationarity, eigenvalues=rc.kkt.reduced_eigenvalues,

@@ -41,6 +41,7 @@ from esba.infra import checks
 from esba.infra.errors import InputError
 from esba.infra.threads import single_threaded
 from esba.model.closed_form import pressure_for_angle
+from esba.model.contact.obstacles import Cylinder
 from esba.model.contact.surface import closest_points, offset_of, surface_points
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Scene, SceneError, check_pressure
@@ -77,7 +78,8 @@ class ContactOptions:
         ``mumps`` or ``spral``.
     ramp_steps : int
         Steps of the load history from the rest state (pressure, then payloads), each a warm-started
-        contact solve: contact depends on the way there.
+        contact solve: contact depends on the way there. A step that fails, or whose shape passes
+        through an obstacle on the way (:func:`_crosses`), is halved (up to :data:`MAX_HALVINGS` times).
     max_outer : int
         Passes that move each segment's constraint point to its exact closest point.
     force_tol : float
@@ -96,7 +98,7 @@ class ContactOptions:
     tol: float = 1e-10
     max_iter: int = 300
     linear_solver: str = "mumps"
-    ramp_steps: int = 4
+    ramp_steps: int = 1
     max_outer: int = 30
     force_tol: float = 1e-7
     gap_tol: float = 1e-7
@@ -228,6 +230,8 @@ class ContactState:
     theta: np.ndarray
     lam_g: np.ndarray
     sigma: np.ndarray
+    pressure: float = 0.0
+    load: float = 1.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -408,6 +412,46 @@ def _envelope_curvature(prob: ContactProblem, theta: np.ndarray, p: np.ndarray, 
     return out
 
 
+#: The most times a solve halves a step of its load history (a step that fails, or whose shape passes through an obstacle).
+MAX_HALVINGS = 40
+
+
+def _crosses(prob: ContactProblem, before: np.ndarray, after: np.ndarray) -> bool:
+    """Whether the shapes between two states (linear in theta) reach deep into an obstacle: the step
+    passed through it rather than meeting it (a deeper reach than min(1 mm, R/4))."""
+    L = prob.scene.actuator.L
+    grid = np.tile(np.linspace(0.0, 1.0, 9), (prob.n, 1))
+    for k, o in enumerate(prob.scene.obstacles):
+        deep = min(1.0, 0.25 * o.radius) if isinstance(o, Cylinder) else 1.0
+        for t in (0.25, 0.5, 0.75):
+            q = surface_points((1 - t) * before + t * after, L, prob.offsets[k], grid)
+            if float(np.min(o.distance(q))) < -deep:
+                return True
+    return False
+
+
+def _active_set(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, lbx: np.ndarray):
+    """A primal-dual active-set method from a neighbouring equilibrium: Newton on the previous active
+    set; a point that penetrates is added, a contact whose force comes out negative dropped, one at
+    a time, until every first-order KKT condition holds. (theta, lam_g, sigma) or None when it fails
+    (IPOPT then solves)."""
+    opts, m = prob.options, prob.m
+    active = np.concatenate([-lam[:m] > opts.force_tol, prob.fixed])
+    for _ in range(4 * prob.n + 2):
+        th, lm, sg, fine = _newton(prob, pv, theta, np.where(active, np.minimum(lam, 0.0), 0.0), sigma, lbx, steps=30, active=active, checked=False)
+        if not fine:
+            return None
+        force = -lm[:m]
+        gaps = np.asarray(prob.nlp.terms(th, _pack(pv, prob.scene, prob.offsets, sg), lm)[0], dtype=float).ravel()[:m]
+        if m and force.min() < -opts.force_tol:
+            active[int(np.argmin(force))] = False
+        elif m and gaps.min() < -opts.gap_tol:
+            active[int(np.argmin(gaps))] = True
+        else:
+            return th, lm, sg
+    return None
+
+
 def _multipliers(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray) -> np.ndarray:
     """The contact forces as the non-negative least-squares solution of dU/dtheta = J^T lambda over
     the points that touch (gap <= 1e-6 mm), the prescribed coordinates' multipliers free.
@@ -580,22 +624,43 @@ def solve_contact(
     if warm is not None:
         steps = [(pressure, 1.0)]
         theta, lam = np.asarray(warm.theta, dtype=float), np.asarray(warm.lam_g, dtype=float)
+        sigma, here = np.asarray(warm.sigma, dtype=float), (float(warm.pressure), float(warm.load))
     else:
         steps = _ramp(scene, pressure, options.ramp_steps)
-        theta, lam = np.zeros(scene.segments), None
-    status, success, sigma = "", True, None
-    if warm is not None and options.newton:  # the fast path: Newton on the previous active set, checked
-        pv = model.param_vector(full)
-        theta_n, lam_n, sigma_n, fine = _newton(prob, pv, theta, lam, np.asarray(warm.sigma, dtype=float), lbx)
-        if fine:
-            return _result(prob, pv, pressure, theta_n, lam_n, sigma_n, "Newton_Active_Set", True, 0, 0, time.perf_counter() - t0, lbx)
-    for p_k, load in steps:
-        pv = model.param_vector(scene.parameters(p_k, load))
-        theta, lam, sigma, status, success, it, out = prob.solve(pv, theta, lam, model.lower_bounds(scene.parameters(p_k, load)))
-        iterations += it
-        outer += out
+        theta, lam = np.zeros(scene.segments), np.zeros(prob.m + 2)
+        sigma, here = _closest(scene, theta, prob.offsets)[0], (0.0, 0.0)
+    status, success, newton_steps, ipopt_steps, halvings = "", True, 0, 0, 0
+    todo = list(reversed(steps))
+    while todo:
+        target = todo.pop()
+        values = scene.parameters(*target)
+        pv, lbx_k = model.param_vector(values), model.lower_bounds(values)
+        found, how = None, ""
+        if options.newton:  # the fast path: Newton from the previous state on an active set it adjusts, checked
+            found, how = _active_set(prob, pv, theta, lam, sigma, lbx_k), "newton"
+        if found is None:
+            th, lm, sg, status, success, it, out = prob.solve(pv, theta, lam if np.any(lam) else None, lbx_k)
+            iterations += it
+            outer += out
+            found, how = ((th, lm, sg) if success else None), "ipopt"
+        if found is None or _crosses(prob, theta, found[0]):
+            if halvings < MAX_HALVINGS:  # a smaller step of the load history
+                halvings += 1
+                todo += [target, (0.5 * (here[0] + target[0]), 0.5 * (here[1] + target[1]))]
+                continue
+            if found is None:
+                theta, lam, sigma = th, lm, sg
+                break
+            status = "Passed_Through_Obstacle"
+            success = False
+        theta, lam, sigma = found
+        here = target
+        newton_steps += how == "newton"
+        ipopt_steps += how == "ipopt"
         if not success:
             break
+    if success and ipopt_steps == 0:
+        status = "Newton_Active_Set"
     pv = model.param_vector(full)
     return _result(prob, pv, pressure, theta, lam, sigma, status, success, iterations, outer, time.perf_counter() - t0, lbx)
 
@@ -685,5 +750,5 @@ def _result(prob: ContactProblem, pv: np.ndarray, pressure: float, theta: np.nda
     return ContactEquilibrium(
         scene=scene, pressure=pressure, theta=theta, tip=tip, centreline=cl, energy=energy, contacts=tuple(contacts),
         gaps=gaps_clean, kkt=kkt, reaction=reaction, displacement=prob.displacement, status=status, success=success,
-        iterations=iterations, outer=outer, solve_time_s=elapsed, state=ContactState(theta, lam, sigma), message=message,
+        iterations=iterations, outer=outer, solve_time_s=elapsed, state=ContactState(theta, lam, sigma, pressure, 1.0), message=message,
     )
