@@ -113,7 +113,13 @@ def tester_figure(path: ContactPath, ramps: Sequence[ForceRamp] = (), force: flo
     f = np.array([-p.reaction[1] for p in path.points])
     soft = np.array([not p.kkt.dead_load_stable for p in path.points])
     ok = np.array([p.ok for p in path.points])
-    ax.plot(y[ok], f[ok], "-", color="C0", lw=1.5, label="displacement control (tip y prescribed)")
+    thetas = np.array([p.theta for p in path.points])
+    cuts = [0] + [k + 1 for k in np.flatnonzero(np.max(np.abs(np.diff(thetas, axis=0)), axis=1) > 0.1)] + [len(y)]
+    for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):  # one line per branch; a jump of the shape is drawn dotted
+        part = np.arange(a, b)[ok[a:b]]
+        ax.plot(y[part], f[part], "-", color="C0", lw=1.5, label="displacement control (tip y prescribed)" if k == 0 else None)
+        if a > 0:
+            ax.plot(y[a - 1:a + 1], f[a - 1:a + 1], ":", color="C0", lw=1.0)
     ax.plot(y[ok & soft], f[ok & soft], "o", color="C3", ms=4, label="... where force control is unstable")
     for k, r in enumerate(ramps):
         ax.plot(r.tip_y, r.forces, ".", color="C2", ms=4, alpha=0.8, label="force control (quasi-static ramp)" if k == 0 else None)

@@ -222,14 +222,14 @@ class ForceRamp:
                 "jumps": [{"force_n": f, "tip_y_before_mm": a, "tip_y_after_mm": b} for f, a, b in self.jumps]}
 
 
-def force_ramp(scene: Scene, pressure: float, forces: Sequence[float], jump_mm: float = 5.0) -> ForceRamp:
+def force_ramp(scene: Scene, pressure: float, forces: Sequence[float], jump_mm: float = 5.0, theta0: Sequence[float] | None = None) -> ForceRamp:
     """A horizontal tip force (a dead load at 90 degrees) raised through ``forces`` at ``pressure``, each
     step an IPOPT solve from the previous state (the quasi-static ramp a force-controlled tester makes):
     where the stable branch ends it falls to another, a jump of the tip larger than ``jump_mm``."""
     from esba.statics.equilibrium import SolverOptions, solve
 
     forces = _check_values("forces", forces, lambda v, w: checks.finite(w, v, InputError))
-    theta = None
+    theta = None if theta0 is None else np.asarray(theta0, dtype=float)
     ys, jumps = [], []
     opts = SolverOptions(multistability="never")
     base = scene.replace(obstacles=(), pressure=pressure)
