@@ -18,7 +18,7 @@ from esba.statics.contact.sweeps import ContactPath, ForceRamp
 
 from .scenes import new_figure, setup_frame_axes
 
-__all__ = ["blocked_figure", "grasp_figure", "tester_figure", "draw_obstacles", "draw_contact_shape"]
+__all__ = ["blocked_figure", "grasp_figure", "tester_figure", "contact_states_figure", "draw_obstacles", "draw_contact_shape"]
 
 
 def draw_obstacles(ax: Axes, point: ContactEquilibrium, extent: float) -> None:
@@ -134,4 +134,20 @@ def tester_figure(path: ContactPath, ramps: Sequence[ForceRamp] = (), force: flo
     ax.set_title(f"tester at P = {p0.pressure:g} MPa, n = {p0.scene.segments}", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
+    return fig
+
+
+def contact_states_figure(states: Sequence[ContactEquilibrium]) -> Figure:
+    """Several equilibria of one scene with obstacles: stable on the constrained set solid, others dashed."""
+    fig = new_figure(6.0, 5.5)
+    ax = fig.subplots()
+    setup_frame_axes(ax)
+    draw_obstacles(ax, states[0], 0.8 * states[0].scene.actuator.L)
+    for k, s in enumerate(states):
+        cl = s.centreline
+        ax.plot(cl[:, 1], cl[:, 0], "-" if s.ok else "--", color=f"C{k % 10}", label=f"#{k + 1}: {s.kkt.stability}, U = {s.energy:.3f} N mm")
+        for c in s.contacts:
+            ax.plot(c.point[1], c.point[0], "o", color=f"C{k % 10}", ms=3.5)
+    ax.legend(fontsize=7)
+    ax.set_title(f"equilibria with contact at P = {states[0].pressure:.4g} MPa", fontsize=9)
     return fig

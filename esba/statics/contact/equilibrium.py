@@ -194,6 +194,7 @@ class KKT:
     ``reduced_eigenvalues`` of the Lagrangian's Hessian on the tangent space of the ``active``
     constraints (N mm/rad^2; all > 0: stable on the constrained set); ``grazing``: points that touch
     with no force (at an event: touch or lift-off), left out of the tangent space.
+    A grazing point is reported in the count, not as a failure: the equilibrium is a KKT point.
     ``dead_load_eigenvalues``: of the same Hessian on every direction, i.e. with each contact force
     and reaction replaced by a dead load of its size: negative ones mark where a force-controlled
     load would not hold the state (negative stiffness) while the constraint does.
@@ -690,7 +691,8 @@ def _result(prob: ContactProblem, pv: np.ndarray, pressure: float, theta: np.nda
     reduced = z.T @ lagrangian @ z
     eig = np.sort(np.linalg.eigvalsh(0.5 * (reduced + reduced.T))) if z.shape[1] else np.zeros(0)
     verdict = stability_verdict(eig, opts.critical_tol) if eig.size else "stable"
-    grazing = int(np.sum((gap <= opts.gap_tol) & ~active))
+    movable = np.linalg.norm(jac[:m], axis=1) > 1e-12  # the base point (and a segment's end at it) cannot move
+    grazing = int(np.sum((gap <= opts.gap_tol) & ~active & movable))
     kkt = KKT(
         stationarity=stationarity,
         min_gap=float(np.min(gap, initial=INF)) if m else INF,
@@ -741,8 +743,6 @@ def _result(prob: ContactProblem, pv: np.ndarray, pressure: float, theta: np.nda
         success, message = False, f"penetration {-kkt.min_gap:.3g} mm > gap_tol"
     elif verdict != "stable":
         message = f"the equilibrium is {verdict} on the constrained set: smallest reduced-Hessian eigenvalue {eig[0]:.3g} N mm/rad^2"
-    elif grazing:
-        message = f"{grazing} point(s) touch with no force (an event: touch or lift-off)"
     model = prob.model
     cl = model.centreline(theta, L, samples=n * opts.samples_per_segment + 1)
     energy = model.energy(theta, pv)
