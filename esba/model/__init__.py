@@ -4,6 +4,6 @@
 (finding, checking and loading the models that ``derive`` emitted, generating a missing one on
 demand), :mod:`.closed_form` (the unloaded pressure of a target angle), :mod:`.structured` (the O(n)
 linear algebra of the chain's Hessian), :mod:`.stability` (verdicts from eigenvalues),
-:mod:`.validity` (where a result leaves the paper's model) and :mod:`.resolution` (what the
-solver can resolve). May import :mod:`esba.infra` and ``derive``.
+:mod:`.validity` (where a result leaves the paper's model), :mod:`.resolution` (what the
+solver can resolve) and :mod:`.contact` (obstacles in a scene and the surfaces of the body they touch). May import :mod:`esba.infra` and ``derive``.
 """

@@ -3,6 +3,7 @@
 :mod:`.equilibrium` (:func:`~esba.statics.equilibrium.solve`, certified by IPOPT), :mod:`.history`
 (the load histories a solve can follow), :mod:`.equilibria` (every equilibrium of a scene by deflated
 Newton, and solve()'s multistability check), :mod:`.batch`
-(arrays of scenes), :mod:`.batch_options` and :mod:`.compiled` (the batch's settings and its C).
+(arrays of scenes), :mod:`.batch_options` and :mod:`.compiled` (the batch's settings and its C),
+:mod:`.contact` (equilibria with obstacles: contact forces as multipliers, KKT checks, paths with contact).
 May import :mod:`esba.paths` and everything below it.
 """
