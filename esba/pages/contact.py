@@ -184,9 +184,10 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         lines.append(f"- {e.kind} at {e.where}: P = {e.parameter:.6f} MPa ({e.status})")
     lines += [
         "",
-        "A `guess` is an event the old active set could not be continued across (a contact moving onto a joint): the",
-        "midpoint of the bracket. The model's arcs touch a cylinder at points, one per segment at most; the length",
-        "within 0.1 mm says how far the finger lies on it.",
+        "A slide is located where the slope of the gap at the segment's end changes sign (the layer is",
+        "tangent-continuous at a joint, so a contact crosses it at one instant); a `guess` would be an event the old",
+        "active set could not be continued to (the bracket's midpoint). The model's arcs touch a cylinder at points,",
+        "one per segment at most; the length within 0.1 mm says how far the finger lies on it.",
         "",
         f"![finger closing on a cylinder]({fig / FIGURES['grasp']})",
         "",

@@ -169,3 +169,15 @@ def test_bad_input_is_one_line(make, message):
         make()
     text = str(info.value)
     assert message in text and "\n" not in text
+
+
+def test_a_contact_sliding_across_a_joint_is_located():
+    g = grasp(Scene(segments=8), (70.0, 45.0), 15.0, [0.24, 0.25])
+    (slide,) = [e for e in g.events if e.kind == "slide"]
+    assert slide.status == "converged" and "across joint 6 into segment 7" in slide.where
+    scene = g.points[0].scene
+    before = solve_contact(scene, pressure=slide.parameter - 1e-4)
+    after = solve_contact(scene, pressure=slide.parameter + 1e-4)
+    assert [c.where for c in before.contacts] == ["inside segment 6"]
+    assert [c.where for c in after.contacts] == ["inside segment 7"]
+    assert 0.745 < before.contacts[0].s < 0.75 < after.contacts[0].s < 0.755  # either side of joint 6 (s = 6/8)

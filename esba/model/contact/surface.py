@@ -115,6 +115,16 @@ def closest_points(theta: Any, L: float, offset: float, obstacle: Obstacle, newt
     h = 1.0 / (GRID - 1)
     lo, hi = (j - 1) * h, (j + 1) * h
     sigma = j * h
+    if not found.all():  # a minimum inside the first or last grid interval shows as a slope into the segment at its end
+        ends = np.tile([0.0, 1.0], (n, 1))
+        q, q1, _ = _along(theta, L, offset, ends, starts, phi0, True)
+        _, g, _ = obstacle.derivatives(q)
+        slope = np.einsum("ijk,ijk->ij", g, q1)
+        first = ~found & (slope[:, 0] < 0) & (d[:, 0] <= d[:, -1])
+        last = ~found & ~first & (slope[:, 1] > 0)
+        lo, hi, sigma = np.where(first, 0.0, lo), np.where(first, h, hi), np.where(first, 0.5 * h, sigma)
+        lo, hi, sigma = np.where(last, 1.0 - h, lo), np.where(last, 1.0, hi), np.where(last, 1.0 - 0.5 * h, sigma)
+        found = found | first | last
     for _ in range(newton_steps):
         q, q1, q2 = _along(theta, L, offset, sigma[:, None], starts, phi0, True)
         _, g, hess = obstacle.derivatives(q[:, 0])

@@ -516,7 +516,12 @@ def _newton(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.nda
                 converged = True
                 break
             new, _ = _closest(prob.scene, theta, prob.offsets)  # an interior contact: its point moves with theta
-            if float(np.max(np.abs(new - sigma))) <= 1e-12:
+            moving = np.zeros_like(sigma, dtype=bool)
+            for j in idx[idx < m]:
+                k, local = divmod(j, m2)
+                moving[k, local - n] = local >= n
+            if float(np.max(np.abs(new - sigma)[moving], initial=0.0)) <= 1e-12:
+                sigma = new
                 converged = True
                 break
             sigma = new

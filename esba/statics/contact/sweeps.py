@@ -32,6 +32,7 @@ import numpy as np
 from esba.infra import checks
 from esba.infra.errors import InputError
 from esba.model.contact.obstacles import Cylinder, HalfPlane
+from esba.model.contact.surface import surface_derivatives
 from esba.model.scene import Payload, Scene, check_pressure
 from esba.paths.events import ContactEvent, locate_event
 
@@ -123,30 +124,76 @@ def _events(prob: ContactProblem, setup: Callable[[float], tuple[np.ndarray, np.
         g = np.asarray(prob.nlp.terms(theta, _pack(pv, prob.scene, prob.offsets, sigma), lam)[0], dtype=float).ravel()
         return g, -lam
 
+    n, m2 = prob.n, 2 * prob.n
+    gained, lost = set(np.flatnonzero(new & ~old).tolist()), set(np.flatnonzero(old & ~new).tolist())
+
+    def joint(k: int, i: int) -> int:  # the constraint of joint i + 1 (the end of segment i)
+        return k * m2 + i
+
+    def inside(k: int, i: int) -> int:  # the constraint inside segment i
+        return k * m2 + n + i
+
+    def slope(k: int, i: int, end: float, sign: float, held: int = -1, by: int = -1):
+        """d(gap)/d(sigma) at one end of segment i, on the continuation of the old active set (with the
+        contact ``held`` held at the joint ``by`` instead: both continuations meet at the event)."""
+        use, lam0 = mask.copy(), a.state.lam_g.copy()
+        if held >= 0:
+            use[held], use[by] = False, True
+            lam0[by], lam0[held] = lam0[held], 0.0
+
+        def f(v: float) -> float:
+            pv, lbx = setup(v)
+            theta, _, _, fine = _newton(prob, pv, a.state.theta, lam0, a.state.sigma, lbx, steps=30, active=use, checked=False)
+            if not fine:
+                return math.nan
+            q, q1, _ = surface_derivatives(theta, prob.scene.actuator.L, prob.offsets[k], np.full((n, 1), end))
+            _, g, _ = prob.scene.obstacles[k].derivatives(q[i:i + 1, 0])
+            return sign * float(g[0] @ q1[i, 0])
+        return f
+
     out = []
-    gained, lost = np.flatnonzero(new & ~old), np.flatnonzero(old & ~new)
-    lost_segments = {(_label(prob, j)[2], _label(prob, j)[3]) for j in lost if j % (2 * prob.n) >= prob.n}
-    for j in gained:
-        where, name, k, seg = _label(prob, j)
-        slide = j % (2 * prob.n) < prob.n and ((k, seg) in lost_segments or (k, seg + 1) in lost_segments)
-        kind = "slide" if slide else "touch"
+    for j in sorted(lost):  # a contact that slides across an end of its segment: one event, located where the gap's slope there changes sign
+        k, local = divmod(j, m2)
+        name = f"{prob.scene.obstacles[k].kind} #{k + 1}"
+        if local >= n:
+            i = local - n
+            for to, end, sign in ((joint(k, i), 1.0, 1.0), (inside(k, i + 1) if i + 1 < n else -1, 1.0, 1.0),
+                                  (joint(k, i - 1) if i > 0 else -1, 0.0, -1.0), (inside(k, i - 1) if i > 0 else -1, 0.0, -1.0)):
+                if to in gained:
+                    at = "the tip" if end == 1.0 and i == n - 1 else f"joint {i + (1 if end == 1.0 else 0)}"
+                    # the layer is tangent-continuous at a joint: a contact reaches the joint and leaves it
+                    # into the next segment at one instant, so across a joint is one event
+                    where = f"from inside segment {i + 1} " + (f"across {at} into segment {to % m2 - n + 1}" if to % m2 >= n else f"onto {at}")
+                    by = joint(k, i) if end == 1.0 else joint(k, i - 1)
+                    out.append(locate_event(slope(k, i, end, sign, held=j, by=by), va, vb, "slide", where, name))
+                    lost.discard(j)
+                    gained.discard(to)
+                    break
+        else:
+            i = local
+            for to, seg, end, sign in ((inside(k, i + 1) if i + 1 < n else -1, i + 1, 0.0, 1.0), (inside(k, i), i, 1.0, -1.0)):
+                if to in gained:
+                    out.append(locate_event(slope(k, seg, end, sign), va, vb, "slide", f"from joint {i + 1} into segment {seg + 1}", name))
+                    lost.discard(j)
+                    gained.discard(to)
+                    break
+    for j in sorted(gained):
+        where, name, _, _ = _label(prob, j)
 
         def gap(v: float, j: int = j) -> float:
             r = continued(v)
             return math.nan if r is None else float(r[0][j])
 
-        out.append(locate_event(gap, va, vb, kind, where, name))
-    for j in lost:
-        where, name, k, seg = _label(prob, j)
-        if j % (2 * prob.n) >= prob.n and any(e.kind == "slide" for e in out):
-            continue  # the interior contact that slid onto a joint: one event, reported as the slide
+        out.append(locate_event(gap, va, vb, "touch", where, name))
+    for j in sorted(lost):
+        where, name, _, _ = _label(prob, j)
 
         def force(v: float, j: int = j) -> float:
             r = continued(v)
             return math.nan if r is None else float(r[1][j])
 
         out.append(locate_event(force, va, vb, "lift-off", where, name))
-    return out
+    return sorted(out, key=lambda e: e.parameter)
 
 
 def contact_path(scene: Scene, values: Sequence[float], parameter: str = "pressure", options: ContactOptions | None = None,
