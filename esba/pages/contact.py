@@ -181,7 +181,7 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         lines.append(f"| {p.pressure:.2f} | {data.grasp.forces[i]:.4f} | {where} | {p.contact_length():.1f} |")
     lines += ["", "Events along the pressure:", ""]
     for e in data.grasp.events:
-        lines.append(f"- {e.kind} at {e.where}: P = {e.parameter:.6f} MPa ({e.status})")
+        lines.append(f"- {e.describe()}: P = {e.parameter:.6f} MPa ({e.status})")
     lines += [
         "",
         "A slide is located where the slope of the gap at the segment's end changes sign (the layer is",

@@ -46,6 +46,10 @@ class ContactEvent:
     status: str
     bracket: tuple[float, float]
 
+    def describe(self) -> str:
+        """``touch at tip``, ``lift-off at joint 3``, ``slide from inside segment 6 across joint 6 into segment 7``."""
+        return f"{self.kind} {self.where}" if self.kind == "slide" else f"{self.kind} at {self.where}"
+
     def to_dict(self) -> dict[str, Any]:
         return {"kind": self.kind, "parameter": self.parameter, "where": self.where, "obstacle": self.obstacle,
                 "status": self.status, "bracket": list(self.bracket)}
