@@ -57,8 +57,7 @@ def _path_table(title: str, d: dict, extra: str = "") -> str:
             f"{kkt['stationarity_nmm']:>10.1e} {kkt['complementarity_nmm']:>8.1e} {eig:>9.4g}  {'ok' if p['ok'] else p['message'] or p['status']}"
         )
     for e in d["events"]:
-        what = f"{e['kind']} {e['where']}" if e["kind"] == "slide" else f"{e['kind']} at {e['where']}"
-        lines.append(f"event: {what} ({e['obstacle']}) at P = {e['parameter']:.6f} MPa ({e['status']})")
+        lines.append(f"event: {e['description']} ({e['obstacle']}) at P = {e['parameter']:.6f} MPa ({e['status']})")
     if extra:
         lines.append(extra)
     if d.get("figure"):

@@ -51,7 +51,7 @@ class ContactEvent:
         return f"{self.kind} {self.where}" if self.kind == "slide" else f"{self.kind} at {self.where}"
 
     def to_dict(self) -> dict[str, Any]:
-        return {"kind": self.kind, "parameter": self.parameter, "where": self.where, "obstacle": self.obstacle,
+        return {"kind": self.kind, "description": self.describe(), "parameter": self.parameter, "where": self.where, "obstacle": self.obstacle,
                 "status": self.status, "bracket": list(self.bracket)}
 
 
