@@ -12,7 +12,7 @@ from esba.model.contact import Cylinder, HalfPlane, ObstacleError
 from esba.model.contact.surface import closest_points, surface_points, symbolic_surface
 from esba.model.scene import Payload, Scene, SceneError, scene_from_dict
 from esba.statics.contact import Displacement, solve_contact
-from esba.statics.contact.sweeps import blocked_force, grasp, displacement_path
+from esba.statics.contact.sweeps import blocked_force, contact_path, displacement_path, grasp
 from esba.statics.equilibrium import SolverOptions, solve
 
 #: the probe at the tip against a dead load of the contact force's size (the issue's own bound)
@@ -181,3 +181,28 @@ def test_a_contact_sliding_across_a_joint_is_located():
     assert [c.where for c in before.contacts] == ["inside segment 6"]
     assert [c.where for c in after.contacts] == ["inside segment 7"]
     assert 0.745 < before.contacts[0].s < 0.75 < after.contacts[0].s < 0.755  # either side of joint 6 (s = 6/8)
+
+
+def test_a_wall_behind_the_actuator_touches_its_dorsal_surface():
+    """A payload pushes the unpressurised actuator back (-y) onto a wall behind it: the outer surface,
+    2 r1 off the layer, touches the wall's face."""
+    wall = HalfPlane(at=(100.0, -40.0), normal_deg=270.0)  # face y = -40 looking towards +y
+    assert wall.resolved_side() == "outer"
+    scene = Scene(segments=3, pressure=0.0, payloads=(Payload(3.0, 90.0, 1.0),), obstacles=(wall,))
+    r = solve_contact(scene)
+    assert r.ok, r.message
+    assert r.contacts and all(c.surface == "outer" and c.direction == (0.0, 1.0) for c in r.contacts)
+    c = r.contacts[-1]
+    assert abs(c.point[1] + 40.0) <= 1e-9
+    layer = surface_points(r.theta, 135.0, 0.0, np.array([[c.s * 3 - int(min(c.s * 3, 2.999999))]] * 3))[min(int(c.s * 3), 2), 0]
+    assert abs(np.hypot(*(layer - np.array(c.point))) - 16.0) <= 1e-9  # the layer is 2 r1 from the contact point
+
+
+def test_touch_and_lift_off_are_the_same_pressure_both_ways():
+    scene = Scene(segments=3, pressure=0.0, obstacles=(Cylinder(centre=(70.0, 45.0), radius=15.0),))
+    up = contact_path(scene, [0.05, 0.15])
+    down = contact_path(scene, [0.15, 0.05])
+    (touch,) = [e for e in up.events if e.kind == "touch"]
+    (lift,) = [e for e in down.events if e.kind == "lift-off"]
+    assert touch.status == lift.status == "converged"
+    assert abs(touch.parameter - lift.parameter) <= 1e-9  # frictionless: no hysteresis
