@@ -563,7 +563,7 @@ def solve(
     if unloaded is not None:
         unloaded = _angles("unloaded", unloaded, scene.segments)
     if scene.obstacles:
-        return _solve_with_contact(scene, options, pressure)
+        return _solve_with_contact(scene, options, pressure, theta0)
     model = scene.model()  # loaded (or generated) before the clock starts
     t_start = time.perf_counter()
     n = scene.segments
@@ -643,17 +643,27 @@ def solve(
 CONTACT_KEYS = ("contacts", "total_contact_force_n", "contact_span_mm", "gaps_elsewhere_mm", "kkt", "obstacles", "outer_passes")
 
 
-def _solve_with_contact(scene: Scene, options: SolverOptions, pressure: float | None) -> Equilibrium:
+def _solve_with_contact(scene: Scene, options: SolverOptions, pressure: float | None, theta0: np.ndarray | None) -> Equilibrium:
     """A scene with obstacles: the constrained equilibrium along the load history from rest
-    (:func:`esba.statics.contact.solve_contact`), as an :class:`Equilibrium` with its ``contact``."""
-    from .contact import ContactOptions, solve_contact
+    (:func:`esba.statics.contact.solve_contact`, the options' history), or from ``theta0`` at the full
+    load, as an :class:`Equilibrium` with its ``contact``."""
+    from esba.model.contact.surface import closest_points, offset_of
 
-    rc = solve_contact(scene, ContactOptions(tol=options.tol, max_iter=options.max_iter, linear_solver=options.linear_solver,
-                                             critical_tol=options.critical_tol, samples_per_segment=options.samples_per_segment), pressure=pressure)
+    from .contact import ContactOptions, ContactState, solve_contact
+
+    copts = ContactOptions(tol=options.tol, max_iter=options.max_iter, linear_solver=options.linear_solver,
+                           critical_tol=options.critical_tol, samples_per_segment=options.samples_per_segment)
+    warm = None
+    if theta0 is not None:
+        p = _resolve_pressure(scene, pressure)[0]
+        sigma = np.array([closest_points(theta0, scene.actuator.L, offset_of(o.resolved_side(), scene.actuator.r1), o)[0] for o in scene.obstacles])
+        warm = ContactState(np.asarray(theta0, dtype=float), np.zeros(2 * scene.segments * len(scene.obstacles) + 2), sigma, p, 1.0)
+    rc = solve_contact(scene, copts, pressure=pressure, warm=warm, history=None if warm is not None else history_steps(options.history))
     model = scene.model()
     pv = model.param_vector(scene.parameters(rc.pressure))
     state = model.state(rc.theta, pv)
-    how = "inflate-then-load with contact, from rest (steps halved where one fails or passes through an obstacle)"
+    how = (f"{history_name(options.history)} with contact, from rest (steps halved where one fails or passes through an obstacle)"
+           if theta0 is None else "none (the contact solve from the given theta0)")
     return Equilibrium(
         scene=scene, model=model, pressure=rc.pressure, theta=rc.theta, tip=rc.tip, centreline=rc.centreline,
         energy=rc.energy, terms=state["terms"], gradient_norm=rc.kkt.stationarity, eigenvalues=rc.kkt.reduced_eigenvalues,

@@ -85,6 +85,9 @@ def test_solve_dispatches_to_contact():
     scene = Scene(segments=3, pressure=0.1, obstacles=(HalfPlane(at=(135.0, 0.0)),))
     r = solve(scene)
     assert r.ok and r.contact is not None and [c.where for c in r.contact.contacts] == ["tip"]
+    assert r.history.startswith("inflate-then-load with contact")
+    again = solve(scene, theta0=r.theta)  # a warm start at the full load
+    assert np.max(np.abs(again.theta - r.theta)) <= 1e-12 and again.history.startswith("none")
 
 
 def test_reduced_hessian_is_the_free_hessian_without_contact():

@@ -575,8 +575,11 @@ def _resolve(scene: Scene, pressure: float | None) -> float:
     return pressure_for_angle(scene.unloaded().replace(obstacles=()))
 
 
-def _ramp(scene: Scene, pressure: float, steps: int) -> list[tuple[float, float]]:
-    """(pressure, load factor) of the load history with contact: inflate, then load."""
+def _ramp(scene: Scene, pressure: float, steps: int, history: Sequence[tuple[float, float]] | None = None) -> list[tuple[float, float]]:
+    """(pressure, load factor) of the load history with contact: inflate, then load, ``steps`` each;
+    or the (pressure, load) fraction steps of ``history`` (:mod:`esba.statics.history`)."""
+    if history is not None:
+        return [(pressure * pf, lf) for pf, lf in history]
     out = [(pressure * k / steps, 0.0) for k in range(1, steps + 1)]
     if scene.payloads or scene.gravity:
         out += [(pressure, k / steps) for k in range(1, steps + 1)]
@@ -592,6 +595,7 @@ def solve_contact(
     displacement: Displacement | None = None,
     warm: ContactState | None = None,
     problem: Any = None,
+    history: Sequence[tuple[float, float]] | None = None,
 ) -> ContactEquilibrium:
     """The equilibrium of a scene with obstacles (frictionless contact), its contacts and KKT check.
 
@@ -608,6 +612,9 @@ def solve_contact(
         A neighbouring equilibrium (a sweep's previous point): one solve from there, no load history.
         Without it the load history is followed from the rest state (pressure, then payloads, in
         ``options.ramp_steps`` steps each).
+    history : sequence of (float, float), optional
+        The load history from rest as (pressure, load) fraction steps ending at (1, 1), instead
+        (``esba.statics.history.history_steps`` of a name or of steps); each step halved as needed.
     """
     options = DEFAULT_CONTACT if options is None else options
     if not isinstance(options, ContactOptions):
@@ -632,7 +639,7 @@ def solve_contact(
         theta, lam = np.asarray(warm.theta, dtype=float), np.asarray(warm.lam_g, dtype=float)
         sigma, here = np.asarray(warm.sigma, dtype=float), (float(warm.pressure), float(warm.load))
     else:
-        steps = _ramp(scene, pressure, options.ramp_steps)
+        steps = _ramp(scene, pressure, options.ramp_steps, history)
         theta, lam = np.zeros(scene.segments), np.zeros(prob.m + 2)
         sigma, here = _closest(scene, theta, prob.offsets)[0], (0.0, 0.0)
     status, success, newton_steps, ipopt_steps, halvings = "", True, 0, 0, 0
