@@ -210,8 +210,15 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         "- 3-D obstacles (a plane, a sphere, a cylinder of any axis) wait for the 3-D model; the obstacle protocol",
         "  (`dimension`, a signed distance with its gradient and Hessian in the point, its parameters for CasADi) is",
         "  written for them.",
-        "- Friction (above). `esba path` and `esba equilibria` do not take obstacles yet: a path with contact is",
-        "  `esba.statics.contact.sweeps.contact_path` (pressure or a prescribed tip coordinate), `esba blocked` and `esba grasp`.",
+        "- Friction (above).",
+        "",
+        "## Where else obstacles go",
+        "",
+        "`esba solve SCENE.toml` with `[[obstacles]]` prints the contacts and the KKT numbers (and `--history` chooses",
+        "the load history from rest, with contact); `esba path SCENE.toml --to P` follows the pressure with contact and",
+        "locates the events; `esba equilibria SCENE.toml` solves the contact problem from the load history's state and",
+        "from every equilibrium of the free actuator (a multistart, `esba/statics/contact/multistart.py`). In Python,",
+        "`esba.statics.contact.sweeps.contact_path` follows the pressure or a prescribed tip coordinate.",
         "",
     ]
     return "\n".join(lines)
