@@ -80,6 +80,19 @@ def _along(theta: np.ndarray, L: float, offset: float, sigma: np.ndarray, starts
     return q, speed * t, speed * theta[:, None, None] * nu
 
 
+def _along_rows(theta: np.ndarray, n: int, L: float, offset: float, sigma: np.ndarray, starts: np.ndarray, phi0: np.ndarray):
+    """q, q', q'' at one fraction per row for the segments given (their angles, starts and headings), each (k, 2)."""
+    u = sigma * theta
+    cx = (L / n) * sigma * np.sinc(u / np.pi)
+    cy = (L / n) * sigma * 0.5 * u * np.sinc(u / (2.0 * np.pi)) ** 2
+    c, s = np.cos(phi0), np.sin(phi0)
+    head = phi0 + u
+    sh, ch = np.sin(head), np.cos(head)
+    q = np.column_stack([starts[:, 0] + c * cx - s * cy + offset * sh, starts[:, 1] + s * cx + c * cy - offset * ch])
+    speed = (L / n + offset * theta)[:, None]
+    return q, speed * np.column_stack([ch, sh]), speed * theta[:, None] * np.column_stack([-sh, ch])
+
+
 def surface_points(theta: Any, L: float, offset: float, sigma: np.ndarray) -> np.ndarray:
     """Points of the surface at ``offset`` at fractions ``sigma`` (n, m) of each segment, shape (n, m, 2)."""
     theta = np.asarray(theta, dtype=float).ravel()
@@ -125,24 +138,34 @@ def closest_points(theta: Any, L: float, offset: float, obstacle: Obstacle, newt
         lo, hi, sigma = np.where(first, 0.0, lo), np.where(first, h, hi), np.where(first, 0.5 * h, sigma)
         lo, hi, sigma = np.where(last, 1.0 - h, lo), np.where(last, 1.0, hi), np.where(last, 1.0 - 0.5 * h, sigma)
         found = found | first | last
+    ends_gap = np.where(d[:, 0] < d[:, -1], d[:, 0], d[:, -1])
+    if not found.any():  # every segment's gap is least at an end: no Newton
+        return np.where(d[:, 0] < d[:, -1], 0.0, 1.0), found, ends_gap
+    rows = np.flatnonzero(found)  # Newton on the segments with an interior candidate only
+    th, st, ph = theta[rows], starts[rows], phi0[rows]
+    sg, lo_r, hi_r = sigma[rows], lo[rows], hi[rows]
     for _ in range(newton_steps):
-        q, q1, q2 = _along(theta, L, offset, sigma[:, None], starts, phi0, True)
-        _, g, hess = obstacle.derivatives(q[:, 0])
-        d1 = np.einsum("ij,ij->i", g, q1[:, 0])
-        d2 = np.einsum("ij,ijk,ik->i", q1[:, 0], hess, q1[:, 0]) + np.einsum("ij,ij->i", g, q2[:, 0])
+        q, q1, q2 = _along_rows(th, n, L, offset, sg, st, ph)
+        _, g, hess = obstacle.derivatives(q)
+        d1 = np.einsum("ij,ij->i", g, q1)
+        d2 = np.einsum("ij,ijk,ik->i", q1, hess, q1) + np.einsum("ij,ij->i", g, q2)
         step = np.where(d2 > 0, d1 / np.where(d2 > 0, d2, 1.0), 0.0)
-        new = np.clip(sigma - step, lo, hi)
-        done = float(np.max(np.abs(new - sigma))) <= 1e-15
-        sigma = new
+        new = np.clip(sg - step, lo_r, hi_r)
+        done = float(np.max(np.abs(new - sg))) <= 1e-15
+        sg = new
         if done:
             break
-    q, q1, _ = _along(theta, L, offset, sigma[:, None], starts, phi0, True)
-    _, g, _ = obstacle.derivatives(q[:, 0])
-    d1 = np.einsum("ij,ij->i", g, q1[:, 0])
-    scale = np.abs(L / n + offset * theta)
-    interior = found & (sigma > 1e-9) & (sigma < 1.0 - 1e-9) & (np.abs(d1) <= 1e-9 * np.maximum(scale, 1.0))
-    sigma = np.where(interior, sigma, np.where(d[:, 0] < d[:, -1], 0.0, 1.0))
-    gap = obstacle.distance(_along(theta, L, offset, sigma[:, None], starts, phi0, False))[:, 0]
+    q, q1, _ = _along_rows(th, n, L, offset, sg, st, ph)
+    dist, g, _ = obstacle.derivatives(q)
+    d1 = np.einsum("ij,ij->i", g, q1)
+    scale = np.abs(L / n + offset * th)
+    ok = (sg > 1e-9) & (sg < 1.0 - 1e-9) & (np.abs(d1) <= 1e-9 * np.maximum(scale, 1.0))
+    interior = np.zeros(n, dtype=bool)
+    interior[rows] = ok
+    sigma = np.where(d[:, 0] < d[:, -1], 0.0, 1.0)
+    sigma[rows[ok]] = sg[ok]
+    gap = ends_gap.copy()
+    gap[rows[ok]] = dist[ok]
     return sigma, interior, gap
 
 

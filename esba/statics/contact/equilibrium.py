@@ -401,6 +401,8 @@ def _envelope_curvature(prob: ContactProblem, theta: np.ndarray, p: np.ndarray, 
     """The Lagrangian's Hessian term of the least gaps at active interior contacts: sum of
     lambda g_theta,sigma g_theta,sigma^T / g_sigma,sigma (the least gap min_sigma g is more concave than g at fixed sigma)."""
     n, K = prob.n, prob.K
+    if not any(active[k * 2 * n + n:(k + 1) * 2 * n].any() for k in range(K)):
+        return np.zeros((n, n))
     _, dss, dxs = (np.asarray(v, dtype=float) for v in prob.nlp.interior(theta, p))
     dss, dxs = dss.ravel(), dxs.reshape(K * n, n)
     out = np.zeros((n, n))
@@ -423,12 +425,44 @@ def _crosses(prob: ContactProblem, before: np.ndarray, after: np.ndarray) -> boo
     L = prob.scene.actuator.L
     grid = np.tile(np.linspace(0.0, 1.0, 9), (prob.n, 1))
     for k, o in enumerate(prob.scene.obstacles):
-        deep = min(1.0, 0.25 * o.radius) if isinstance(o, Cylinder) else 1.0
+        if not isinstance(o, Cylinder):  # nothing passes through a half-plane: its far side is all inside it
+            continue
+        deep = min(1.0, 0.25 * o.radius)
         for t in (0.25, 0.5, 0.75):
             q = surface_points((1 - t) * before + t * after, L, prob.offsets[k], grid)
             if float(np.min(o.distance(q))) < -deep:
                 return True
     return False
+
+
+def _predicted_set(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, active: np.ndarray) -> np.ndarray:
+    """The active set of the quadratic model of the problem at the start (one evaluation, then
+    linear algebra only): the same add/drop rule on H d + grad + J_A^T lam_A = 0, g_A + J_A d = 0 (the
+    prescribed coordinates at their targets). The nonlinear active set starts from it."""
+    opts, m, n = prob.options, prob.m, prob.n
+    g, jac, grad, hess, hess_g, _ = (np.asarray(v, dtype=float) for v in prob.nlp.terms(theta, _pack(pv, prob.scene, prob.offsets, sigma), lam))
+    g, grad = g.ravel() - np.concatenate([np.zeros(m), prob.targets]), grad.ravel()
+    h = hess + hess_g
+    active = active.copy()
+    for _ in range(2 * m + 2):
+        idx = np.flatnonzero(active)
+        a = jac[idx]
+        try:
+            sol = np.linalg.solve(np.block([[h, a.T], [a, np.zeros((idx.size, idx.size))]]), -np.concatenate([grad, g[idx]]))
+        except np.linalg.LinAlgError:
+            return active
+        d, mult = sol[:n], sol[n:]
+        force = np.full(m, np.inf)
+        inside = idx < m
+        force[idx[inside]] = -mult[inside]
+        predicted = g[:m] + jac[:m] @ d
+        if m and force.min() < -opts.force_tol:
+            active[int(np.argmin(force))] = False
+        elif m and np.where(active[:m], np.inf, predicted).min() < -opts.gap_tol:
+            active[int(np.argmin(np.where(active[:m], np.inf, predicted)))] = True
+        else:
+            break
+    return active
 
 
 def _active_set(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, lbx: np.ndarray):
@@ -437,7 +471,7 @@ def _active_set(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np
     a time, until every first-order KKT condition holds. (theta, lam_g, sigma) or None when it fails
     (IPOPT then solves)."""
     opts, m = prob.options, prob.m
-    active = np.concatenate([-lam[:m] > opts.force_tol, prob.fixed])
+    active = _predicted_set(prob, pv, theta, lam, sigma, np.concatenate([-lam[:m] > opts.force_tol, prob.fixed]))
     for _ in range(4 * prob.n + 2):
         th, lm, sg, fine = _newton(prob, pv, theta, np.where(active, np.minimum(lam, 0.0), 0.0), sigma, lbx, steps=30, active=active, checked=False)
         if not fine:
