@@ -435,22 +435,24 @@ def _crosses(prob: ContactProblem, before: np.ndarray, after: np.ndarray) -> boo
     return False
 
 
-def _predicted_set(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, active: np.ndarray) -> np.ndarray:
+def _predicted_set(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The active set of the quadratic model of the problem at the start (one evaluation, then
     linear algebra only): the same add/drop rule on H d + grad + J_A^T lam_A = 0, g_A + J_A d = 0 (the
-    prescribed coordinates at their targets). The nonlinear active set starts from it."""
+    prescribed coordinates at their targets). The nonlinear active set starts from it, and Newton
+    from theta + d (the model's step on it)."""
     opts, m, n = prob.options, prob.m, prob.n
     g, jac, grad, hess, hess_g, _ = (np.asarray(v, dtype=float) for v in prob.nlp.terms(theta, _pack(pv, prob.scene, prob.offsets, sigma), lam))
     g, grad = g.ravel() - np.concatenate([np.zeros(m), prob.targets]), grad.ravel()
     h = hess + hess_g
     active = active.copy()
+    d = np.zeros(n)
     for _ in range(2 * m + 2):
         idx = np.flatnonzero(active)
         a = jac[idx]
         try:
             sol = np.linalg.solve(np.block([[h, a.T], [a, np.zeros((idx.size, idx.size))]]), -np.concatenate([grad, g[idx]]))
         except np.linalg.LinAlgError:
-            return active
+            return active, np.zeros(n)
         d, mult = sol[:n], sol[n:]
         force = np.full(m, np.inf)
         inside = idx < m
@@ -462,7 +464,7 @@ def _predicted_set(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam:
             active[int(np.argmin(np.where(active[:m], np.inf, predicted)))] = True
         else:
             break
-    return active
+    return active, d
 
 
 def _active_set(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, lbx: np.ndarray):
@@ -471,9 +473,10 @@ def _active_set(prob: ContactProblem, pv: np.ndarray, theta: np.ndarray, lam: np
     a time, until every first-order KKT condition holds. (theta, lam_g, sigma) or None when it fails
     (IPOPT then solves)."""
     opts, m = prob.options, prob.m
-    active = _predicted_set(prob, pv, theta, lam, sigma, np.concatenate([-lam[:m] > opts.force_tol, prob.fixed]))
+    active, step = _predicted_set(prob, pv, theta, lam, sigma, np.concatenate([-lam[:m] > opts.force_tol, prob.fixed]))
+    start = theta + step if np.all(theta + step > lbx) and np.all(np.isfinite(step)) else theta
     for _ in range(4 * prob.n + 2):
-        th, lm, sg, fine = _newton(prob, pv, theta, np.where(active, np.minimum(lam, 0.0), 0.0), sigma, lbx, steps=30, active=active, checked=False)
+        th, lm, sg, fine = _newton(prob, pv, start, np.where(active, np.minimum(lam, 0.0), 0.0), sigma, lbx, steps=30, active=active, checked=False)
         if not fine:
             return None
         force = -lm[:m]
@@ -675,7 +678,7 @@ def solve_contact(
     else:
         steps = _ramp(scene, pressure, options.ramp_steps, history)
         theta, lam = np.zeros(scene.segments), np.zeros(prob.m + 2)
-        sigma, here = _closest(scene, theta, prob.offsets)[0], (0.0, 0.0)
+        sigma, here = np.full((prob.K, scene.segments), 0.5), (0.0, 0.0)  # at rest: the midpoints (moved once theta moves)
     status, success, newton_steps, ipopt_steps, halvings = "", True, 0, 0, 0
     todo = list(reversed(steps))
     while todo:
