@@ -325,7 +325,7 @@ def add_bench(sub) -> None:
     mp.add_argument("--json", action="store_true", help="print JSON")
     mp.set_defaults(func=_cmd_bench_maps)
     co = bsub.add_parser("contact", help="a contact solve (n = 3) against a free solve, naive SciPy and the compiled limit; the blocked-force curve (n = 8, 31 pressures)")
-    co.add_argument("--repeat", type=segments_arg, default=5, help="runs per timing, median reported (default 5)")
+    co.add_argument("--repeat", type=segments_arg, default=7, help="runs per timing, median reported (default 7)")
     co.add_argument("--markdown", metavar="FILE", help="also write the contact section of a docs page (docs/performance.md)")
     co.add_argument("--json", action="store_true", help="print JSON")
     co.set_defaults(func=_cmd_bench_contact)

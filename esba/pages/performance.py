@@ -385,8 +385,8 @@ def _maps_body(rows: Sequence[Any], t: Times) -> str:
 class ContactSettings:
     """``esba bench contact``: runs per timing, and the command the section names."""
 
-    repeat: int = 5
-    command: str = f"esba bench contact --repeat 5 --markdown {_DOC}"
+    repeat: int = 7
+    command: str = f"esba bench contact --repeat 7 --markdown {_DOC}"
 
 
 def contact_table(data: dict, t: Times = TIMES) -> str:
