@@ -44,6 +44,12 @@ def _base(args: argparse.Namespace):
         raise UsageError(str(exc)) from None
 
 
+def _options(args: argparse.Namespace):
+    from esba.statics.contact import ContactOptions
+
+    return ContactOptions(certify=args.certify)
+
+
 def _path_table(title: str, d: dict, extra: str = "") -> str:
     lines = [title]
     lines.append(f"  {'P MPa':>8} {'force N':>9} {'contacts (s, force N)':<44} {'tip x, y mm':>17} {'KKT: stat.':>10} {'compl.':>8} {'min eig':>9}  status")
@@ -79,7 +85,7 @@ def _cmd_blocked(args: argparse.Namespace) -> int:
 
     figure = scene_figure(args, DEFAULT_BLOCKED_FIGURE)
     base = _base(args)
-    path = blocked_force(base, args.pressure)
+    path = blocked_force(base, args.pressure, _options(args))
     data = path.to_dict(shapes=True)
     data["scene"] = base.replace(payloads=(), gravity=False).describe()
     data["probe"] = "frictionless half-plane y >= 0 through the tip at rest (face looking towards -y, the bending side)"
@@ -99,7 +105,7 @@ def _cmd_grasp(args: argparse.Namespace) -> int:
     figure = scene_figure(args, DEFAULT_GRASP_FIGURE)
     base = _base(args)
     try:
-        path = grasp(base, args.at, args.radius, args.pressure)
+        path = grasp(base, args.at, args.radius, args.pressure, _options(args))
     except (ObstacleError, SceneError) as exc:
         raise UsageError(str(exc).replace("cylinder.radius=", "--radius ").replace("cylinder.centre", "--at")) from None
     data = path.to_dict(shapes=True)
@@ -123,6 +129,7 @@ def _common(p: argparse.ArgumentParser, figure: str) -> None:
     p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant")
     p.add_argument("--json", action="store_true", help="print JSON (every point with its shape, contacts and KKT numbers)")
+    p.add_argument("--certify", action="store_true", help="also run IPOPT from each active-set Newton result and report how far it moved it")
     p.add_argument("--plot", metavar="FILE|DIR", help=f"the figure (default {figure} when no scene file is given)")
     p.add_argument("--no-plot", action="store_true", help="write no figure")
 

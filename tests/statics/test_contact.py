@@ -209,3 +209,13 @@ def test_touch_and_lift_off_are_the_same_pressure_both_ways():
     (lift,) = [e for e in down.events if e.kind == "lift-off"]
     assert touch.status == lift.status == "converged"
     assert abs(touch.parameter - lift.parameter) <= 1e-9  # frictionless: no hysteresis
+
+
+def test_ipopt_certifies_the_active_set_result():
+    from esba.statics.contact import ContactOptions
+
+    scene = Scene(segments=8, pressure=0.2, obstacles=(Cylinder(centre=(70.0, 45.0), radius=15.0),))
+    fast = solve_contact(scene)
+    certified = solve_contact(scene, ContactOptions(certify=True))
+    assert fast.status == "Newton_Active_Set" and certified.status.startswith("Newton_Active_Set; IPOPT Solve_Succeeded")
+    assert np.max(np.abs(fast.theta - certified.theta)) <= 1e-9
