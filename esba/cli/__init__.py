@@ -33,6 +33,7 @@ from esba.infra.interrupts import caused_by_interrupt
 from .arguments import Parser, UsageError
 from .bench import add_bench
 from .cache import add_cache
+from .contact import add_blocked, add_grasp
 from .design import add_design
 from .docs import add_docs
 from .equilibria import add_equilibria
@@ -52,7 +53,7 @@ from .sweep import add_sweep
 __all__ = ["main", "build_parser", "COMMANDS", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INTERRUPTED"]
 
 #: Functions that add one subcommand each, in the order ``esba --help`` lists them.
-COMMANDS: list[Callable] = [add_generate, add_audit, add_solve, add_equilibria, add_path, add_stiffness, add_pressure, add_validate, add_sweep, add_bench, add_figures, add_design, add_fit, add_experiments, add_estimate, add_map, add_section, add_export, add_docs, add_example, add_cache]
+COMMANDS: list[Callable] = [add_generate, add_audit, add_solve, add_equilibria, add_path, add_blocked, add_grasp, add_stiffness, add_pressure, add_validate, add_sweep, add_bench, add_figures, add_design, add_fit, add_experiments, add_estimate, add_map, add_section, add_export, add_docs, add_example, add_cache]
 
 
 def build_parser() -> argparse.ArgumentParser:

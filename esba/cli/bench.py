@@ -144,6 +144,20 @@ def _cmd_bench_maps(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_bench_contact(args: argparse.Namespace) -> int:
+    from esba.pages.performance import PAGE, ContactSettings, contact_table
+
+    if args.markdown:
+        outputs.check_file(args.markdown, "--markdown", (".md",))
+    settings = ContactSettings(args.repeat, f"esba bench contact --repeat {args.repeat} --markdown {args.markdown}")
+    data = PAGE.compute_section("contact", settings, _bench_progress(args, "  {} done"))
+    out = dict(data, rows=[r.__dict__ for r in data["rows"]])
+    print_result(args, out, lambda d: contact_table(data))
+    if args.markdown:
+        print(f"wrote {PAGE.write_section(args.markdown, 'contact', data, settings)}", file=sys.stderr)
+    return EXIT_OK
+
+
 def _cmd_bench_path(args: argparse.Namespace) -> int:
     from esba.pages.performance import PAGE, PathSettings, path_table
 
@@ -310,6 +324,11 @@ def add_bench(sub) -> None:
     mp.add_argument("--markdown", metavar="FILE", help="also write the maps section of a docs page (docs/performance.md)")
     mp.add_argument("--json", action="store_true", help="print JSON")
     mp.set_defaults(func=_cmd_bench_maps)
+    co = bsub.add_parser("contact", help="a contact solve (n = 3) against a free solve, naive SciPy and the compiled limit; the blocked-force curve (n = 8, 31 pressures)")
+    co.add_argument("--repeat", type=segments_arg, default=7, help="runs per timing, median reported (default 7)")
+    co.add_argument("--markdown", metavar="FILE", help="also write the contact section of a docs page (docs/performance.md)")
+    co.add_argument("--json", action="store_true", help="print JSON")
+    co.set_defaults(func=_cmd_bench_contact)
     sc = bsub.add_parser("scaling", help="equilibria per second of a sweep in this process and on Dask (1, 2 workers), chunk sizes, overhead per chunk (docs/scaling.md)")
     sc.add_argument("--points", type=count_arg("points", 20, 200_000, "the rows are compared in memory"), default=12_000, help="grid size, 20 to 200000 (default 12000)")
     sc.add_argument("--segments", "-n", type=segments_arg, default=16, help="segment count (default 16)")

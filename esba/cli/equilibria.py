@@ -18,6 +18,8 @@ def _cmd_equilibria(args: argparse.Namespace) -> int:
 
     figure = scene_figure(args, DEFAULT_EQUILIBRIA_FIGURE)
     scene = scene_from_args(args)
+    if scene.obstacles:
+        return _contact_equilibria(args, scene, figure)
     try:
         extra = {} if args.starts is None else {"starts": args.starts}
         if args.max_bend is not None:
@@ -41,6 +43,39 @@ def _cmd_equilibria(args: argparse.Namespace) -> int:
     if not res.states:
         beyond = f" ({res.outside} beyond it: --max-bend widens it, up to 720 deg)" if res.outside else ""
         print(f"esba: no equilibrium found in the domain searched, {res.describe_domain()}{beyond}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _contact_table(d: dict) -> str:
+    lines = [f"scene: {d['scene']}", f"pressure: {d['pressure_mpa']:.7f} MPa",
+             f"method: {d['method']} ({d['free_equilibria']} free equilibria, {d['dropped']} dropped: they lie through an obstacle or failed)",
+             f"  {'#':>2}  {'stability':<9} {'total deg':>10} {'tip x, y mm':>17} {'energy N mm':>12}  contacts (where, force N)"]
+    for k, s in enumerate(d["states"], start=1):
+        where = "; ".join(f"{c['where']} {c['force_n']:.4f}" for c in s["contacts"]) or "none"
+        lines.append(f"  {k:>2}  {s['kkt']['stability']:<9} {s['total_angle_deg']:>10.3f} {s['tip_mm'][0]:>8.2f},{s['tip_mm'][1]:>8.2f} {s['energy_nmm']:>12.4f}  {where}")
+    if d.get("figure"):
+        lines.append(f"figure: wrote {d['figure']}")
+    return "\n".join(lines)
+
+
+def _contact_equilibria(args: argparse.Namespace, scene, figure) -> int:
+    """``esba equilibria`` on a scene with obstacles: esba.statics.contact.multistart."""
+    from esba.statics.contact.multistart import contact_equilibria
+
+    if args.starts is not None or args.max_bend is not None or args.no_check:
+        raise UsageError("--starts, --max-bend and --no-check tune the free search; with obstacles the search is the free one's defaults")
+    res = contact_equilibria(scene)
+    data = res.to_dict()
+    data["scene"] = scene.describe()
+    if figure is not None and res.states:
+        from esba.figures.contact import contact_states_figure
+        from esba.figures.scenes import save_figure
+
+        data["figure"] = str(save_figure(contact_states_figure(res.states), figure).resolve())
+    print_result(args, data, _contact_table)
+    if not res.states:
+        print("esba: no contact equilibrium found from the free equilibria", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
 

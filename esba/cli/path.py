@@ -85,6 +85,8 @@ def _cmd_path(args: argparse.Namespace) -> int:
     from esba.statics.equilibrium import EquilibriumError
 
     scene = scene_from_args(args)
+    if scene.obstacles:
+        return _contact_path(args, scene, out, plot)
     param = args.param
     if args.payload_index != 1:
         if param not in ("payload", "omega", "at"):
@@ -112,6 +114,49 @@ def _cmd_path(args: argparse.Namespace) -> int:
     reached = result.main.stopped == "loop" or (len(result.main) and result.main.lam[-1] == args.to)
     if not reached:
         print(f"esba: the branch did not reach --to {args.to:g}: {result.main.stop_reason}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+#: Points of a path with contact (``esba path`` on a scene with obstacles).
+CONTACT_PATH_POINTS = 31
+
+
+def _contact_path(args: argparse.Namespace, scene, out, plot) -> int:
+    """``esba path`` on a scene with obstacles: the pressure from --from (default 0) to --to in 31
+    steps, each a contact equilibrium warm-started from the previous one, with the contact events
+    located (esba.statics.contact.sweeps.contact_path)."""
+    import numpy as np
+
+    from esba.infra import jsonsafe
+    from esba.infra.outputs import write_text
+    from esba.statics.contact.sweeps import contact_path
+
+    from .contact import _path_table as contact_table
+
+    if args.param != "pressure":
+        raise UsageError(f"--param {args.param}: a scene with obstacles follows the pressure only (--param pressure); a prescribed tip is esba.statics.contact.sweeps.displacement_path")
+    start = 0.0 if args.start is None else args.start
+    path = contact_path(scene, np.linspace(start, args.to, CONTACT_PATH_POINTS), "pressure")
+    data = path.to_dict(shapes=bool(args.json and args.points))
+    data["scene"] = scene.describe()
+    if out:
+        if str(out).endswith(".json"):
+            write_text(out, jsonsafe.dumps(path.to_dict(shapes=True), indent=2, sort_keys=True) + "\n")
+        else:
+            rows = ["pressure_mpa,total_force_n,contacts,tip_x_mm,tip_y_mm,total_angle_deg,ok"]
+            rows += [f"{p.pressure:.10g},{f:.10g},{len(p.contacts)},{p.tip[0]:.10g},{p.tip[1]:.10g},{p.total_angle_deg:.10g},{p.ok}" for p, f in zip(path.points, path.forces)]
+            write_text(out, "\n".join(rows) + "\n")
+        data["out"] = str(out.resolve())
+    if plot:
+        from esba.figures.contact import grasp_figure
+        from esba.figures.scenes import save_figure
+
+        data["figure"] = str(save_figure(grasp_figure(path), plot).resolve())
+    print_result(args, data, lambda d: contact_table(f"path with contact: {d['scene']}", d) + (f"\nbranch file: wrote {d['out']}" if d.get("out") else ""))
+    bad = [p for p in path.points if not p.ok]
+    if bad:
+        print(f"esba: warning: {len(bad)} of {len(path.points)} points are not certified equilibria (first: P = {bad[0].pressure:g} MPa: {bad[0].message or bad[0].status})", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
 

@@ -5,6 +5,7 @@
 demand), :mod:`.closed_form` (the unloaded pressure of a target angle), :mod:`.structured` (the O(n)
 linear algebra of the chain's Hessian), :mod:`.stability` (verdicts from eigenvalues),
 :mod:`.validity` (where a result leaves the paper's model), :mod:`.resolution` (what the
-solver can resolve) and :mod:`.section` (the cross-section: torsion constant, shear centre and
-stiffnesses, by finite elements). May import :mod:`esba.infra` and ``derive``.
+solver can resolve), :mod:`.section` (the cross-section: torsion constant, shear centre and
+stiffnesses, by finite elements) and :mod:`.contact` (obstacles in a scene and the surfaces of the
+body they touch). May import :mod:`esba.infra` and ``derive``.
 """

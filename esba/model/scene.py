@@ -38,6 +38,15 @@ A scene file is TOML; every key is optional::
     angle_deg = 90.0          # Omega from the vertical: 0 down, 90 horizontal against the bend
     at = 1.0                  # point of application, fraction of L from the base (1 = tip)
 
+    [[obstacles]]             # repeat for more; contact is solved only when there is one
+    kind = "half-plane"       # a flat probe or wall (esba.model.contact.obstacles) ...
+    at = [135.0, 0.0]         # a point on its face, mm
+    normal_deg = 90.0         # where its face looks, as a payload's angle_deg
+    # kind = "cylinder"       # ... or a cylinder across the bending plane
+    # centre = [90.0, 30.0]   # mm
+    # radius = 12.0           # mm
+    # side = "auto"           # the surface it touches: auto, inner (the layer), outer (2 r1 off it)
+
     [uncertainty]             # optional: standard deviations (see esba.calibration.uncertainty)
     E = "10%"                 # relative; 0.05 (MPa) absolute; "±0.1" a tolerance
 
@@ -66,6 +75,7 @@ from derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
 from esba.infra import checks, inputs
 from esba.infra.errors import InputError
 
+from .contact.obstacles import MAX_OBSTACLES, Obstacle, ObstacleError, obstacle_from_dict
 from .generated import Model, load_model
 
 __all__ = ["Actuator", "ACTUATOR_RULES", "check_actuator_field", "actuator_rule", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "MAX_PRESSURE", "MAX_PAYLOAD"]
@@ -317,6 +327,10 @@ class Scene:
         Segment count n, 1 to :data:`esba.infra.checks.MAX_SEGMENTS` (256).
     variant : str
         ``"paper"`` (default) or ``"printed"`` (see :mod:`derive.effects`).
+    obstacles : tuple of Obstacle
+        Rigid obstacles the actuator may touch (:mod:`esba.model.contact.obstacles`); with any, the
+        equilibrium is the constrained one of :mod:`esba.statics.contact` (frictionless contact).
+        None may reach into the actuator at rest.
     """
 
     actuator: Actuator = field(default_factory=Actuator)
@@ -328,6 +342,7 @@ class Scene:
     fibres: bool = True
     segments: int = 3
     variant: str = DEFAULT_VARIANT
+    obstacles: tuple[Obstacle, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.actuator, Actuator):
@@ -353,6 +368,16 @@ class Scene:
         object.__setattr__(self, "segments", checks.segments(self.segments, SceneError))
         if self.variant not in VARIANTS:
             raise SceneError(f"variant={checks.quote(self.variant)}: allowed are {', '.join(VARIANTS)}")
+        obstacles = self.obstacles
+        if isinstance(obstacles, Obstacle):
+            obstacles = (obstacles,)
+        if not isinstance(obstacles, (tuple, list)) or not all(isinstance(o, Obstacle) for o in obstacles):
+            raise SceneError(f"obstacles={checks.quote(self.obstacles)}: expected a list of obstacles (HalfPlane, Cylinder)")
+        if len(obstacles) > MAX_OBSTACLES:
+            raise SceneError(f"obstacles: {len(obstacles)} given; at most {MAX_OBSTACLES} (each adds 2 n constraints to every solve)")
+        for k, o in enumerate(obstacles, start=1):
+            o.check_at_rest(self.actuator.L, self.actuator.r1, f"obstacle #{k}")
+        object.__setattr__(self, "obstacles", tuple(obstacles))
         try:
             self.effects  # noqa: B018 - the payload count limit lives in EffectSet
         except ValueError as exc:
@@ -414,6 +439,7 @@ class Scene:
         drive = f"P={self.pressure:g} MPa" if self.pressure is not None else f"unloaded angle {self.target_angle_deg:g} deg"
         loads = "; ".join(f"{p.force:g} N at {p.angle_deg:g} deg, s={p.at:g}" for p in self.payloads) or "no payload"
         extra = (", gravity" if self.gravity else "") + ("" if self.fibres else ", no fibres")
+        extra += "".join(f"; {o.describe()}" for o in self.obstacles)
         return (
             f"L={a.L:g} r1={a.r1:g} r2={a.r2:g} d={a.d:g} rho={a.rho_deg:g} deg E={a.E:g} MPa; "
             f"{drive}; {loads}; n={self.segments}, {self.variant}{extra}"
@@ -429,7 +455,7 @@ MAIN_JOB = Scene(target_angle_deg=90.0, payloads=(Payload(2.0, 90.0, 1.0),), seg
 # TOML
 
 #: ``uncertainty`` (standard deviations of the parameters) is read by :func:`esba.calibration.uncertainty.load_sigmas`.
-_TOP_KEYS = {"segments", "variant", "gravity", "fibres", "actuator", "loads", "payloads", "uncertainty"}
+_TOP_KEYS = {"segments", "variant", "gravity", "fibres", "actuator", "loads", "payloads", "obstacles", "uncertainty"}
 _LOAD_KEYS = {"pressure", "target_angle_deg", "g"}
 _PAYLOAD_KEYS = {"force", "angle_deg", "at"}
 
@@ -469,9 +495,13 @@ def scene_from_dict(data: Mapping[str, Any]) -> Scene:
         if "force" not in item:
             raise SceneError(f"[[payloads]] #{k}: missing key force (N)")
         payloads.append(Payload(**item))
+    raw_obstacles = data.get("obstacles", [])
+    if not isinstance(raw_obstacles, list):
+        raise SceneError(f"obstacles={checks.quote(raw_obstacles)}: expected an array of tables [[obstacles]]")
+    obstacles = tuple(obstacle_from_dict(f"[[obstacles]] #{k}", item) for k, item in enumerate(raw_obstacles, start=1))
     kwargs: dict[str, Any] = {k: data[k] for k in ("segments", "variant", "gravity", "fibres") if k in data}
     kwargs.update(loads)
-    return Scene(actuator=actuator, payloads=tuple(payloads), **kwargs)
+    return Scene(actuator=actuator, payloads=tuple(payloads), obstacles=obstacles, **kwargs)
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -488,7 +518,7 @@ def load_scene(path: str | Path) -> Scene:
     data = inputs.load_toml(path, "scene file", SceneError)  # a regular file of bounded size, BOM or not
     try:
         return scene_from_dict(data)
-    except SceneError as exc:
+    except (SceneError, ObstacleError) as exc:
         raise SceneError(f"scene file {str(path)!r}: {exc}") from None
     except TypeError as exc:  # pragma: no cover - guarded by the key checks
         raise SceneError(f"scene file {str(path)!r}: {exc}") from None

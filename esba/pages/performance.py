@@ -10,6 +10,7 @@ generation  ``esba bench generation --markdown docs/performance.md``  :func:`esb
 solve       ``esba bench solve --markdown docs/performance.md``       :func:`esba.bench.solve.solve_benchmark`
 path        ``esba bench path --markdown docs/performance.md``        :func:`esba.bench.path.path_benchmark`
 maps        ``esba bench maps --markdown docs/performance.md``        :func:`esba.bench.maps.maps_benchmark`
+contact     ``esba bench contact --markdown docs/performance.md``     :func:`esba.bench.contact.contact_benchmark`
 ==========  ====================================================  =====================================
 
 Each renderer writes its times through :class:`esba.pages.page.Times`, so that ``esba docs --check
@@ -41,6 +42,8 @@ __all__ = [
     "path_table",
     "MapsSettings",
     "maps_table",
+    "ContactSettings",
+    "contact_table",
     "PERFORMANCE_TITLE",
     "SECTIONS",
 ]
@@ -48,7 +51,7 @@ __all__ = [
 #: The title of the benchmarks' page.
 PERFORMANCE_TITLE = "# Performance"
 #: The sections, in the page's order.
-SECTIONS = ("generation", "solve", "path", "maps")
+SECTIONS = ("generation", "solve", "path", "maps", "contact")
 #: Where the commands' ``--markdown`` writes in the committed page.
 _DOC = "docs/performance.md"
 
@@ -398,6 +401,57 @@ def _maps_body(rows: Sequence[Any], t: Times) -> str:
 
 
 # ---------------------------------------------------------------------------------------------
+# contact
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """``esba bench contact``: runs per timing, and the command the section names."""
+
+    repeat: int = 7
+    command: str = f"esba bench contact --repeat 7 --markdown {_DOC}"
+
+
+def contact_table(data: dict, t: Times = TIMES) -> str:
+    """The contact benchmark as a fixed-width table."""
+    head = f"{'what':<46} {'n':>2} {'median ms':>10} {'vs free':>8} {'max |dtheta| rad':>17}  how"
+    lines = [head, "-" * len(head)]
+    free = data["rows"][0].seconds
+    for r in data["rows"]:
+        dev = "-" if r.deviation != r.deviation else f"{r.deviation:.1e}"
+        ratio = t(r.seconds / free, ".1f") + "x" if r.n == 3 else "-"
+        lines.append(f"{r.name:<46} {r.n:>2} {t(1e3 * r.seconds, '.2f'):>10} {ratio:>8} {dev:>17}  {r.note}")
+    lines.append(
+        f"contact solve / free solve: {t(data['ratio'], '.2f')}x (target <= {data['ratio_target']:g}x: {t.word('met' if data['ratio'] <= data['ratio_target'] else 'NOT met')}); "
+        f"blocked-force curve: {t(data['curve_s'], '.3f')} s (target <= {data['curve_target_s']:g} s: {t.word('met' if data['curve_s'] <= data['curve_target_s'] else 'NOT met')})"
+    )
+    return "\n".join(lines)
+
+
+def _contact_body(data: dict, t: Times) -> str:
+    return "\n".join(
+        [
+            "## Contact",
+            "",
+            "A contact solve against a free one, and the blocked-force curve ([contact.md](contact.md)). n = 3: the flat",
+            "probe at the tip of the Table 1 actuator at 0.1 MPa, solved from rest, against the free solve of its twin (a",
+            "horizontal dead load of the contact force: the same equilibrium, to round-off), a naive SciPy script (SLSQP,",
+            "gaps sampled) and the compiled limit (one Newton solve of the KKT system on the known active set). n = 8: the",
+            "blocked-force curve at 31 pressures, each warm-started from the previous one. Medians over repeated runs on a",
+            "shared 2-core machine.",
+            "",
+            t.word(_versions()),
+            "",
+            "```",
+            contact_table(data, t),
+            "```",
+            "",
+            f"Every point of the curve is a certified KKT point: {'yes' if data['curve_ok'] else 'NO'}; the blocked force at 0.3 MPa is {data['force_at_03']:.4f} N.",
+        ]
+    )
+
+
+# ---------------------------------------------------------------------------------------------
 # the page
 
 
@@ -407,7 +461,7 @@ class PerformancePage(Page):
     name = "performance"
 
     def settings(self) -> dict[str, Any]:
-        return {"generation": GenerationSettings(), "solve": SolveSettings(), "path": PathSettings(), "maps": MapsSettings()}
+        return {"generation": GenerationSettings(), "solve": SolveSettings(), "path": PathSettings(), "maps": MapsSettings(), "contact": ContactSettings()}
 
     def check_settings(self) -> dict[str, Any]:
         return {k: dataclasses.replace(s, repeat=1) for k, s in self.settings().items()}
@@ -435,11 +489,15 @@ class PerformancePage(Page):
             from esba.bench.path import path_benchmark
 
             return path_benchmark(repeat=settings.repeat, progress=progress)
+        if key == "contact":
+            from esba.bench.contact import contact_benchmark
+
+            return contact_benchmark(repeat=settings.repeat, progress=progress)
         raise KeyError(key)
 
     def section(self, key: str, data: Any, settings: Any, times: Times = TIMES) -> str:
         """One section's block, as it stands in the page."""
-        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body}[key](data, times)
+        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body, "contact": _contact_body}[key](data, times)
         return section_block(key, body, settings.command)
 
     def render(self, data: dict[str, Any], settings: dict[str, Any], path: Path, times: Times = TIMES) -> Rendered:
@@ -447,7 +505,7 @@ class PerformancePage(Page):
 
     def write_section(self, path: str | Path, key: str, data: Any, settings: Any) -> Path:
         """Write (or replace) one section of the page at ``path``, keeping the others as they are."""
-        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body}[key](data, TIMES)
+        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body, "contact": _contact_body}[key](data, TIMES)
         return write_section(path, key, body, settings.command, PERFORMANCE_TITLE)
 
 

@@ -6,7 +6,7 @@ page's module when it is asked for.
 Examples
 --------
 >>> list(ENTRIES)
-['derivations', 'validation', 'design', 'paths', 'experiments', 'sensing', 'accuracy-vs-time', 'performance', 'scaling', 'equilibria', 'maps']
+['derivations', 'validation', 'design', 'paths', 'experiments', 'sensing', 'accuracy-vs-time', 'performance', 'scaling', 'equilibria', 'maps', 'contact']
 >>> [e.name for e in ENTRIES.values() if e.slow]
 ['accuracy-vs-time', 'performance', 'scaling']
 >>> check_names(["paths", "paths", "validation"])
@@ -63,7 +63,7 @@ ENTRIES: dict[str, Entry] = {
         Entry("accuracy-vs-time", "accuracy-vs-time.md", "esba.pages.accuracy", "esba bench accuracy", True,
               "error against n, tolerance, effects, naive scripts, the batch"),
         Entry("performance", "performance.md", "esba.pages.performance",
-              "esba bench generation|solve|path --markdown docs/performance.md", True,
+              "esba bench generation|solve|path|maps|contact --markdown docs/performance.md", True,
               "generation, single calls, path tracing"),
         Entry("scaling", "scaling.md", "esba.pages.scaling", "esba bench scaling --markdown docs/scaling.md", True,
               "sweeps in this process and on Dask workers"),
@@ -71,6 +71,8 @@ ENTRIES: dict[str, Entry] = {
               "every equilibrium of the bistable window and the detached branch, barriers"),
         Entry("maps", "maps.md", "esba.pages.maps", "esba map --write-doc docs/maps.md", False,
               "stability maps: fold curves, cusps, regions by stable states, designs clear of folds"),
+        Entry("contact", "contact.md", "esba.pages.contact", "esba docs --write contact", False,
+              "contact: the blocked-force curve, a tester through the snap, a finger closing on a cylinder, KKT checks"),
     )
 }
 

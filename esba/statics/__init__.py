@@ -4,6 +4,7 @@
 (the load histories a solve can follow), :mod:`.equilibria` (every equilibrium of a scene by deflated
 Newton, and solve()'s multistability check), :mod:`.batch`
 (arrays of scenes), :mod:`.batch_options` and :mod:`.compiled` (the batch's settings and its C),
-:mod:`.text` (the text ``esba solve`` and ``esba equilibria`` print, and the results' ``summary()``).
+:mod:`.text` (the text ``esba solve`` and ``esba equilibria`` print, and the results' ``summary()``),
+:mod:`.contact` (equilibria with obstacles: contact forces as multipliers, KKT checks, paths with contact).
 May import :mod:`esba.paths` and everything below it.
 """

@@ -282,6 +282,10 @@ class Equilibrium(Report):
     multistability : Multistability or None
         The other stable states of the scene, which one the history reached and why, or why
         ``solve`` did not look (:mod:`esba.statics.equilibria`); None for :func:`evaluate`.
+    contact : ContactEquilibrium or None
+        For a scene with obstacles, the constrained solve (:mod:`esba.statics.contact`): its
+        contacts, gaps and KKT numbers. ``gradient_norm`` is then the Lagrangian's stationarity and
+        ``eigenvalues`` those of the reduced Hessian on the active constraints' tangent space.
     """
 
     scene: Scene
@@ -308,6 +312,7 @@ class Equilibrium(Report):
     validity: tuple[Finding, ...] = ()
     history: str = ""
     multistability: Multistability | None = None
+    contact: Any = None
 
     _plotter = "esba.figures.results:draw_equilibrium"
 
@@ -395,6 +400,7 @@ class Equilibrium(Report):
             "history": self.history,
             "multistable": self.multistable,
             "multistability": None if self.multistability is None else self.multistability.to_dict(),
+            "contact": None if self.contact is None else {k: v for k, v in self.contact.to_dict().items() if k in CONTACT_KEYS},
             "iterations": self.iterations,
             "steps": self.steps,
             "gradient_norm": self.gradient_norm,
@@ -623,6 +629,8 @@ def solve(
         theta0 = _angles("theta0", theta0, scene.segments, bounded=True)
     if unloaded is not None:
         unloaded = _angles("unloaded", unloaded, scene.segments)
+    if scene.obstacles:
+        return _solve_with_contact(scene, options, pressure, theta0)
     model = scene.model()  # loaded (or generated) before the clock starts
     t_start = time.perf_counter()
     n = scene.segments
@@ -739,6 +747,39 @@ def _certify(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, o
         f"the Newton polish moved it by {float(np.max(np.abs(point - theta))):.2g} rad"
     )
     return Minimum(point, "Solve_Succeeded", True, 0), state, certificate
+#: What ``Equilibrium.to_dict`` keeps of a contact solve (its shape and angles are the result's own).
+CONTACT_KEYS = ("contacts", "total_contact_force_n", "contact_span_mm", "gaps_elsewhere_mm", "kkt", "obstacles", "outer_passes")
+
+
+def _solve_with_contact(scene: Scene, options: SolverOptions, pressure: float | None, theta0: np.ndarray | None) -> Equilibrium:
+    """A scene with obstacles: the constrained equilibrium along the load history from rest
+    (:func:`esba.statics.contact.solve_contact`, the options' history), or from ``theta0`` at the full
+    load, as an :class:`Equilibrium` with its ``contact``."""
+    from esba.model.contact.surface import closest_points, offset_of
+
+    from .contact import ContactOptions, ContactState, solve_contact
+
+    copts = ContactOptions(tol=options.tol, max_iter=options.max_iter, linear_solver=options.linear_solver,
+                           critical_tol=options.critical_tol, samples_per_segment=options.samples_per_segment)
+    warm = None
+    if theta0 is not None:
+        p = _resolve_pressure(scene, pressure)[0]
+        sigma = np.array([closest_points(theta0, scene.actuator.L, offset_of(o.resolved_side(), scene.actuator.r1), o)[0] for o in scene.obstacles])
+        warm = ContactState(np.asarray(theta0, dtype=float), np.zeros(2 * scene.segments * len(scene.obstacles) + 2), sigma, p, 1.0)
+    rc = solve_contact(scene, copts, pressure=pressure, warm=warm, history=None if warm is not None else history_steps(options.history))
+    model = scene.model()
+    pv = model.param_vector(scene.parameters(rc.pressure))
+    state = model.state(rc.theta, pv)
+    how = (f"{history_name(options.history)} with contact, from rest (steps halved where one fails or passes through an obstacle)"
+           if theta0 is None else "none (the contact solve from the given theta0)")
+    return Equilibrium(
+        scene=scene, model=model, pressure=rc.pressure, theta=rc.theta, tip=rc.tip, centreline=rc.centreline,
+        energy=rc.energy, terms=state["terms"], gradient_norm=rc.kkt.stationarity, eigenvalues=rc.kkt.reduced_eigenvalues,
+        stability=rc.kkt.stability, status=rc.status, success=rc.success, iterations=rc.iterations, steps=rc.outer,
+        solve_time_s=rc.solve_time_s, message=rc.message, certificate=f"IPOPT with gap >= 0 constraints, then Newton on the active set: {rc.status}",
+        validity=assess(scene, rc.theta, rc.pressure, rc.tip), history=how,
+        multistability=not_looked("a scene with obstacles: the search for other states is of the free actuator"), contact=rc,
+    )
 
 
 def _multistability(scene: Scene, model: Model, result: Equilibrium, how: str, history: LoadHistory | None, options: SolverOptions) -> Multistability:

@@ -34,6 +34,12 @@ def solve_table(d: dict) -> str:
     ]
     if d.get("message"):
         rows.append(("NOT OK", d["message"]))
+    if d.get("contact"):  # a scene with obstacles: its contacts and KKT numbers
+        c, k = d["contact"], d["contact"]["kkt"]
+        rows.append(("contacts", "; ".join(f"{x['where']} (s = {x['s']:.4f}) {x['force_n']:.4f} N along ({x['direction'][0]:.3f}, {x['direction'][1]:.3f}), {x['kind']} #{x['obstacle'] + 1}"
+                                           for x in c["contacts"]) or "none"))
+        rows.append(("KKT", f"stationarity {k['stationarity_nmm']:.1e} N mm/rad, least gap {k['min_gap_mm']:.1e} mm, least force {k['min_force_n']:.1e} N, "
+                            f"complementarity {k['complementarity_nmm']:.1e} N mm; reduced Hessian on {k['active']} active: {k['stability']}"))
     if d.get("history"):
         rows.append(("history", d["history"]))
     if d.get("multistability"):

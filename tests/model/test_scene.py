@@ -164,7 +164,7 @@ def test_toml_fields(tmp_path):
     [
         ("segments = 3\n[actuator\nL = 1\n", "is not valid TOML: Expected ']' at the end of a table declaration (at line 2"),
         ("segments = \n", "is not valid TOML"),
-        ("segmnts = 3\n", "scene: unknown key(s) segmnts; allowed are actuator, fibres, gravity, loads, payloads, segments, uncertainty, variant"),
+        ("segmnts = 3\n", "scene: unknown key(s) segmnts; allowed are actuator, fibres, gravity, loads, obstacles, payloads, segments, uncertainty, variant"),
         ("[actuator]\nR1 = 8\n", "[actuator]: unknown key(s) R1; allowed are E, L, M, d, r1, r2, rho_deg"),
         ("[loads]\npresure = 0.1\n", "[loads]: unknown key(s) presure; allowed are g, pressure, target_angle_deg"),
         ("[[payloads]]\nangle_deg = 0\n", "[[payloads]] #1: missing key force (N)"),

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from esba.bench.contact import ContactBenchRow
 from esba.bench.maps import MapBenchRow
 from esba.bench.path import PathBenchRow
 from esba.bench.timing import GenerationRow
@@ -88,12 +89,16 @@ def test_the_whole_page_renders_its_sections_in_order():
                         ad_hessian_instructions=6585, naive_s=3.5, call_us={"energy": 43.0, "gradient": 46.2, "hessian": 49.4})
     row = PathBenchRow(n=3, points=34, folds=(0.17354, 0.16360), evaluations=145, trace_s=0.02, ipopt_s=0.044, naive_s=None, newton_step_us=None)
     maps = MapBenchRow("omega-payload", curves=1, points=55, special=2, trace_s=0.12, brute_k=20, brute_s=9.9, agree=400, near=3)
-    data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row], "maps": [maps]}
+    contact = {"rows": [ContactBenchRow("free solve (dead-load twin)", 3, 0.008, 1e-12, "esba.solve"), ContactBenchRow("contact solve", 3, 0.016, 0.0, "from rest"),
+                        ContactBenchRow("blocked-force curve, 31 pressures", 8, 0.4, float("nan"), "warm-started")],
+               "ratio": 2.0, "ratio_target": 3.0, "curve_s": 0.4, "curve_target_s": 1.0, "curve_ok": True, "force_at_03": 6.5204}
+    data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row], "maps": [maps], "contact": contact}
     text = PAGE.render(data, PAGE.settings(), ROOT / "docs" / "performance.md").text
     _, sections = read_sections(text)
     assert tuple(k for k, _ in sections) == SECTIONS
     assert "2318       3987       6510     6585" in text
     assert "omega-payload" in text and "400/400" in text and "Every cell of each grid agrees" in text
+    assert "contact solve / free solve: 2.00x (target <= 3x: met)" in text and "blocked-force curve: 0.400 s (target <= 1 s: met)" in text
 
 
 def test_the_committed_page_has_every_section_written_by_its_command():
