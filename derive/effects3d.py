@@ -43,10 +43,19 @@ Examples
 
 from __future__ import annotations
 
+import hashlib
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 
 from .effects import MAX_PAYLOADS, EffectError, EffectSet, check_segments, check_variant
+from .provenance import DERIVE_DIR, GENERATION_SOURCES
+
+MANIFEST_3D = "manifest3d.json"
+#: The format of the spatial model files.
+FORMAT_3D = 1
+#: The spatial derivation's own modules (the planar ones it builds on are in GENERATION_SOURCES).
+SOURCES_3D = ("effects3d.py", "emit3d.py", "program3d.py", "spatial.py")
 
 #: The terms of the spatial family, in canonical order.
 EFFECTS_3D: tuple[str, ...] = ("air", "axial", "radial", "fibres", "rod", "side", "twist", "payload", "moment", "gravity")
@@ -193,3 +202,15 @@ class Effects3D:
 def model3d_filename(n: int, effects: Effects3D, variant: str) -> str:
     """File name of the generated spatial model for ``(n, effects, variant)``."""
     return f"m3d_n{check_segments(n):03d}__{effects.tag}__{check_variant(variant)}.py"
+
+
+@lru_cache(maxsize=1)
+def source_hash_3d() -> str:
+    """SHA-256 over the planar generation sources and the spatial ones, in name order: a change to
+    either marks the spatial models stale, while the planar models' own hash stays as it is."""
+    h = hashlib.sha256()
+    for name in sorted(set(GENERATION_SOURCES) | set(SOURCES_3D)):
+        path = DERIVE_DIR / name
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()

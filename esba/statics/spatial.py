@@ -1,0 +1,165 @@
+"""Equilibria of the spatial model: a load-ramped Newton method, certified by IPOPT.
+
+The history is the planar solver's (:func:`esba.statics.equilibrium.solve`): the pressure is raised
+from 0 with no load, then every load (payloads, moments, weight) from 0 to its value, each step a
+damped Newton solve on the gradient from the previous state; the last state is handed to IPOPT
+(exact Hessian) as the certificate. The result says whether it is stable (the 3n x 3n Hessian
+positive definite), and its smallest eigenvalue and its mode.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import casadi as ca
+import numpy as np
+
+from esba.model.generated import domain_lower_bound
+from esba.model.spatial import Model3D
+
+__all__ = ["Equilibrium3D", "newton3d", "solve3d", "load_names"]
+
+#: Gradient norm (N*mm per rad, relative to the largest term) below which Newton stops.
+NEWTON_TOL = 1e-12
+
+
+def load_names(model: Model3D) -> list[str]:
+    """The parameters that are ramped as loads: payload magnitudes, moments, the mass."""
+    out = []
+    for name in model.parameters:
+        if name[:1] == "F" and name[1:].isdigit() or name[:2] in ("mx", "my", "mz") and name[2:].isdigit() or name == "M":
+            out.append(name)
+    return out
+
+
+@dataclass
+class Equilibrium3D:
+    q: np.ndarray
+    n: int
+    converged: bool
+    stable: bool
+    min_eigenvalue: float
+    mode: np.ndarray
+    gradient_norm: float
+    ipopt_status: str
+    tip: np.ndarray
+    tip_rotation: np.ndarray
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def theta(self) -> np.ndarray:
+        return self.q[: self.n]
+
+    @property
+    def psi(self) -> np.ndarray:
+        return self.q[self.n : 2 * self.n]
+
+    @property
+    def tau(self) -> np.ndarray:
+        return self.q[2 * self.n :]
+
+    @property
+    def ok(self) -> bool:
+        return self.converged and self.stable
+
+
+def _bounds(model: Model3D, values: Mapping[str, float]) -> np.ndarray:
+    lb = np.full(model.size, -np.inf)
+    if model.effects.radial:
+        lb[: model.n] = domain_lower_bound(model.n, *(float(values[k]) for k in ("L", "r1", "r2", "d")))
+    return lb
+
+
+def newton3d(model: Model3D, values: Mapping[str, float], q0, *, max_iter: int = 60, lb=None) -> tuple[np.ndarray, bool, float]:
+    """Damped Newton on the gradient from ``q0``: (q, converged, |gradient|).
+
+    Each step solves H dq = -g (H shifted to positive definite when it is not, so the step goes
+    down in energy), then halves it until the energy falls (or the gradient shrinks) and the state
+    stays inside the model's domain ``lb``.
+    """
+    fun = model.state_function()
+    p = model.param_vector(values)
+    q = np.array(q0, dtype=float)
+    lb = _bounds(model, values) if lb is None else lb
+
+    def state(x):
+        u, g, h = fun(x, p)
+        return float(u), np.asarray(g).ravel(), np.asarray(h)
+
+    u, g, h = state(q)
+    scale = max(1.0, float(np.abs(h).max()))
+    for _ in range(max_iter):
+        gn = float(np.abs(g).max())
+        if gn <= NEWTON_TOL * scale:
+            return q, True, gn
+        w, V = np.linalg.eigh(h)
+        shift = np.where(w > 1e-10 * scale, w, np.maximum(np.abs(w), 1e-6 * scale))
+        step = -V @ ((V.T @ g) / shift)
+        t = 1.0
+        for _ in range(40):
+            trial = q + t * step
+            if np.all(trial > lb):
+                ut, gt, ht = state(trial)
+                if np.isfinite(ut) and (ut <= u + 1e-14 * max(1.0, abs(u)) or np.abs(gt).max() < gn):
+                    break
+            t *= 0.5
+        else:
+            return q, False, gn
+        q, u, g, h = trial, ut, gt, ht
+    return q, float(np.abs(g).max()) <= NEWTON_TOL * scale * 1e3, float(np.abs(g).max())
+
+
+def _ipopt(model: Model3D, values, q0, lb) -> tuple[np.ndarray, str]:
+    solver = model.registry.get("ipopt")
+    if solver is None:
+        q = ca.SX.sym("q", model.size)
+        ps = ca.SX.sym("p", len(model.parameters))
+        f = model.functions["energy"](q, *ca.vertsplit(ps))[0]
+        solver = ca.nlpsol("esba3d", "ipopt", {"x": q, "p": ps, "f": f},
+                           {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": 1e-12, "ipopt.sb": "yes"})
+        model.registry["ipopt"] = solver
+    lbx = np.where(np.isfinite(lb), lb, -ca.inf)
+    res = solver(x0=q0, p=model.param_vector(values), lbx=lbx)
+    return np.asarray(res["x"]).ravel(), str(solver.stats()["return_status"])
+
+
+def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int = 8, certify: bool = True) -> Equilibrium3D:
+    """The equilibrium of ``model`` at ``values`` along the load history (see the module's doc).
+
+    ``q0``: a warm start, solved at the full load directly (no history).
+    """
+    values = dict(values)
+    lb = _bounds(model, values)
+    notes: list[str] = []
+    if q0 is None:
+        q = np.zeros(model.size)
+        loads = load_names(model)
+        ok = True
+        stage = {**values, **{k: 0.0 for k in loads}}
+        pressure = float(values.get("P", 0.0))
+        for lam in np.linspace(0.0, 1.0, steps + 1)[1:]:
+            if "P" in stage:
+                stage["P"] = lam * pressure
+            q, ok_step, _ = newton3d(model, stage, q, lb=lb)
+            ok = ok and ok_step
+        for lam in np.linspace(0.0, 1.0, steps + 1)[1:]:
+            stage.update({k: lam * float(values[k]) for k in loads})
+            q, ok_step, _ = newton3d(model, stage, q, lb=lb)
+            ok = ok and ok_step
+        if not ok:
+            notes.append("a Newton step of the load history did not converge")
+    else:
+        q = np.array(q0, dtype=float)
+    q, converged, gn = newton3d(model, values, q, lb=lb)
+    status = "not run"
+    if certify:
+        qi, status = _ipopt(model, values, q, lb)
+        if status == "Solve_Succeeded" and np.abs(qi - q).max() > 1e-8:
+            notes.append(f"IPOPT moved the Newton solution by {np.abs(qi - q).max():.2e} rad")
+        if status != "Solve_Succeeded":
+            notes.append(f"IPOPT: {status}")
+    h = model.hessian(q, values)
+    w, V = np.linalg.eigh(h)
+    tip, rot, _ = model.pose(q, values["L"])
+    return Equilibrium3D(q, model.n, converged, bool(w[0] > 0), float(w[0]), V[:, 0], gn, status, tip, rot, notes)
