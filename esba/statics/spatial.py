@@ -163,3 +163,39 @@ def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int 
     w, V = np.linalg.eigh(h)
     tip, rot, _ = model.pose(q, values["L"])
     return Equilibrium3D(q, model.n, converged, bool(w[0] > 0), float(w[0]), V[:, 0], gn, status, tip, rot, notes)
+
+
+def fold3d(model: Model3D, values: Mapping[str, float], parameter: str, q0, *, max_iter: int = 80, tol: float = 1e-11) -> tuple[float, np.ndarray, np.ndarray]:
+    """A fold (or branch point) of the equilibria in ``parameter``: (value, q, null vector).
+
+    Newton on the extended system  g(q, lam) = 0,  H(q, lam) v = 0,  v0 . v = 1  from the
+    equilibrium ``q0`` at ``values`` (v0 its softest mode); the derivatives of H along v and in
+    lam are central differences, so the iteration converges to the exact fold (its residuals are
+    the model's own gradient and Hessian) at a linear rate near the end.
+    """
+    vals = dict(values)
+    lam = float(vals[parameter])
+    q = np.array(q0, dtype=float)
+    w, V = np.linalg.eigh(model.hessian(q, vals))
+    v0 = V[:, 0]
+    v = v0.copy()
+    N = model.size
+    for _ in range(max_iter):
+        vals[parameter] = lam
+        g, H = model.gradient(q, vals), model.hessian(q, vals)
+        r = np.concatenate([g, H @ v, [v0 @ v - 1.0]])
+        scale = max(1.0, float(np.abs(H).max()))
+        if np.abs(r[: 2 * N]).max() < tol * scale:
+            return lam, q, v
+        e = 1e-6 * max(1.0, abs(lam))
+        gp, Hp = model.gradient(q, {**vals, parameter: lam + e}), model.hessian(q, {**vals, parameter: lam + e})
+        gm, Hm = model.gradient(q, {**vals, parameter: lam - e}), model.hessian(q, {**vals, parameter: lam - e})
+        eq = 1e-6
+        Hv_q = np.column_stack([(model.hessian(q + eq * ei, vals) - model.hessian(q - eq * ei, vals)) @ v / (2 * eq) for ei in np.eye(N)])
+        J = np.zeros((2 * N + 1, 2 * N + 1))
+        J[:N, :N], J[:N, 2 * N] = H, (gp - gm) / (2 * e)
+        J[N:2 * N, :N], J[N:2 * N, N:2 * N], J[N:2 * N, 2 * N] = Hv_q, H, (Hp - Hm) @ v / (2 * e)
+        J[2 * N, N:2 * N] = v0
+        dz = np.linalg.lstsq(J, -r, rcond=None)[0]
+        q, v, lam = q + dz[:N], v + dz[N:2 * N], lam + dz[2 * N]
+    raise RuntimeError(f"fold3d: no fold of {parameter} found from {values[parameter]:g} in {max_iter} iterations")

@@ -1,0 +1,79 @@
+"""The planar model is the restriction of the spatial one (issue 26): for loads in the bending plane
+the 3-D solve returns zero sideways bend and twist and the planar numbers to 1e-10."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from esba.model.generated import load_model
+from esba.model.scene import MAIN_JOB
+from esba.model.spatial import load_model3d
+from esba.statics.equilibrium import solve
+from esba.statics.spatial import fold3d, newton3d, solve3d
+
+#: Sideways and torsional stiffnesses large enough that the in-plane state is stable (N*mm^2).
+STIFF = dict(EI_side=4e5, GJ=1e6, Beta1=0.0)
+
+
+def _values(pressure: float) -> dict[str, float]:
+    return {**MAIN_JOB.parameters(pressure), **STIFF}
+
+
+def test_table_2_in_3d_is_the_planar_solution_with_no_sideways_bend_or_twist():
+    planar = solve(MAIN_JOB)
+    result = solve3d(load_model3d(3), _values(planar.pressure))
+    assert result.ok and result.ipopt_status == "Solve_Succeeded", result.notes
+    assert np.abs(result.theta - planar.theta).max() < 1e-10
+    assert np.abs(result.psi).max() == 0.0 and np.abs(result.tau).max() == 0.0
+    assert np.abs(result.tip[:2] - planar.tip[:2]).max() < 1e-9 and result.tip[2] == 0.0
+
+
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_in_plane_states_have_the_planar_energy_gradient_and_hessian_and_decoupled_blocks(n):
+    """At any in-plane state: U, dU/dtheta and the theta-theta block are the planar model's; the
+    psi and tau gradients and the blocks coupling them to theta vanish. So every planar fold,
+    cusp and buckling load (a zero of the theta block) is one of the 3-D model."""
+    m2, m3 = load_model(n), load_model3d(n)
+    rng = np.random.default_rng(n)
+    for P in (0.05, 0.17):
+        vals = {**MAIN_JOB.parameters(P), **STIFF}
+        for _ in range(3):
+            theta = rng.uniform(-0.1, 1.2, n)
+            q = np.concatenate([theta, np.zeros(2 * n)])
+            assert m3.energy(q, vals) == pytest.approx(m2.energy(theta, vals), rel=1e-13, abs=1e-12)
+            g3, H3, H2 = m3.gradient(q, vals), m3.hessian(q, vals), m2.hessian(theta, vals)
+            assert np.abs(g3[:n] - m2.gradient(theta, vals)).max() < 1e-10 * max(1.0, np.abs(g3).max())
+            assert np.abs(g3[n:]).max() < 1e-12
+            assert np.abs(H3[:n, :n] - H2).max() < 1e-10 * np.abs(H2).max()
+            assert np.abs(H3[:n, n:]).max() < 1e-12
+
+
+def test_the_2_N_pressure_folds_found_in_3d_are_the_planar_ones():
+    """Newton on the extended system of the 3-D model finds 0.173535495546 and 0.163601780422 MPa."""
+    model = load_model3d(3)
+    vals = _values(0.16)
+    q = solve3d(model, vals, certify=False).q
+    for P in np.linspace(0.16, 0.173, 14):  # up the less bent branch, toward its fold
+        vals["P"] = P
+        q, ok, _ = newton3d(model, vals, q)
+        assert ok
+    upper, q_up, v_up = fold3d(model, vals, "P", q)
+    assert upper == pytest.approx(0.173535495546, abs=1e-10)
+    assert np.abs(q_up[3:]).max() < 1e-15 and np.abs(v_up[3:]).max() < 1e-12  # an in-plane fold
+    vals = _values(0.3)
+    q = solve3d(model, vals, certify=False).q
+    vals["P"] = 0.165  # down the more bent branch
+    q, ok, _ = newton3d(model, vals, q)
+    lower, _, _ = fold3d(model, vals, "P", q)
+    assert lower == pytest.approx(0.163601780422, abs=1e-10)
+
+
+def test_the_table_2_push_swings_a_torsionally_soft_actuator_out_of_the_plane():
+    """The same in-plane state with a silicone-only torsion stiffness (GJ = G pi r1^4 / 2, G = E/3):
+    the 3n x 3n Hessian has a negative eigenvalue whose mode is sideways bend and twist only."""
+    planar = solve(MAIN_JOB)
+    vals = {**_values(planar.pressure), "GJ": 0.54 / 3 * np.pi * 8.0**4 / 2}
+    result = solve3d(load_model3d(3), vals, q0=np.concatenate([planar.theta, np.zeros(6)]), certify=False)
+    assert result.converged and not result.stable
+    assert np.abs(result.mode[:3]).max() < 1e-12 and np.abs(result.mode[6:]).max() > 0.1
