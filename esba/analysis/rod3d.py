@@ -42,12 +42,12 @@ def elastica_reference(alpha: float) -> dict[str, float]:
     def length_t(phi0: float) -> float:
         s0 = np.sin(phi0)
         f = lambda t: 2.0 * np.sqrt(s0) / np.sqrt(1.0 - (s0 * (1 - t * t)) ** 2)  # noqa: E731
-        return integrate.quad(f, 0.0, 1.0, epsabs=1e-12, epsrel=1e-12, limit=200)[0] - np.sqrt(2.0 * alpha)
+        return integrate.quad(f, 0.0, 1.0, epsabs=1e-10, epsrel=1e-10, limit=200)[0] - np.sqrt(2.0 * alpha)
 
     phi0 = optimize.brentq(length_t, 1e-9, np.pi / 2 - 1e-6, xtol=1e-15)  # alpha -> inf as phi0 -> pi/2
     s0 = np.sin(phi0)
     fy = lambda t: s0 * (1 - t * t) * 2.0 * np.sqrt(s0) / np.sqrt(1.0 - (s0 * (1 - t * t)) ** 2)  # noqa: E731
-    y = integrate.quad(fy, 0.0, 1.0, epsabs=1e-12, epsrel=1e-12, limit=200)[0] / np.sqrt(2.0 * alpha)
+    y = integrate.quad(fy, 0.0, 1.0, epsabs=1e-10, epsrel=1e-10, limit=200)[0] / np.sqrt(2.0 * alpha)
     x = np.sqrt(2.0 * s0 / alpha)
     return {"v": y, "u": 1.0 - x, "phi0": phi0}
 

@@ -121,11 +121,71 @@ def _uncertainty_rows(d: dict) -> list[tuple[str, str]]:
     return rows
 
 
+def _section_arg(items: list[str] | None) -> dict[str, float]:
+    from esba.statics.spatial import SpatialError, check_section
+
+    section: dict[str, str] = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise UsageError(f"--section {item!r}: expected NAME=VALUE, e.g. EI_side=4e5 (N*mm^2)")
+        section[name.strip()] = value.strip()
+    try:
+        return check_section(section)
+    except SpatialError as exc:
+        raise UsageError(f"--section: {exc}") from None
+
+
+def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
+    """``esba solve --3d``: the spatial model (docs/3d.md); no figure, no uncertainty yet."""
+    import numpy as np
+
+    from esba.model.spatial import load_model3d
+    from esba.statics.spatial import scene_values3d, solve_scene3d, tip_compliance
+
+    refuse(args, ["monte_carlo", "sigma", "mc_out", "mc_chunk", "seed", "history", "sensitivities"], "with --3d (the 3-D solve has none yet)")
+    section = _section_arg(args.section)
+    result = solve_scene3d(scene, section)
+    effects, values = scene_values3d(scene, section)
+    model = load_model3d(scene.segments, effects, scene.variant)
+    data = {
+        "scene": scene.describe(),
+        "model": model.path.name,
+        "converged": result.converged,
+        "stable": result.stable,
+        "ipopt": result.ipopt_status,
+        "theta_deg": np.degrees(result.theta).tolist(),
+        "psi_deg": np.degrees(result.psi).tolist(),
+        "tau_deg": np.degrees(result.tau).tolist(),
+        "tip_mm": result.tip.tolist(),
+        "min_eigenvalue": result.min_eigenvalue,
+        "notes": result.notes,
+    }
+    if result.stable:
+        C, _ = tip_compliance(model, values, result.q)
+        data["tip_compliance"] = C.tolist()
+
+    def table(d: dict) -> str:
+        rows = [f"{'scene':>10}: {d['scene']}", f"{'model':>10}: {d['model']}"]
+        for key in ("theta_deg", "psi_deg", "tau_deg", "tip_mm"):
+            rows.append(f"{key:>10}: " + "  ".join(f"{v:.4f}" for v in d[key]))
+        rows.append(f"{'state':>10}: {'stable' if d['stable'] else 'UNSTABLE (the softest mode: ' + format(d['min_eigenvalue'], '.3g') + ')'}; IPOPT {d['ipopt']}")
+        rows += [f"{'note':>10}: {n}" for n in d["notes"]]
+        return "\n".join(rows)
+
+    print_result(args, data, table)
+    return EXIT_OK if result.ok else EXIT_FAILED
+
+
 def _cmd_solve(args: argparse.Namespace) -> int:
     from esba.statics.equilibrium import EquilibriumError, SolverOptions, SolverOptionsError, solve
 
-    figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
     scene = scene_from_args(args)
+    if args.three_d or scene.needs_3d:
+        return _cmd_solve3d(args, scene)
+    if args.section:
+        raise UsageError("--section sets the 3-D model's section stiffnesses: give --3d (or a payload out of the plane)")
+    figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
         raise UsageError("--monte-carlo needs uncertain parameters: --sigma NAME=SIGMA or an [uncertainty] table in the scene file")
@@ -297,6 +357,8 @@ def add_solve(sub) -> None:
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--max-iter", type=count_arg("max_iter", 1, _MAX_ITER, "an equilibrium takes tens of iterations"), default=200, metavar="N", help="IPOPT iterations per solve (default 200, at most 100000)")
     p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
+    p.add_argument("--3d", dest="three_d", action="store_true", help="solve with the 3-D model (chosen by itself when a payload points out of the plane; docs/3d.md)")
+    p.add_argument("--section", action="append", metavar="NAME=VALUE", help="3-D section stiffness: EI_side=..., GJ=... (N*mm^2; repeatable)")
     p.add_argument(
         "--history",
         type=_history_arg,

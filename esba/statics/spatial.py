@@ -199,3 +199,100 @@ def fold3d(model: Model3D, values: Mapping[str, float], parameter: str, q0, *, m
         dz = np.linalg.lstsq(J, -r, rcond=None)[0]
         q, v, lam = q + dz[:N], v + dz[N:2 * N], lam + dz[2 * N]
     raise RuntimeError(f"fold3d: no fold of {parameter} found from {values[parameter]:g} in {max_iter} iterations")
+
+
+# ---------------------------------------------------------------------------------------------
+# Scenes in 3-D and the tip's stiffness
+
+#: The section parameters a 3-D actuator model takes beyond the planar ones (N*mm^2).
+SECTION_PARAMETERS = ("EI_side", "GJ")
+
+
+class SpatialError(ValueError):
+    """A bad input to the 3-D solve (one line naming it)."""
+
+
+def check_section(section: Mapping[str, float] | None) -> dict[str, float]:
+    """The section stiffnesses by name: every name known, every value finite and > 0.
+
+    Until the section module (``esba.model.section``) supplies their defaults from the eccentric
+    section, both must be given.
+    """
+    section = dict(section or {})
+    for name, value in section.items():
+        if name not in SECTION_PARAMETERS:
+            raise SpatialError(f"section parameter {name!r}: unknown; allowed are {', '.join(SECTION_PARAMETERS)} (N*mm^2)")
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            raise SpatialError(f"section parameter {name}={value!r}: expected a number > 0 (N*mm^2)") from None
+        if not np.isfinite(v) or v <= 0:
+            raise SpatialError(f"section parameter {name}={value!r}: expected a finite number > 0 (N*mm^2)")
+        section[name] = v
+    missing = [k for k in SECTION_PARAMETERS if k not in section]
+    if missing:
+        try:
+            from esba.model.section import section_stiffness  # noqa: F401  (the section helper, when present)
+        except ImportError:
+            raise SpatialError(f"section parameter(s) {', '.join(missing)} missing: give them (N*mm^2), e.g. EI_side=4e5 GJ=2e4") from None
+        raise SpatialError(f"section parameter(s) {', '.join(missing)} missing: give them (N*mm^2)")
+    return section
+
+
+def scene_values3d(scene, section: Mapping[str, float] | None = None) -> tuple[object, dict[str, float]]:
+    """The spatial effects and parameter values of a planar-style scene (payloads may point out of plane).
+
+    Gravity acts along +x (the planar scene's), with g of the scene.
+    """
+    from derive.effects3d import Effects3D
+    from esba.model.closed_form import pressure_for_angle
+
+    sec = check_section(section)
+    pressure = scene.pressure if scene.pressure is not None else pressure_for_angle(scene.unloaded())  # payloads do not enter it
+    values = scene.parameters(pressure)
+    values.update(sec)
+    if scene.gravity:
+        values.update(gx=values["g"], gy=0.0, gz=0.0)
+    effects = Effects3D.from_planar(scene.effects)
+    return effects, values
+
+
+def solve_scene3d(scene, section: Mapping[str, float] | None = None, *, steps: int = 8) -> Equilibrium3D:
+    """The 3-D equilibrium of ``scene`` (its payloads may point out of the bending plane)."""
+    from esba.model.spatial import load_model3d
+
+    effects, values = scene_values3d(scene, section)
+    model = load_model3d(scene.segments, effects, scene.variant)
+    return solve3d(model, values, steps=steps)
+
+
+def tip_jacobian(model: Model3D, q, L: float, step: float = 1e-7) -> np.ndarray:
+    """The 6 x 3n Jacobian of the tip's motion (translation; rotation, as the spatial angular
+    velocity) per unit rate of q, by central differences of the generated kinematics."""
+    q = np.asarray(q, dtype=float)
+    J = np.zeros((6, model.size))
+    for i in range(model.size):
+        dq = np.zeros(model.size)
+        dq[i] = step
+        tp, Rp, _ = model.pose(q + dq, L)
+        tm, Rm, _ = model.pose(q - dq, L)
+        _, R0, _ = model.pose(q, L)
+        W = (Rp - Rm) / (2 * step) @ R0.T
+        J[:3, i] = (tp - tm) / (2 * step)
+        J[3:, i] = (W[2, 1], W[0, 2], W[1, 0])
+    return J
+
+
+def tip_compliance(model: Model3D, values: Mapping[str, float], q) -> tuple[np.ndarray, np.ndarray]:
+    """The tip's 6 x 6 compliance C = J H^-1 J^T and stiffness K = C^-1 at the equilibrium q.
+
+    Rows and columns: tip force (x, y, z; N), tip moment (about x, y, z; N*mm), dead loads added at
+    the tip, in the base frame. The state must be stable (H positive definite).
+    """
+    H = model.hessian(q, values)
+    if np.linalg.eigvalsh(H)[0] <= 0:
+        raise SpatialError("tip stiffness: the state is not stable (its Hessian is not positive definite)")
+    J = tip_jacobian(model, q, values["L"])
+    C = J @ np.linalg.solve(H, J.T)
+    C = 0.5 * (C + C.T)
+    return C, np.linalg.pinv(C, rcond=1e-12, hermitian=True)
