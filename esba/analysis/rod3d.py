@@ -109,3 +109,47 @@ def lateral_torsional_load(n: int, EI_side: float = 1.0, GJ: float = 1.0, EI: fl
     vals["F1"] = F
     w, V = np.linalg.eigh(model.hessian(state["q"], vals))
     return BranchPoint(F, V[:, 0], state["q"])
+
+
+# ---------------------------------------------------------------------------------------------
+# B3: the Bathe-Bolourchi 45 degree bend
+
+#: Bathe & Bolourchi (1979): a 45 degree arc of radius 100 in the plane, square section 1 x 1,
+#: E = 1e7, G = E/2 (nu = 0), I = 1/12, J = 1/6 (the polar moment, as the references take it),
+#: clamped at one end, a dead load P out of the plane at the other.
+BATHE = {"R": 100.0, "EI": 1e7 / 12, "GJ": 5e6 / 6}
+
+#: Tip positions (x toward the arc's centre, y along the clamped tangent, z along the load) as the
+#: references publish them: Bathe & Bolourchi (1979), Simo & Vu-Quoc (1986), Cardona & Geradin
+#: (1988), Crisfield (1990), each with 8 elements.
+BATHE_REFERENCES = {
+    300.0: {"Bathe-Bolourchi": (22.5, 59.2, 39.5), "Simo-Vu-Quoc": (22.33, 58.84, 40.08)},
+    450.0: {"Simo-Vu-Quoc": (18.62, 52.32, 48.39)},
+    600.0: {"Bathe-Bolourchi": (15.9, 47.2, 53.4), "Simo-Vu-Quoc": (15.79, 47.23, 53.37),
+            "Cardona-Geradin": (15.74, 47.15, 53.43), "Crisfield": (15.61, 47.07, 53.56)},
+}
+
+
+def bathe_bolourchi(n: int, loads=(300.0, 450.0, 600.0), steps_per_100: int = 10) -> dict[float, np.ndarray]:
+    """B3 on the n-segment rod with rest curvature 1/R: the tip (x, y, z) in the references' axes.
+
+    esba's rod starts along x and bends toward +y; the references start along y and bend toward
+    +x: their (x, y, z) is esba's (y, x, z). The load is raised in steps of 100/steps_per_100.
+    """
+    L = BATHE["R"] * np.pi / 4
+    model = load_model3d(n, "rod,payload")
+    vals = rod_values(L=L, EI=BATHE["EI"], EI_side=BATHE["EI"], GJ=BATHE["GJ"], kappa0=1.0 / BATHE["R"], Omega=0.0, Beta=np.pi / 2)
+    q = np.zeros(model.size)
+    q[:n] = L / (n * BATHE["R"])
+    out = {}
+    top = max(loads)
+    for P in np.linspace(0.0, top, int(round(top / 100 * steps_per_100)) + 1)[1:]:
+        vals["F1"] = P
+        q, ok, _ = newton3d(model, vals, q)
+        if not ok:
+            raise RuntimeError(f"B3: Newton did not converge at P = {P:g}, n = {n}")
+        for want in loads:
+            if abs(P - want) < 1e-9:
+                tip = model.tip(q, L)
+                out[want] = np.array([tip[1], tip[0], tip[2]])
+    return out

@@ -65,3 +65,22 @@ def test_b5_at_n_3_already_brackets_the_branch_point():
     """A fast check: at n = 3 the Hessian turns singular 8 % above Prandtl's load (the 1/n^2 error)."""
     b = lateral_torsional_load(3)
     assert 1.0 < b.load / PRANDTL < 1.1
+
+
+@pytest.mark.slow
+@pytest.mark.ci
+def test_b3_bathe_bolourchi_tip_positions_lie_within_the_references_spread():
+    """At P = 300 and 600 the extrapolated tip (n = 8, 16) is nearer to a published tip than the
+    published tips are to each other; at 450 (one reference) within 0.25 % of the tip's distance."""
+    from esba.analysis.rod3d import BATHE_REFERENCES, bathe_bolourchi
+
+    t8, t16 = bathe_bolourchi(8), bathe_bolourchi(16)
+    for P, refs in BATHE_REFERENCES.items():
+        tip = richardson(t8[P], t16[P])
+        pts = np.array(list(refs.values()))
+        nearest = np.linalg.norm(pts - tip, axis=1).min()
+        if len(pts) > 1:
+            spread = max(np.linalg.norm(a - b) for a in pts for b in pts)
+            assert nearest < spread, (P, tip, nearest, spread)
+        else:
+            assert nearest < 2.5e-3 * np.linalg.norm(pts[0]), (P, tip, nearest)
