@@ -6,9 +6,9 @@ page's module when it is asked for.
 Examples
 --------
 >>> list(ENTRIES)
-['derivations', 'validation', 'design', 'paths', 'experiments', 'sensing', 'accuracy-vs-time', 'performance', 'scaling', 'equilibria', 'maps']
+['derivations', 'validation', 'design', 'paths', 'experiments', 'sensing', 'accuracy-vs-time', 'performance', 'scaling', 'equilibria', 'maps', '3d']
 >>> [e.name for e in ENTRIES.values() if e.slow]
-['accuracy-vs-time', 'performance', 'scaling']
+['accuracy-vs-time', 'performance', 'scaling', '3d']
 >>> check_names(["paths", "paths", "validation"])
 ['paths', 'validation']
 >>> check_names(["path"])  # doctest: +ELLIPSIS
@@ -71,6 +71,8 @@ ENTRIES: dict[str, Entry] = {
               "every equilibrium of the bistable window and the detached branch, barriers"),
         Entry("maps", "maps.md", "esba.pages.maps", "esba map --write-doc docs/maps.md", False,
               "stability maps: fold curves, cusps, regions by stable states, designs clear of folds"),
+        Entry("3d", "3d.md", "esba.pages.spatial", "esba docs --write 3d", True,
+              "the actuator in 3-D: the planar restriction, rod benchmarks B1-B5, the sideways flip, the cost"),
     )
 }
 

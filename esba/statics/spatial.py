@@ -1,8 +1,8 @@
 """Equilibria of the spatial model: a load-ramped Newton method, certified by IPOPT.
 
-The history is the planar solver's (:func:`esba.statics.equilibrium.solve`): the pressure is raised
-from 0 with no load, then every load (payloads, moments, weight) from 0 to its value, each step a
-damped Newton solve on the gradient from the previous state; the last state is handed to IPOPT
+The history is the planar solver's (:func:`esba.statics.equilibrium.solve`): the unloaded state at
+the pressure, then every load (payloads, moments, weight) raised from 0 to its value in steps, each
+a damped Newton solve on the gradient from the previous state; the last state is handed to IPOPT
 (exact Hessian) as the certificate. The result says whether it is stable (the 3n x 3n Hessian
 positive definite), and its smallest eigenvalue and its mode.
 """
@@ -15,6 +15,7 @@ from typing import Mapping
 import casadi as ca
 import numpy as np
 
+from esba.infra.threads import single_threaded
 from esba.model.generated import domain_lower_bound
 from esba.model.spatial import Model3D
 
@@ -71,6 +72,7 @@ def _bounds(model: Model3D, values: Mapping[str, float]) -> np.ndarray:
     return lb
 
 
+@single_threaded
 def newton3d(model: Model3D, values: Mapping[str, float], q0, *, max_iter: int = 60, lb=None) -> tuple[np.ndarray, bool, float]:
     """Damped Newton on the gradient from ``q0``: (q, converged, |gradient|).
 
@@ -89,13 +91,18 @@ def newton3d(model: Model3D, values: Mapping[str, float], q0, *, max_iter: int =
 
     u, g, h = state(q)
     scale = max(1.0, float(np.abs(h).max()))
+    last = np.inf  # the size of the last step: one more step is taken after the gradient is small
     for _ in range(max_iter):
         gn = float(np.abs(g).max())
-        if gn <= NEWTON_TOL * scale:
+        if gn <= NEWTON_TOL * scale and (last < 1e-12 or gn == 0.0):
             return q, True, gn
-        w, V = np.linalg.eigh(h)
-        shift = np.where(w > 1e-10 * scale, w, np.maximum(np.abs(w), 1e-6 * scale))
-        step = -V @ ((V.T @ g) / shift)
+        try:  # positive definite (the usual case): Cholesky
+            c = np.linalg.cholesky(h)
+            step = -np.linalg.solve(c.T, np.linalg.solve(c, g))
+        except np.linalg.LinAlgError:  # not: step along the eigenvectors, curvature made positive
+            w, V = np.linalg.eigh(h)
+            shift = np.where(w > 1e-10 * scale, w, np.maximum(np.abs(w), 1e-6 * scale))
+            step = -V @ ((V.T @ g) / shift)
         t = 1.0
         for _ in range(40):
             trial = q + t * step
@@ -106,8 +113,9 @@ def newton3d(model: Model3D, values: Mapping[str, float], q0, *, max_iter: int =
             t *= 0.5
         else:
             return q, False, gn
+        last = float(np.abs(trial - q).max())
         q, u, g, h = trial, ut, gt, ht
-    return q, float(np.abs(g).max()) <= NEWTON_TOL * scale * 1e3, float(np.abs(g).max())
+    return q, float(np.abs(g).max()) <= NEWTON_TOL * scale, float(np.abs(g).max())
 
 
 def _ipopt(model: Model3D, values, q0, lb) -> tuple[np.ndarray, str]:
@@ -124,7 +132,8 @@ def _ipopt(model: Model3D, values, q0, lb) -> tuple[np.ndarray, str]:
     return np.asarray(res["x"]).ravel(), str(solver.stats()["return_status"])
 
 
-def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int = 8, certify: bool = True) -> Equilibrium3D:
+@single_threaded
+def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int = 4, certify: bool = True) -> Equilibrium3D:
     """The equilibrium of ``model`` at ``values`` along the load history (see the module's doc).
 
     ``q0``: a warm start, solved at the full load directly (no history).
@@ -138,11 +147,16 @@ def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int 
         ok = True
         stage = {**values, **{k: 0.0 for k in loads}}
         pressure = float(values.get("P", 0.0))
-        for lam in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            if "P" in stage:
-                stage["P"] = lam * pressure
-            q, ok_step, _ = newton3d(model, stage, q, lb=lb)
-            ok = ok and ok_step
+        # the unloaded state: each segment's in-plane energy is separable, one damped Newton solve
+        # from straight reaches it (the pressure is raised in steps only when that fails)
+        q, ok, _ = newton3d(model, stage, q, lb=lb)
+        if not ok:
+            q, ok = np.zeros(model.size), True
+            for lam in np.linspace(0.0, 1.0, steps + 1)[1:]:
+                if "P" in stage:
+                    stage["P"] = lam * pressure
+                q, ok_step, _ = newton3d(model, stage, q, lb=lb)
+                ok = ok and ok_step
         for lam in np.linspace(0.0, 1.0, steps + 1)[1:]:
             stage.update({k: lam * float(values[k]) for k in loads})
             q, ok_step, _ = newton3d(model, stage, q, lb=lb)
@@ -296,3 +310,41 @@ def tip_compliance(model: Model3D, values: Mapping[str, float], q) -> tuple[np.n
     C = J @ np.linalg.solve(H, J.T)
     C = 0.5 * (C + C.T)
     return C, np.linalg.pinv(C, rcond=1e-12, hermitian=True)
+
+
+def first_instability(model: Model3D, values: Mapping[str, float], load: str, q0, *, top: float, steps: int = 40) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """The first value of the parameter ``load`` in (values[load], top] at which the equilibrium
+    followed from ``q0`` loses stability: (value, q, mode), None when it stays stable up to ``top``.
+
+    The equilibrium is followed by Newton in ``steps`` equal steps; where the smallest eigenvalue of
+    the 3n x 3n Hessian changes sign, Brent's method finds the zero (a fold or a branch point:
+    the mode says which way it goes, in the plane or out of it).
+    """
+    vals = dict(values)
+    start = float(vals[load])
+    q = np.array(q0, dtype=float)
+
+    def at(x: float, qs: np.ndarray) -> tuple[float, np.ndarray]:
+        vals[load] = x
+        qn, ok, _ = newton3d(model, vals, qs)
+        if not ok:
+            raise RuntimeError(f"first_instability: Newton lost the equilibrium at {load} = {x:g}")
+        return float(np.linalg.eigvalsh(model.hessian(qn, vals))[0]), qn
+
+    e0, q = at(start, q)
+    if e0 <= 0:
+        raise SpatialError(f"first_instability: the state at {load} = {start:g} is already unstable")
+    grid = np.linspace(start, top, steps + 1)[1:]
+    prev = start
+    for x in grid:
+        e, qn = at(x, q)
+        if e <= 0:
+            from scipy.optimize import brentq
+
+            qa = q
+            x_star = brentq(lambda y: at(y, qa)[0], prev, x, xtol=1e-12 * max(1.0, abs(x)), rtol=1e-12)
+            _, qs = at(x_star, qa)
+            w, V = np.linalg.eigh(model.hessian(qs, vals))
+            return x_star, qs, V[:, 0]
+        q, prev = qn, x
+    return None
