@@ -1,0 +1,86 @@
+"""``esba solve --3d`` and the 3-D loads of scenes, flags and the API: answers and one-line refusals."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from esba.cli import EXIT_OK, EXIT_USAGE, main
+from esba.model.scene import MAIN_JOB, Payload, Scene, SceneError, scene_from_dict
+from esba.model.spatial import load_model3d
+from esba.statics.equilibrium import solve
+from esba.statics.spatial import SpatialError, check_section, solve_scene3d, tip_compliance
+
+SECTION = ["--section", "EI_side=4e5", "--section", "GJ=1e6"]
+
+
+def run(capsys, *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_solve_3d_of_table_2_is_the_planar_answer_with_no_twist(capsys):
+    code, out, err = run(capsys, "solve", "--3d", *SECTION, "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    assert np.allclose(np.radians(d["theta_deg"]), solve(MAIN_JOB).theta, atol=1e-10)
+    assert d["psi_deg"] == [0.0] * 3 and d["tau_deg"] == [0.0] * 3 and d["stable"]
+    C = np.array(d["tip_compliance"])
+    assert C.shape == (6, 6) and np.allclose(C, C.T)
+
+
+def test_a_payload_out_of_the_plane_picks_the_3d_model_and_moves_the_tip_sideways(capsys):
+    code, out, err = run(capsys, "solve", "--payload-out-of-plane", "20", *SECTION, "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    assert d["tip_mm"][2] > 0.5 and "20 deg out of plane" in d["scene"]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["solve", "--3d", "--section", "EI_side=4e5"], "section parameter(s) GJ missing"),
+    (["solve", "--3d", "--section", "EIside=4e5", "--section", "GJ=1"], "section parameter 'EIside': unknown; allowed are EI_side, GJ"),
+    (["solve", "--3d", "--section", "GJ=nan", "--section", "EI_side=1"], "GJ='nan': expected a finite number > 0"),
+    (["solve", "--3d", "--section", "GJ"], "--section 'GJ': expected NAME=VALUE"),
+    (["solve", "--section", "GJ=1"], "--section sets the 3-D model's section stiffnesses: give --3d"),
+    (["solve", "--payload-out-of-plane", "120", *SECTION], "payload.out_of_plane_deg=120: expected an angle from -90 to 90"),
+    (["solve", "--payload-out-of-plane", "nan", *SECTION], "out_of_plane_deg"),
+    (["equilibria", "--payload-out-of-plane", "10", "--no-plot"], "out_of_plane_deg=10 points out of the bending plane"),
+    (["solve", "--3d", *SECTION, "--sensitivities"], "--sensitivities is not used with --3d"),
+])
+def test_bad_3d_input_is_refused_in_one_line(capsys, args, message):
+    code, _, err = run(capsys, *args)
+    assert code == EXIT_USAGE
+    assert message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_planar_scene_file_means_what_it_meant_and_a_3d_one_says_so():
+    planar = scene_from_dict({"payloads": [{"force": 1.0, "angle_deg": 90}]})
+    assert not planar.needs_3d and planar.payloads[0].out_of_plane_deg == 0.0
+    spatial = scene_from_dict({"payloads": [{"force": 1.0, "out_of_plane_deg": 30}]})
+    assert spatial.needs_3d
+    with pytest.raises(SceneError, match="out_of_plane_deg=30 points out of the bending plane"):
+        spatial.model()
+    with pytest.raises(SceneError, match="out_of_plane_deg=-91"):
+        Payload(1.0, out_of_plane_deg=-91)
+
+
+def test_the_api_solves_a_sideways_payload_and_twists_the_finger():
+    scene = Scene(target_angle_deg=90.0, payloads=(Payload(0.5, 0.0, 1.0, out_of_plane_deg=90.0),))
+    r = solve_scene3d(scene, {"EI_side": 4e5, "GJ": 2e4})
+    assert r.ok and abs(r.tip[2]) > 0.1 and np.abs(r.tau).max() > 0
+    with pytest.raises(SpatialError, match="unknown"):
+        check_section({"EI": 1.0, "GJ": 1.0, "EI_side": 1.0})
+
+
+def test_the_tip_compliance_of_a_straight_rod_has_the_closed_form_rotations():
+    """Moments at the tip of a straight rod: rotations L/GJ, L/EI_side, L/EI at any n; the coupling of
+    the in-plane moment to the deflection is L^2/(2 EI); the axial direction is rigid."""
+    m = load_model3d(3, "rod,payload")
+    vals = dict(L=2.0, EI=3.0, EI_side=5.0, GJ=7.0, kappa0=0.0, F1=0.0, Omega1=0.0, Beta1=0.0, s1=1.0)
+    C, K = tip_compliance(m, vals, np.zeros(9))
+    assert np.diag(C)[3:] == pytest.approx([2 / 7, 2 / 5, 2 / 3], rel=1e-8)
+    assert C[1, 5] == pytest.approx(2.0**2 / (2 * 3.0), rel=1e-8) and abs(C[0, 0]) < 1e-12
+    assert np.allclose(K @ C @ K, K, atol=1e-6 * np.abs(K).max())
