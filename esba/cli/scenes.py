@@ -145,6 +145,9 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
 
     refuse(args, ["monte_carlo", "sigma", "mc_out", "mc_chunk", "seed", "history", "sensitivities"], "with --3d (the 3-D solve has none yet)")
     section = _section_arg(args.section)
+    if args.no_plot and args.plot is not None:
+        raise UsageError("--plot and --no-plot: give one of the two")
+    figure = outputs.figure_file(args.plot, "--plot", "esba-solve3d.png") if args.plot is not None else None  # checked first
     result = solve_scene3d(scene, section)
     effects, values = scene_values3d(scene, section)
     model = load_model3d(scene.segments, effects, scene.variant)
@@ -173,6 +176,16 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
         rows += [f"{'note':>10}: {n}" for n in d["notes"]]
         return "\n".join(rows)
 
+    if figure is not None:
+        from esba.figures.scenes import save_figure
+        from esba.figures.spatial import tube_figure
+
+        forces = []
+        for k, p in enumerate(scene.payloads, start=1):
+            om, be = math.radians(p.angle_deg), math.radians(p.out_of_plane_deg)
+            forces.append((p.force * np.array([math.cos(be) * math.cos(om), -math.cos(be) * math.sin(om), math.sin(be)]), p.at))
+        written = save_figure(tube_figure(scene.segments, result.q, values, forces, scene.describe()), figure)
+        print(f"esba: wrote {written}", file=sys.stderr)
     print_result(args, data, table)
     return EXIT_OK if result.ok else EXIT_FAILED
 

@@ -206,3 +206,35 @@ def load_model3d(n: int = 3, effects: Effects3D | str = DEFAULT_EFFECTS_3D, vari
     if not isinstance(eff, Effects3D):
         raise EffectError(f"effects={effects!r}: expected a string such as {DEFAULT_EFFECTS_3D!r} or an Effects3D")
     return _load(n, eff, variant)
+
+
+def segment_pose(q_joint, length: float, sigma: float = 1.0) -> np.ndarray:
+    """exp(sigma hat(Xi)) of one joint (theta, psi, tau) and segment length L/n, as a 4 x 4 pose
+    (NumPy, Rodrigues' closed form; the generated ``kinematics`` gives the same segment end points)."""
+    th, ps, ta = (float(v) * sigma for v in q_joint)
+    w = np.array([ta, ps, th])
+    W = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+    r = float(np.linalg.norm(w))
+    if r < 1e-4:  # series of f1, f2, f3
+        f1, f2, f3 = 1 - r * r / 6, 0.5 - r * r / 24, 1 / 6 - r * r / 120
+    else:
+        f1, f2, f3 = np.sin(r) / r, (1 - np.cos(r)) / r**2, (r - np.sin(r)) / r**3
+    g = np.eye(4)
+    g[:3, :3] = np.eye(3) + f1 * W + f2 * W @ W
+    g[:3, 3] = (np.eye(3) + f2 * W + f3 * W @ W) @ np.array([sigma * length, 0.0, 0.0])
+    return g
+
+
+def centreline3d(n: int, q, L: float, per_segment: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """Points (m, 3) and frames (m, 3, 3) along the layer's mid-line, ``per_segment`` samples a segment."""
+    q = np.asarray(q, dtype=float).ravel()
+    joints = np.column_stack([q[:n], q[n:2 * n], q[2 * n:]])
+    g = np.eye(4)
+    pts, frames = [g[:3, 3].copy()], [g[:3, :3].copy()]
+    for j in range(n):
+        for k in range(1, per_segment + 1):
+            gk = g @ segment_pose(joints[j], L / n, k / per_segment)
+            pts.append(gk[:3, 3])
+            frames.append(gk[:3, :3])
+        g = g @ segment_pose(joints[j], L / n)
+    return np.array(pts), np.array(frames)

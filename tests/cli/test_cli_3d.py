@@ -84,3 +84,15 @@ def test_the_tip_compliance_of_a_straight_rod_has_the_closed_form_rotations():
     assert np.diag(C)[3:] == pytest.approx([2 / 7, 2 / 5, 2 / 3], rel=1e-8)
     assert C[1, 5] == pytest.approx(2.0**2 / (2 * 3.0), rel=1e-8) and abs(C[0, 0]) < 1e-12
     assert np.allclose(K @ C @ K, K, atol=1e-6 * np.abs(K).max())
+
+
+def test_the_numpy_centreline_passes_through_the_generated_segment_ends_and_the_tube_is_drawn(tmp_path, capsys):
+    from esba.model.spatial import centreline3d
+
+    m = load_model3d(3)
+    q = np.array([0.3, 0.5, 0.2, -0.1, 0.2, 0.05, 0.1, -0.3, 0.2])
+    pts, frames = centreline3d(3, q, 135.0, per_segment=4)
+    tip, rot, ends = m.pose(q, 135.0)
+    assert np.abs(pts[::4] - ends.T).max() < 1e-12 and np.abs(frames[-1] - rot).max() < 1e-12
+    code, _, err = run(capsys, "solve", "--payload-out-of-plane", "40", *SECTION, "--plot", str(tmp_path / "tube.png"))
+    assert code == EXIT_OK and (tmp_path / "tube.png").stat().st_size > 10_000, err
