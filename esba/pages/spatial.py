@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from esba.bench.timing import median_time
+
 from .page import TIMES, Page, Progress, Rendered, Times
 
 __all__ = ["PAGE", "SpatialPage"]
@@ -32,15 +34,6 @@ class SpatialData:
     flips: list[tuple] = field(default_factory=list)
     silicone: tuple = ()
     cost: dict[str, Any] = field(default_factory=dict)
-
-
-def _median_time(fn, repeats: int = 5) -> float:
-    out = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t0)
-    return float(np.median(out))
 
 
 class SpatialPage(Page):
@@ -133,13 +126,13 @@ class SpatialPage(Page):
         v3 = {**MAIN_JOB.parameters(planar.pressure), **stiff}
         d.cost = {
             "generation": gen,
-            "solve3d_n3": _median_time(lambda: solve3d(m3, v3)),
-            "solve_planar_n3": _median_time(lambda: solve(MAIN_JOB)),
+            "solve3d_n3": median_time(lambda: solve3d(m3, v3), 5),
+            "solve_planar_n3": median_time(lambda: solve(MAIN_JOB), 5),
         }
         m30 = load_model3d(30)
         v30 = dict(v3)
         q30 = solve3d(m30, v30, certify=False).q
-        d.cost["warm_n30"] = _median_time(lambda: newton3d(m30, v30, q30 + 1e-6), repeats=11)
+        d.cost["warm_n30"] = median_time(lambda: newton3d(m30, v30, q30 + 1e-6), 11)
         load_model(3)
         return d
 
