@@ -22,6 +22,8 @@ FLIP_GJ = ("silicone", 1.0e4, 1.0e5)
 FLIP_EI_SIDE = ("silicone", 4.0e5)
 #: Where the flip study stops (N).
 FLIP_TOP = 4.0
+#: The stated twist angle of the sideways-load study (degrees).
+TWIST_DEG = 10.0
 
 
 @dataclass
@@ -32,6 +34,7 @@ class SpatialData:
     b3: list[tuple] = field(default_factory=list)
     b5: tuple = ()
     flips: list[tuple] = field(default_factory=list)
+    twists: list[tuple] = field(default_factory=list)
     silicone: tuple = ()
     cost: dict[str, Any] = field(default_factory=dict)
 
@@ -45,7 +48,7 @@ class SpatialPage(Page):
         from esba.model.scene import MAIN_JOB
         from esba.model.spatial import load_model3d
         from esba.statics.equilibrium import solve
-        from esba.statics.spatial import first_instability, fold3d, newton3d, solve3d
+        from esba.statics.spatial import first_instability, fold3d, load_for_twist, newton3d, solve3d
 
         say = progress or (lambda msg: None)
         d = SpatialData()
@@ -112,6 +115,10 @@ class SpatialPage(Page):
                 else:
                     F, qs, mode = found
                     d.flips.append((eis, gj, F, float(np.degrees(np.sum(qs[:3]))), float(np.abs(mode[:3]).max())))
+                side = {**vals, "Omega1": 0.0, "Beta1": np.pi / 2}  # a tip load straight out of the plane (+z)
+                qs0 = solve3d(m3, side, certify=False).q
+                hit = load_for_twist(m3, side, "F1", qs0, angle=np.radians(TWIST_DEG), top=FLIP_TOP)
+                d.twists.append((eis, gj, None if hit is None else hit[0], None if hit is None else float(m3.tip(hit[1], side["L"])[2])))
         # --- cost
         say("cost")
         from derive.emit3d import generate_source3d
@@ -238,6 +245,16 @@ class SpatialPage(Page):
                 out.append(f"| {eis:.4g} | {gj:.4g} | stable to {FLIP_TOP:g} N | | |")
             else:
                 out.append(f"| {eis:.4g} | {gj:.4g} | {F:.4f} | {ang:.2f} | {inplane:.1e} |")
+        out += [
+            "",
+            f"A tip load straight out of the plane (Beta = 90 deg) on the same actuator twists it; the load at which the total",
+            f"twist sum(tau_i) reaches {TWIST_DEG:g} deg:",
+            "",
+            "| EI_side (N mm^2) | GJ (N mm^2) | sideways tip load for the twist (N) | tip z there (mm) |",
+            "|---|---|---|---|",
+        ]
+        for eis, gj, F, z in d.twists:
+            out.append(f"| {eis:.4g} | {gj:.4g} | " + (f"below {TWIST_DEG:g} deg up to {FLIP_TOP:g} N | |" if F is None else f"{F:.4f} | {z:.2f} |"))
         out += [
             "",
             f"\"silicone\" is the rubber alone as a concentric annulus (EI_side = E pi (r1^4 - r2^4)/4 = {d.silicone[0]:.4g},",

@@ -348,3 +348,31 @@ def first_instability(model: Model3D, values: Mapping[str, float], load: str, q0
             return x_star, qs, V[:, 0]
         q, prev = qn, x
     return None
+
+
+def load_for_twist(model: Model3D, values: Mapping[str, float], load: str, q0, *, angle: float, top: float, steps: int = 40) -> tuple[float, np.ndarray] | None:
+    """The value of ``load`` (raised from values[load]) at which the total twist sum(tau) reaches
+    ``angle`` (rad) on the equilibrium followed from ``q0``: (value, q), None when it stays below up to ``top``.
+    The equilibrium is followed by Newton in ``steps`` steps; Brent's method finds the crossing."""
+    from scipy.optimize import brentq
+
+    vals = dict(values)
+    n = model.n
+
+    def twist(x: float, qs: np.ndarray) -> tuple[float, np.ndarray]:
+        vals[load] = x
+        qn, ok, _ = newton3d(model, vals, qs)
+        if not ok:
+            raise RuntimeError(f"load_for_twist: Newton lost the equilibrium at {load} = {x:g}")
+        return float(abs(np.sum(qn[2 * n:]))) - angle, qn
+
+    prev = float(vals[load])
+    _, q = twist(prev, np.asarray(q0, dtype=float))
+    for x in np.linspace(prev, top, steps + 1)[1:]:
+        e, qn = twist(x, q)
+        if e >= 0:
+            qa = q
+            x_star = brentq(lambda y: twist(y, qa)[0], prev, x, xtol=1e-12 * max(1.0, abs(x)))
+            return x_star, twist(x_star, qa)[1]
+        q, prev = qn, x
+    return None

@@ -77,3 +77,24 @@ def test_the_table_2_push_swings_a_torsionally_soft_actuator_out_of_the_plane():
     result = solve3d(load_model3d(3), vals, q0=np.concatenate([planar.theta, np.zeros(6)]), certify=False)
     assert result.converged and not result.stable
     assert np.abs(result.mode[:3]).max() < 1e-12 and np.abs(result.mode[6:]).max() > 0.1
+
+
+def test_first_instability_and_twist_load_of_the_silicone_only_actuator():
+    """Pushed in its plane (Table 2's direction) the 90 degree actuator with the silicone's own
+    stiffnesses loses a sideways-twist mode (a branch point): stable just below, singular there.
+    A tip load out of the plane twists it by 10 degrees at a load found by Brent's method."""
+    from esba.model.closed_form import pressure_for_angle
+    from esba.statics.spatial import first_instability, load_for_twist
+
+    model = load_model3d(3)
+    Ic = np.pi * (8.0**4 - 3.0**4) / 4
+    vals = {**MAIN_JOB.parameters(pressure_for_angle(MAIN_JOB.unloaded())), "EI_side": 0.54 * Ic, "GJ": 0.18 * 2 * Ic, "F1": 0.0, "Beta1": 0.0}
+    q0 = solve3d(model, vals, certify=False).q
+    F, q, mode = first_instability(model, vals, "F1", q0, top=4.0)
+    assert 0.0 < F < 2.0 and np.abs(mode[:3]).max() < 1e-10 and np.abs(q[3:]).max() < 1e-14
+    assert abs(np.linalg.eigvalsh(model.hessian(q, {**vals, "F1": F}))[0]) < 1e-8
+    below, _, _ = newton3d(model, {**vals, "F1": 0.9 * F}, q)
+    assert np.linalg.eigvalsh(model.hessian(below, {**vals, "F1": 0.9 * F}))[0] > 0
+    side = {**vals, "Omega1": 0.0, "Beta1": np.pi / 2}
+    Ft, qt = load_for_twist(model, side, "F1", solve3d(model, side, certify=False).q, angle=np.radians(10.0), top=4.0)
+    assert abs(np.sum(qt[6:])) == pytest.approx(np.radians(10.0), abs=1e-10) and np.abs(newton3d(model, {**side, "F1": Ft}, qt)[0] - qt).max() < 1e-9
