@@ -148,6 +148,7 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
     if args.no_plot and args.plot is not None:
         raise UsageError("--plot and --no-plot: give one of the two")
     figure = outputs.figure_file(args.plot, "--plot", "esba-solve3d.png") if args.plot is not None else None  # checked first
+    page = outputs.check_file(args.html, "--html", (".html",)) if args.html is not None else None
     result = solve_scene3d(scene, section)
     effects, values = scene_values3d(scene, section)
     model = load_model3d(scene.segments, effects, scene.variant)
@@ -176,16 +177,22 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
         rows += [f"{'note':>10}: {n}" for n in d["notes"]]
         return "\n".join(rows)
 
+    forces = []
+    for p in scene.payloads:
+        om, be = math.radians(p.angle_deg), math.radians(p.out_of_plane_deg)
+        forces.append((p.force * np.array([math.cos(be) * math.cos(om), -math.cos(be) * math.sin(om), math.sin(be)]), p.at))
     if figure is not None:
         from esba.figures.scenes import save_figure
         from esba.figures.spatial import tube_figure
 
-        forces = []
-        for k, p in enumerate(scene.payloads, start=1):
-            om, be = math.radians(p.angle_deg), math.radians(p.out_of_plane_deg)
-            forces.append((p.force * np.array([math.cos(be) * math.cos(om), -math.cos(be) * math.sin(om), math.sin(be)]), p.at))
         written = save_figure(tube_figure(scene.segments, result.q, values, forces, scene.describe()), figure)
         print(f"esba: wrote {written}", file=sys.stderr)
+    if page is not None:
+        from esba.figures.spatial import tube_html
+
+        page.parent.mkdir(parents=True, exist_ok=True)
+        outputs.write_text(page, tube_html(scene.segments, result.q, values, forces, scene.describe()))
+        print(f"esba: wrote {page}", file=sys.stderr)
     print_result(args, data, table)
     return EXIT_OK if result.ok else EXIT_FAILED
 
@@ -196,8 +203,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     if args.three_d or scene.needs_3d:
         return _cmd_solve3d(args, scene)
-    if args.section:
-        raise UsageError("--section sets the 3-D model's section stiffnesses: give --3d (or a payload out of the plane)")
+    if args.section or args.html:
+        raise UsageError(f"{'--section' if args.section else '--html'} is for the 3-D model: give --3d (or a payload out of the plane)")
     figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
@@ -372,6 +379,7 @@ def add_solve(sub) -> None:
     p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
     p.add_argument("--3d", dest="three_d", action="store_true", help="solve with the 3-D model (chosen by itself when a payload points out of the plane; docs/3d.md)")
     p.add_argument("--section", action="append", metavar="NAME=VALUE", help="3-D section stiffness: EI_side=..., GJ=... (N*mm^2; repeatable)")
+    p.add_argument("--html", metavar="FILE.html", help="with --3d: also write a view of the deformed actuator that turns with the mouse (one offline HTML file)")
     p.add_argument(
         "--history",
         type=_history_arg,

@@ -44,7 +44,9 @@ def test_a_payload_out_of_the_plane_picks_the_3d_model_and_moves_the_tip_sideway
     (["solve", "--3d", "--section", "EIside=4e5", "--section", "GJ=1"], "section parameter 'EIside': unknown; allowed are EI_side, GJ"),
     (["solve", "--3d", "--section", "GJ=nan", "--section", "EI_side=1"], "GJ='nan': expected a finite number > 0"),
     (["solve", "--3d", "--section", "GJ"], "--section 'GJ': expected NAME=VALUE"),
-    (["solve", "--section", "GJ=1"], "--section sets the 3-D model's section stiffnesses: give --3d"),
+    (["solve", "--section", "GJ=1"], "--section is for the 3-D model: give --3d"),
+    (["solve", "--html", "x.html"], "--html is for the 3-D model: give --3d"),
+    (["solve", "--3d", *SECTION, "--html", "x.txt"], "--html"),
     (["solve", "--payload-out-of-plane", "120", *SECTION], "payload.out_of_plane_deg=120: expected an angle from -90 to 90"),
     (["solve", "--payload-out-of-plane", "nan", *SECTION], "out_of_plane_deg"),
     (["equilibria", "--payload-out-of-plane", "10", "--no-plot"], "out_of_plane_deg=10 points out of the bending plane"),
@@ -96,3 +98,12 @@ def test_the_numpy_centreline_passes_through_the_generated_segment_ends_and_the_
     assert np.abs(pts[::4] - ends.T).max() < 1e-12 and np.abs(frames[-1] - rot).max() < 1e-12
     code, _, err = run(capsys, "solve", "--payload-out-of-plane", "40", *SECTION, "--plot", str(tmp_path / "tube.png"))
     assert code == EXIT_OK and (tmp_path / "tube.png").stat().st_size > 10_000, err
+
+
+def test_the_interactive_view_is_one_offline_html_file(tmp_path, capsys):
+    page = tmp_path / "view.html"
+    code, _, err = run(capsys, "solve", "--payload-out-of-plane", "30", *SECTION, "--html", str(page))
+    assert code == EXIT_OK, err
+    text = page.read_text()
+    assert text.startswith("<!DOCTYPE html>") and "<canvas" in text and '"rings"' in text and "30 deg out of plane" in text
+    assert "src=" not in text and "http" not in text  # nothing to fetch: it works offline
