@@ -38,16 +38,26 @@ def rod_values(L: float = 1.0, EI: float = 1.0, EI_side: float = 1.0, GJ: float 
 def elastica_reference(alpha: float) -> dict[str, float]:
     """Tip of the exact elastica (B1): v/L (deflection), 1 - u/L... as x/L, and the tip angle phi0."""
 
-    # substitute sin(phi) = sin(phi0) (1 - t^2) to remove the endpoint singularity
-    def length_t(phi0: float) -> float:
+    # substitute sin(phi) = sin(phi0) (1 - t^2) to remove the endpoint singularity; the factor
+    # 1 - sin(phi)^2 = (1 - s0 u)(1 + s0 u), u = 1 - t^2, with 1 - s0 = 2 sin^2((pi/2 - phi0)/2) free of cancellation
+    def integrand(phi0: float, weight: bool):
         s0 = np.sin(phi0)
-        f = lambda t: 2.0 * np.sqrt(s0) / np.sqrt(1.0 - (s0 * (1 - t * t)) ** 2)  # noqa: E731
-        return integrate.quad(f, 0.0, 1.0, epsabs=1e-10, epsrel=1e-10, limit=200)[0] - np.sqrt(2.0 * alpha)
+        gap = 2.0 * np.sin((np.pi / 2 - phi0) / 2) ** 2
 
-    phi0 = optimize.brentq(length_t, 1e-9, np.pi / 2 - 1e-6, xtol=1e-15)  # alpha -> inf as phi0 -> pi/2
+        def f(t: float) -> float:
+            u = 1.0 - t * t
+            value = 2.0 * np.sqrt(s0) / np.sqrt((gap + s0 * t * t) * (1.0 + s0 * u))
+            return s0 * u * value if weight else value
+
+        return f
+
+    def length_t(phi0: float) -> float:
+        return integrate.quad(integrand(phi0, False), 0.0, 1.0, epsabs=1e-12, epsrel=1e-12, limit=200)[0] - np.sqrt(2.0 * alpha)
+
+    # alpha = 10 has phi0 = 1.43; pi/2 - 1e-3 holds alpha up to about 25
+    phi0 = optimize.brentq(length_t, 1e-9, np.pi / 2 - 1e-3, xtol=1e-15)
     s0 = np.sin(phi0)
-    fy = lambda t: s0 * (1 - t * t) * 2.0 * np.sqrt(s0) / np.sqrt(1.0 - (s0 * (1 - t * t)) ** 2)  # noqa: E731
-    y = integrate.quad(fy, 0.0, 1.0, epsabs=1e-10, epsrel=1e-10, limit=200)[0] / np.sqrt(2.0 * alpha)
+    y = integrate.quad(integrand(phi0, True), 0.0, 1.0, epsabs=1e-12, epsrel=1e-12, limit=200)[0] / np.sqrt(2.0 * alpha)
     x = np.sqrt(2.0 * s0 / alpha)
     return {"v": y, "u": 1.0 - x, "phi0": phi0}
 

@@ -40,8 +40,8 @@ def _exudyn_tip(nel: int, L: float, EI: float, EI_side: float, GJ: float, force)
     settings.staticSolver.newton.relativeTolerance = 1e-8
     settings.staticSolver.newton.absoluteTolerance = 1e-10
     settings.staticSolver.verboseMode = 0
-    settings.solutionSettings.writeSolutionToFile = False  # Exudyn writes solution/ into the current folder otherwise
-    settings.solutionSettings.sensorsWritePeriod = 1e9
+    settings.solution.file.write = False  # Exudyn writes solution/ into the current folder otherwise
+    settings.solution.sensors.writePeriod = 1e9
     assert exu.SolveStatic(mbs, settings)
     return np.array(mbs.GetNodeOutput(nodes[-1], exu.OutputVariableType.Position))
 
