@@ -107,3 +107,14 @@ def test_the_interactive_view_is_one_offline_html_file(tmp_path, capsys):
     text = page.read_text()
     assert text.startswith("<!DOCTYPE html>") and "<canvas" in text and '"rings"' in text and "30 deg out of plane" in text
     assert "src=" not in text and "http" not in text  # nothing to fetch: it works offline
+
+
+def test_a_moment_or_rod_is_refused_by_the_planar_family_and_named():
+    from derive.effects import EffectError, EffectSet
+
+    with pytest.raises(EffectError, match="unknown effect 'moment'"):
+        EffectSet.parse("air,moment")
+    with pytest.raises(EffectError, match="unknown effect 'rod'"):
+        EffectSet.parse("rod,payload")
+    m = load_model3d(2, "rod,moment")
+    assert m.parameters == ("L", "EI_side", "GJ", "EI", "kappa0", "mx1", "my1", "mz1", "sm1")
