@@ -145,12 +145,26 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
 
     refuse(args, ["monte_carlo", "sigma", "mc_out", "mc_chunk", "seed", "history", "sensitivities"], "with --3d (the 3-D solve has none yet)")
     section = _section_arg(args.section)
+    down = (1.0, 0.0, 0.0)
+    if args.gravity_direction is not None:
+        from esba.statics.spatial import SpatialError, check_direction
+
+        try:
+            parts = [float(v) for v in args.gravity_direction.split(",")]
+        except ValueError:
+            raise UsageError(f"--gravity-direction {args.gravity_direction!r}: expected X,Y,Z, three numbers of the base frame") from None
+        try:
+            down = tuple(check_direction("--gravity-direction", parts))
+        except SpatialError as exc:
+            raise UsageError(str(exc)) from None
+        if not scene.gravity:
+            raise UsageError("--gravity-direction turns the weight: give --gravity (or gravity = true in the scene file)")
     if args.no_plot and args.plot is not None:
         raise UsageError("--plot and --no-plot: give one of the two")
     figure = outputs.figure_file(args.plot, "--plot", "esba-solve3d.png") if args.plot is not None else None  # checked first
     page = outputs.check_file(args.html, "--html", (".html",)) if args.html is not None else None
-    result = solve_scene3d(scene, section)
-    effects, values = scene_values3d(scene, section)
+    result = solve_scene3d(scene, section, gravity_direction=down)
+    effects, values = scene_values3d(scene, section, down)
     model = load_model3d(scene.segments, effects, scene.variant)
     data = {
         "scene": scene.describe(),
@@ -203,8 +217,9 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     if args.three_d or scene.needs_3d:
         return _cmd_solve3d(args, scene)
-    if args.section or args.html:
-        raise UsageError(f"{'--section' if args.section else '--html'} is for the 3-D model: give --3d (or a payload out of the plane)")
+    for flag, given in (("--section", args.section), ("--html", args.html), ("--gravity-direction", args.gravity_direction)):
+        if given:
+            raise UsageError(f"{flag} is for the 3-D model: give --3d (or a payload out of the plane)")
     figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
@@ -379,6 +394,7 @@ def add_solve(sub) -> None:
     p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
     p.add_argument("--3d", dest="three_d", action="store_true", help="solve with the 3-D model (chosen by itself when a payload points out of the plane; docs/3d.md)")
     p.add_argument("--section", action="append", metavar="NAME=VALUE", help="3-D section stiffness: EI_side=..., GJ=... (N*mm^2; repeatable)")
+    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (default 1,0,0: down, the paper's)")
     p.add_argument("--html", metavar="FILE.html", help="with --3d: also write a view of the deformed actuator that turns with the mouse (one offline HTML file)")
     p.add_argument(
         "--history",

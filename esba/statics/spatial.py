@@ -253,11 +253,27 @@ def check_section(section: Mapping[str, float] | None) -> dict[str, float]:
     return section
 
 
-def scene_values3d(scene, section: Mapping[str, float] | None = None) -> tuple[object, dict[str, float]]:
+def check_direction(name: str, direction) -> np.ndarray:
+    """A direction in space as a unit 3-vector: finite, not zero (one line naming ``name`` otherwise)."""
+    try:
+        v = np.asarray(direction, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise SpatialError(f"{name}={direction!r}: expected three numbers (x, y, z) of the base frame") from None
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise SpatialError(f"{name}={direction!r}: expected three finite numbers (x, y, z) of the base frame")
+    size = float(np.linalg.norm(v))
+    if size == 0.0:
+        raise SpatialError(f"{name}={direction!r}: a zero vector has no direction; give one such as (1, 0, 0) (down, the paper's)")
+    return v / size
+
+
+def scene_values3d(scene, section: Mapping[str, float] | None = None, gravity_direction=(1.0, 0.0, 0.0)) -> tuple[object, dict[str, float]]:
     """The spatial effects and parameter values of a planar-style scene (payloads may point out of plane).
 
-    Gravity acts along +x (the planar scene's), with g of the scene.
+    Gravity (when the scene has it) acts along ``gravity_direction`` in the base frame (x down, the
+    paper's; any direction for an actuator mounted another way), with g of the scene.
     """
+    down = check_direction("gravity direction", gravity_direction)
     from derive.effects3d import Effects3D
     from esba.model.closed_form import pressure_for_angle
 
@@ -266,16 +282,17 @@ def scene_values3d(scene, section: Mapping[str, float] | None = None) -> tuple[o
     values = scene.parameters(pressure)
     values.update(sec)
     if scene.gravity:
-        values.update(gx=values["g"], gy=0.0, gz=0.0)
+        values.update(gx=values["g"] * down[0], gy=values["g"] * down[1], gz=values["g"] * down[2])
     effects = Effects3D.from_planar(scene.effects)
     return effects, values
 
 
-def solve_scene3d(scene, section: Mapping[str, float] | None = None, *, steps: int = 8) -> Equilibrium3D:
-    """The 3-D equilibrium of ``scene`` (its payloads may point out of the bending plane)."""
+def solve_scene3d(scene, section: Mapping[str, float] | None = None, *, gravity_direction=(1.0, 0.0, 0.0), steps: int = 4) -> Equilibrium3D:
+    """The 3-D equilibrium of ``scene`` (its payloads may point out of the bending plane; its weight
+    along ``gravity_direction``)."""
     from esba.model.spatial import load_model3d
 
-    effects, values = scene_values3d(scene, section)
+    effects, values = scene_values3d(scene, section, gravity_direction)
     model = load_model3d(scene.segments, effects, scene.variant)
     return solve3d(model, values, steps=steps)
 

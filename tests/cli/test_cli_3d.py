@@ -51,6 +51,11 @@ def test_a_payload_out_of_the_plane_picks_the_3d_model_and_moves_the_tip_sideway
     (["solve", "--payload-out-of-plane", "nan", *SECTION], "out_of_plane_deg"),
     (["equilibria", "--payload-out-of-plane", "10", "--no-plot"], "out_of_plane_deg=10 points out of the bending plane"),
     (["solve", "--3d", *SECTION, "--sensitivities"], "--sensitivities is not used with --3d"),
+    (["solve", "--3d", "--gravity", "--gravity-direction", "0,0,0", *SECTION], "a zero vector has no direction"),
+    (["solve", "--3d", "--gravity", "--gravity-direction", "nan,0,1", *SECTION], "expected three finite numbers"),
+    (["solve", "--3d", "--gravity", "--gravity-direction", "down", *SECTION], "expected X,Y,Z, three numbers"),
+    (["solve", "--3d", "--gravity-direction", "0,0,1", *SECTION], "--gravity-direction turns the weight: give --gravity"),
+    (["solve", "--gravity-direction", "0,0,1"], "--gravity-direction is for the 3-D model"),
 ])
 def test_bad_3d_input_is_refused_in_one_line(capsys, args, message):
     code, _, err = run(capsys, *args)
@@ -118,3 +123,16 @@ def test_a_moment_or_rod_is_refused_by_the_planar_family_and_named():
         EffectSet.parse("rod,payload")
     m = load_model3d(2, "rod,moment")
     assert m.parameters == ("L", "EI_side", "GJ", "EI", "kappa0", "mx1", "my1", "mz1", "sm1")
+
+
+def test_the_weight_in_3d_is_the_planar_weight_and_turns_with_the_mount():
+    """Gravity along x (the paper's) gives the planar gravity solve to 1e-10; along z it bends the
+    finger out of its plane."""
+    scene = Scene(target_angle_deg=90.0, payloads=(Payload(1.0, 0.0),), gravity=True)
+    planar = solve(scene)
+    r = solve_scene3d(scene, {"EI_side": 4e5, "GJ": 1e6})
+    assert np.abs(r.theta - planar.theta).max() < 1e-10 and np.abs(r.q[3:]).max() == 0.0
+    turned = solve_scene3d(scene, {"EI_side": 4e5, "GJ": 1e6}, gravity_direction=(0.0, 0.0, 2.0))
+    assert turned.ok and turned.tip[2] > 0.0
+    with pytest.raises(SpatialError, match="a zero vector has no direction"):
+        solve_scene3d(scene, {"EI_side": 4e5, "GJ": 1e6}, gravity_direction=(0, 0, 0))
