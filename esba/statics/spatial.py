@@ -393,3 +393,68 @@ def load_for_twist(model: Model3D, values: Mapping[str, float], load: str, q0, *
             return x_star, twist(x_star, qa)[1]
         q, prev = qn, x
     return None
+
+
+def newton_kernel(model: Model3D, iterations: int = 3) -> ca.Function:
+    """One CasADi Function (q, p) -> (q after ``iterations`` full Newton steps, |gradient| there):
+    a warm solve in one call from Python (MX, the steps by a QR solve; no line search, so
+    :func:`warm3d` and :func:`follow3d` check the result and fall back to :func:`newton3d`)."""
+    key = ("newton_kernel", iterations)
+    found = model.registry.get(key)
+    if found is None:
+        q = ca.MX.sym("q", model.size)
+        ps = ca.MX.sym("p", len(model.parameters))
+        args = ca.vertsplit(ps) if len(model.parameters) else []
+        x = q
+        for _ in range(iterations):
+            x = x - ca.solve(model.functions["hessian"](x, *args), model.functions["gradient"](x, *args), "qr")
+        g = model.functions["gradient"](x, *args)
+        found = ca.Function("esba3d_newton", [q, ps], [x, ca.mmax(ca.fabs(g))])
+        model.registry[key] = found
+    return found
+
+
+def _kernel_step(model: Model3D, kernel: ca.Function, p: np.ndarray, q: np.ndarray, lb: np.ndarray) -> np.ndarray | None:
+    x, gn = kernel(q, p)
+    x = np.asarray(x).ravel()
+    if np.all(np.isfinite(x)) and np.all(x > lb) and float(gn) <= 1e-9 * max(1.0, float(np.abs(x).max())):
+        return x
+    return None
+
+
+@single_threaded
+def warm3d(model: Model3D, values: Mapping[str, float], q0) -> np.ndarray:
+    """The equilibrium near ``q0`` at ``values``: one call of :func:`newton_kernel`, checked, else
+    the damped :func:`newton3d` (a warm solve: no load history, no certificate)."""
+    lb = _bounds(model, values)
+    x = _kernel_step(model, newton_kernel(model), model.param_vector(values), np.asarray(q0, dtype=float), lb)
+    if x is None:
+        x, ok, _ = newton3d(model, values, q0, lb=lb)
+        if not ok:
+            raise RuntimeError("warm3d: no equilibrium found near the start")
+    return x
+
+
+@single_threaded
+def follow3d(model: Model3D, values: Mapping[str, float], parameter: str, path, q0) -> np.ndarray:
+    """The equilibria along ``path`` (values of ``parameter``) from ``q0``: natural continuation, one
+    call of :func:`newton_kernel` a point (checked: the gradient at the end and the domain), the
+    damped :func:`newton3d` where that check fails. Returns the states, shape (len(path), 3n)."""
+    vals = dict(values)
+    kernel = newton_kernel(model)
+    index = list(model.parameters).index(parameter)
+    p = model.param_vector(vals)
+    lb = _bounds(model, vals)
+    q = np.array(q0, dtype=float)
+    out = np.empty((len(path), model.size))
+    for k, lam in enumerate(path):
+        p[index] = lam
+        x = _kernel_step(model, kernel, p, q, lb)
+        if x is None:
+            vals[parameter] = float(lam)
+            x, ok, _ = newton3d(model, vals, q, lb=lb)
+            if not ok:
+                raise RuntimeError(f"follow3d: no equilibrium found at {parameter} = {lam:g}")
+        q = x
+        out[k] = q
+    return out

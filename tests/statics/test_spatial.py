@@ -98,3 +98,27 @@ def test_first_instability_and_twist_load_of_the_silicone_only_actuator():
     side = {**vals, "Omega1": 0.0, "Beta1": np.pi / 2}
     Ft, qt = load_for_twist(model, side, "F1", solve3d(model, side, certify=False).q, angle=np.radians(10.0), top=4.0)
     assert abs(np.sum(qt[6:])) == pytest.approx(np.radians(10.0), abs=1e-10) and np.abs(newton3d(model, {**side, "F1": Ft}, qt)[0] - qt).max() < 1e-9
+
+
+def test_following_the_pressure_in_3d_reaches_the_upper_fold_state_of_the_damped_newton():
+    """follow3d (one compiled Newton call a point) gives the damped Newton's states to 1e-10."""
+    from esba.statics.spatial import follow3d
+
+    model = load_model3d(3)
+    vals = _values(0.16)
+    q0 = solve3d(model, vals, certify=False).q
+    path = np.linspace(0.16, 0.173, 14)
+    states = follow3d(model, vals, "P", path, q0)
+    q = q0
+    for P, s in zip(path, states):
+        q, ok, _ = newton3d(model, {**vals, "P": P}, q)
+        assert ok and np.abs(q - s).max() < 1e-10
+
+
+def test_a_warm_3d_solve_is_the_damped_newtons_answer():
+    from esba.statics.spatial import warm3d
+
+    model = load_model3d(3)
+    vals = _values(solve(MAIN_JOB).pressure)
+    q = solve3d(model, vals, certify=False).q
+    assert np.abs(warm3d(model, vals, q + 1e-3) - q).max() < 1e-10
