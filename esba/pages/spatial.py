@@ -36,6 +36,7 @@ class SpatialData:
     flips: list[tuple] = field(default_factory=list)
     twists: list[tuple] = field(default_factory=list)
     silicone: tuple = ()
+    swung: list = field(default_factory=list)
     cost: dict[str, Any] = field(default_factory=dict)
 
 
@@ -48,7 +49,7 @@ class SpatialPage(Page):
         from esba.model.scene import MAIN_JOB
         from esba.model.spatial import load_model3d
         from esba.statics.equilibrium import solve
-        from esba.statics.spatial import first_instability, fold3d, load_for_twist, newton3d, solve3d, warm3d
+        from esba.statics.spatial import equilibria3d, first_instability, fold3d, load_for_twist, newton3d, solve3d, warm3d
 
         say = progress or (lambda msg: None)
         d = SpatialData()
@@ -102,6 +103,7 @@ class SpatialPage(Page):
         Ic = np.pi * (r1**4 - r2**4) / 4
         silicone = {"GJ": E / 3 * 2 * Ic, "EI_side": E * Ic}
         d.silicone = (silicone["EI_side"], silicone["GJ"])
+        d.swung = [(s.energy, s.morse_index, s.in_plane, tuple(float(v) for v in s.tip)) for s in equilibria3d(MAIN_JOB, silicone)]
         P90 = pressure_for_angle(MAIN_JOB.unloaded())
         for GJ in FLIP_GJ:
             for EIs in FLIP_EI_SIDE:
@@ -266,7 +268,15 @@ class SpatialPage(Page):
             "paper's 2 N experiment stays in its plane only because the layer and the double-helix fibres make the finger stiff",
             "in torsion. The mode is a swing of the whole bent finger about its base (twist), not a buckle in the plane (its",
             "in-plane part is 0). For a gripper this is the number to design against: a finger that holds an object by pushing",
-            "on it must carry GJ well above the silicone's. The section's stiffnesses (`esba section`, from the eccentric chamber,",
+            "on it must carry GJ well above the silicone's. Where it goes: `equilibria3d` (the planar search for the in-plane",
+            "states, then down their out-of-plane modes) finds for Table 2 with the silicone's stiffnesses",
+            "",
+            "| energy (N mm) | Morse index | in the plane | tip (x, y, z) mm |",
+            "|---|---|---|---|",
+            *[f"| {e:.4f} | {m} | {'yes' if ip else 'no'} | ({', '.join(f'{v:.2f}' for v in tip)}) |" for e, m, ip, tip in d.swung],
+            "",
+            "a mirror pair of stable states swung out of the plane, and the planar state as a saddle. The section's stiffnesses",
+            "(`esba section`, from the eccentric chamber,",
             "the layer and the fibres) replace these assumed pairs once given.",
             "",
             "## What 3-D costs",

@@ -458,3 +458,58 @@ def follow3d(model: Model3D, values: Mapping[str, float], parameter: str, path, 
         q = x
         out[k] = q
     return out
+
+
+@dataclass
+class State3D:
+    q: np.ndarray
+    energy: float
+    morse_index: int
+    min_eigenvalue: float
+    in_plane: bool
+    tip: np.ndarray
+
+
+def equilibria3d(scene, section: Mapping[str, float] | None = None, options=None) -> list[State3D]:
+    """Every equilibrium of an in-plane ``scene`` in 3-D, sorted by energy.
+
+    In-plane loads keep the plane a symmetry: the in-plane equilibria are exactly the planar
+    model's (:func:`esba.statics.equilibria.equilibria`, its complete search), each judged again by
+    the 3n x 3n Hessian; from every one that is unstable out of the plane, the damped Newton
+    method runs down its out-of-plane modes (both signs) to the equilibria that branch off it.
+    A scene with a payload out of the plane has no such symmetry: it is refused (one line).
+    """
+    from esba.model.spatial import load_model3d
+    from esba.statics.equilibria import equilibria
+
+    if scene.needs_3d:
+        raise SpatialError("equilibria in 3-D: only for loads in the bending plane so far (the planar search is its in-plane part); "
+                           "solve a scene with a payload out of the plane with solve_scene3d")
+    effects, values = scene_values3d(scene, section)
+    model = load_model3d(scene.segments, effects, scene.variant)
+    planar = equilibria(scene, options)
+    n = model.n
+    found: list[np.ndarray] = []
+
+    def add(q: np.ndarray) -> None:
+        if not any(np.abs(q - f).max() < 1e-7 for f in found):
+            found.append(q)
+
+    for state in planar.states:
+        q = np.concatenate([state.theta, np.zeros(2 * n)])
+        add(q)
+        w, V = np.linalg.eigh(model.hessian(q, values))
+        for k in np.flatnonzero(w < 0):
+            mode = V[:, k]
+            if np.abs(mode[:n]).max() > 1e-8:  # an in-plane mode: the planar search has its neighbours
+                continue
+            for sign in (1.0, -1.0):
+                qs, ok, _ = newton3d(model, values, q + sign * 1e-3 * mode / np.abs(mode).max())
+                if ok and np.abs(qs[n:]).max() > 1e-6:
+                    add(qs)
+    out = []
+    for q in found:
+        w = np.linalg.eigvalsh(model.hessian(q, values))
+        out.append(State3D(q, model.energy(q, values), int(np.sum(w < -1e-9 * max(1.0, abs(w).max()))), float(w[0]),
+                           bool(np.abs(q[n:]).max() == 0.0), model.tip(q, values["L"])))
+    return sorted(out, key=lambda s: (round(s.energy, 9), round(float(s.tip[2]), 9)))  # mirror pairs: -z first

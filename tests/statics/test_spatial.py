@@ -122,3 +122,22 @@ def test_a_warm_3d_solve_is_the_damped_newtons_answer():
     vals = _values(solve(MAIN_JOB).pressure)
     q = solve3d(model, vals, certify=False).q
     assert np.abs(warm3d(model, vals, q + 1e-3) - q).max() < 1e-10
+
+
+def test_equilibria_in_3d_find_the_mirror_pair_the_soft_finger_swings_to():
+    """Table 2 with stiff sideways bending and torsion: one equilibrium, the planar one, stable.
+    With the silicone's own stiffnesses the planar state has out-of-plane negative curvature, and
+    two mirror-image out-of-plane states (tip z of opposite sign, equal energy) are the minima."""
+    from esba.statics.spatial import SpatialError, equilibria3d
+
+    stiff = equilibria3d(MAIN_JOB, {"EI_side": 4e5, "GJ": 1e6})
+    assert len(stiff) == 1 and stiff[0].in_plane and stiff[0].morse_index == 0
+    Ic = np.pi * (8.0**4 - 3.0**4) / 4
+    soft = equilibria3d(MAIN_JOB, {"EI_side": 0.54 * Ic, "GJ": 0.18 * 2 * Ic})
+    low = [s for s in soft if s.morse_index == 0]
+    assert len(low) == 2 and not low[0].in_plane and low[0].energy == pytest.approx(low[1].energy, rel=1e-10)
+    assert low[0].tip[2] == pytest.approx(-low[1].tip[2], rel=1e-8) and abs(low[0].tip[2]) > 1.0
+    planar = [s for s in soft if s.in_plane]
+    assert len(planar) == 1 and planar[0].morse_index > 0 and planar[0].energy > low[0].energy
+    with pytest.raises(SpatialError, match="only for loads in the bending plane"):
+        equilibria3d(MAIN_JOB.replace(payloads=(MAIN_JOB.payloads[0].__class__(2.0, 90.0, 1.0, 10.0),)), {"EI_side": 1.0, "GJ": 1.0})
