@@ -16,4 +16,8 @@ paper        the paper's printed closed forms, transcribed verbatim
 audit        derived versus printed, with verdicts, and the docs page
 program      the energy, gradient and Hessian of an n-segment model as a straight-line program
 emit         SymPy -> CasADi source code, the manifest, the ``generated/`` folder
+effects3d    the vocabulary of the spatial (3-D) family (pure Python): effects, parameters, its hash
+spatial      Eq. (1)-(2) on SE(3): each joint bends in plane, sideways and twists; the segment template
+program3d    the spatial model's energy, gradient and Hessian as a straight-line program (screw form)
+emit3d       the spatial family into ``generated/m3d_*.py`` and ``generated/manifest3d.json``
 """

@@ -102,12 +102,58 @@ def _render_entry(e: AuditEntry) -> str:
     return "\n".join(out)
 
 
+def _render_spatial() -> str:
+    """The spatial model (issue 26): its assumptions and the numbers the paper does not give, and
+    the computed check that it restricts to Eq. (1)-(2) in the plane."""
+    from . import spatial
+    from .effects3d import UNITS_3D
+    from .kinematics import segment_twist
+
+    n, t = sp.Symbol("n", positive=True), sp.Symbol("t", positive=True)
+    holds = sp.simplify(spatial.segment_twist3d((t, 0, 0), n) - segment_twist(t, n) * t) == sp.zeros(6, 1)
+    units = ", ".join(f"{k} ({v})" for k, v in UNITS_3D.items())
+    out = [
+        "## The spatial model (3-D): assumptions and numbers the paper does not give",
+        "",
+        "`derive/spatial.py`, `derive/program3d.py`, `derive/emit3d.py`; results and benchmarks in `docs/3d.md`.",
+        "",
+        f"- Eq. (1)-(2) on SE(3): segment i is exp(hat(Xi_i)), Xi_i = [L/n, 0, 0, tau_i, psi_i, theta_i]. With psi_i = tau_i = 0 it "
+        f"is the paper's twist xi_i theta_i (check: {'holds' if holds else '**FAILS**'}). Each segment is inextensible and "
+        "unshearable (the layer's assumption carried to 3-D): a helix piece of constant curvature and twist.",
+        "- The paper's in-plane terms are kept as they are, functions of theta_i alone. Assumed: a sideways bend leaves the "
+        "chamber's volume unchanged to first order (the chamber is centred in z), so the air does no work on psi; the "
+        "fibre restraint acts on the in-plane bend only.",
+        "- Sideways bending and torsion add 1/2 EI_side (n/L) psi_i^2 and 1/2 GJ (n/L) tau_i^2 per segment, about axes "
+        "through the layer's mid-line (an unshearable rod's energy does not depend on where the twist axis lies). EI_side "
+        "and GJ are parameters of every 3-D model; the paper gives neither. Their defaults belong to the section "
+        "(`esba section`: the silicone with its eccentric chamber, the layer at 6500 MPa of Section 4.2, whose width and "
+        "thickness the paper does not give, and the fibres in torsion); until it is given, `esba solve --3d` asks for "
+        "both (`--section EI_side=... --section GJ=...`). `docs/3d.md` uses the silicone alone as a concentric annulus "
+        "(EI_side = E pi (r1^4 - r2^4)/4, GJ = (E/3) pi (r1^4 - r2^4)/2, G = E/3 for an incompressible rubber) as its "
+        "softest case.",
+        "- The plain rod: 1/2 EI (n/L) (theta_i - kappa0 L/n)^2 in the plane, kappa0 a rest curvature in the plane (1/mm).",
+        "- Payload k: F_k (cos Beta_k cos Omega_k, -cos Beta_k sin Omega_k, sin Beta_k), a dead load at fraction s_k of L; "
+        "Beta = 0 is Eq. (14).",
+        "- Point moment k: potential -m_k . sum_i sigma_i (tau_i, psi_i, theta_i), m_k = (mx, my, mz) in body components, sigma_i "
+        "the part of segment i before the point. Exact for a moment about the bending axis of an in-plane deformation; a dead "
+        "moment fixed in space is not conservative in 3-D, and this is the conservative stand-in, valid while the rotations "
+        "are about one axis.",
+        "- Gravity: the weight M g / n of each segment at its mid-point (as Eq. 15), g = (gx, gy, gz) in the base frame; "
+        "(g, 0, 0) is the paper's.",
+        "- Sign conventions: positive psi bends the tip toward -z, positive tau turns the section about +x (right-handed).",
+        f"- Units of the new parameters: {units}.",
+        "",
+    ]
+    return "\n".join(out)
+
+
 def render_entries(items: Sequence[AuditEntry], checks: Sequence[TableCheck]) -> str:
     """The Markdown of the derivations page from the audit's entries and table checks
     (deterministic: no dates, no versions)."""
     parts = [_INTRO, "## Summary", "", _summary(items), ""]
     parts += [_render_entry(e) for e in items]
     parts.append(_render_tables(checks))
+    parts.append(_render_spatial())
     return "\n".join(parts).rstrip("\n") + "\n"
 
 

@@ -168,6 +168,8 @@ def add_scene_flags(p: argparse.ArgumentParser, payloads: bool = True) -> None:
         p.add_argument("--payload", type=float_arg, action="append", metavar="N", help="payload magnitude in N (repeatable; replaces the scene's payloads)")
         p.add_argument("--payload-angle", type=float_arg, action="append", metavar="DEG", help="direction Omega of the k-th payload from the vertical (90 = horizontal; one value applies to all)")
         p.add_argument("--payload-at", type=float_arg, action="append", metavar="FRACTION", help="point of the k-th payload as a fraction of L (1 = tip; one value applies to all)")
+        p.add_argument("--payload-out-of-plane", type=float_arg, action="append", metavar="DEG",
+                       help="angle Beta of the k-th payload out of the bending plane, -90..90 (needs the 3-D model: solve --3d; one value applies to all)")
         p.add_argument("--no-payload", action="store_true", help="no payloads (and no payload terms)")
     p.add_argument("--gravity", action="store_true", default=None, help="include the actuator's weight (Eq. 15)")
     p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
@@ -224,8 +226,8 @@ def scene_from_args(args: argparse.Namespace, payloads: bool = True):
         scene = load_scene_file(args.scene, MAIN_JOB)
         changes = scene_changes(args)
         if payloads:
-            if args.no_payload and (args.payload or args.payload_angle or args.payload_at):
-                raise UsageError("--no-payload cannot be combined with --payload, --payload-angle or --payload-at")
+            if args.no_payload and (args.payload or args.payload_angle or args.payload_at or args.payload_out_of_plane):
+                raise UsageError("--no-payload cannot be combined with --payload, --payload-angle, --payload-at or --payload-out-of-plane")
             current = list(scene.payloads)
             if args.no_payload:
                 current = []
@@ -233,9 +235,11 @@ def scene_from_args(args: argparse.Namespace, payloads: bool = True):
                 current = [Payload(f) for f in args.payload]
             angles = _per_payload("--payload-angle", args.payload_angle, len(current))
             ats = _per_payload("--payload-at", args.payload_at, len(current))
-            if args.no_payload or args.payload is not None or angles or ats:
+            betas = _per_payload("--payload-out-of-plane", args.payload_out_of_plane, len(current))
+            if args.no_payload or args.payload is not None or angles or ats or betas:
                 current = [
-                    Payload(p.force, angles[k] if angles else p.angle_deg, ats[k] if ats else p.at) for k, p in enumerate(current)
+                    Payload(p.force, angles[k] if angles else p.angle_deg, ats[k] if ats else p.at, betas[k] if betas else p.out_of_plane_deg)
+                    for k, p in enumerate(current)
                 ]
                 changes["payloads"] = tuple(current)
         return scene.replace(**changes) if changes else scene

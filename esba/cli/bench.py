@@ -158,6 +158,19 @@ def _cmd_bench_contact(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_bench_3d(args: argparse.Namespace) -> int:
+    from esba.pages.performance import PAGE, SpatialSettings, spatial_table
+
+    if args.markdown:
+        outputs.check_file(args.markdown, "--markdown", (".md",))
+    settings = SpatialSettings(args.repeat, f"esba bench 3d --repeat {args.repeat} --markdown {args.markdown}")
+    data = PAGE.compute_section("3d", settings, _bench_progress(args, "  {} done"))
+    print_result(args, data, spatial_table)
+    if args.markdown:
+        print(f"wrote {PAGE.write_section(args.markdown, '3d', data, settings)}", file=sys.stderr)
+    return EXIT_OK
+
+
 def _cmd_bench_path(args: argparse.Namespace) -> int:
     from esba.pages.performance import PAGE, PathSettings, path_table
 
@@ -318,6 +331,11 @@ def add_bench(sub) -> None:
     pa.add_argument("--markdown", metavar="FILE", help="also write the path section of a docs page (docs/performance.md)")
     pa.add_argument("--json", action="store_true", help="print JSON")
     pa.set_defaults(func=_cmd_bench_path)
+    s3 = bsub.add_parser("3d", help="the 3-D model against the planar one: generation (n = 3, 10, 30), solve, warm n = 30, continuation per point (docs/performance.md)")
+    s3.add_argument("--repeat", type=segments_arg, default=3, help="runs per timing, median reported (default 3)")
+    s3.add_argument("--markdown", metavar="FILE", help="also write the 3d section of a docs page (docs/performance.md)")
+    s3.add_argument("--json", action="store_true", help="print JSON")
+    s3.set_defaults(func=_cmd_bench_3d)
     mp = bsub.add_parser("maps", help="time to trace the fold curves of each map of docs/maps.md against the brute-force grid of stable-state counts")
     mp.add_argument("--repeat", type=segments_arg, default=3, help="runs per timing of the fold curves, median reported (default 3)")
     mp.add_argument("--k", type=count_arg("--k", 2, 100, "k x k brute-force cells"), default=20, help="cells per side of the brute-force grid (default 20)")

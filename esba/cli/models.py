@@ -19,7 +19,52 @@ from .arguments import UsageError, refuse, segments_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 
+def _cmd_generate3d(args: argparse.Namespace, out) -> int:
+    """``esba generate --3d``: the spatial family (derive/emit3d.py)."""
+    from derive.effects3d import DEFAULT_EFFECTS_3D, Effects3D
+
+    if args.refresh:
+        from derive import emit3d  # SymPy: only for this command
+
+        refuse(args, ["effects"], "with --refresh: the committed models have the default effects (drop --refresh to generate others)")
+        if out is None:
+            raise UsageError("--refresh rewrites the repository's generated/: run it inside a checkout, or give --out DIR")
+        chosen = [(n, e, v) for n, e, v in emit3d.COMMITTED_3D if args.segments in (None, n) and args.variant in (None, v)]
+        rows = []
+        for n, eff, var in chosen:
+            print(f"esba: generating the 3-D model n = {n} ({eff}) into {out}", file=sys.stderr)
+            rows.append(emit3d.write_model3d(n, eff, var, out)[0].name)
+        print_result(args, {"refreshed": rows, "folder": str(out)}, lambda d: "\n".join(f"wrote {d['folder']}/{r}" for r in d["refreshed"]))
+        return EXIT_OK
+    try:
+        effects = Effects3D.parse(args.effects if args.effects is not None else DEFAULT_EFFECTS_3D)
+    except EffectError as exc:
+        raise UsageError(f"--effects: {exc}") from None
+    if args.segments is None:
+        raise UsageError("generate --3d needs --segments N (a whole number from 1 to 256) or --refresh")
+    variant = args.variant or DEFAULT_VARIANT
+    t0 = time.perf_counter()
+    if out is None:
+        from esba.model.spatial import load_model3d
+
+        model = load_model3d(args.segments, effects, variant)
+        path, counts, where = model.path, {k: f.n_instructions() for k, f in model.functions.items()}, "the model cache"
+    else:
+        from derive import emit3d  # SymPy: only for this command
+
+        path, entry = emit3d.write_model3d(args.segments, effects, variant, out)
+        counts, where = entry["instructions"], "the checkout's generated/" if args.out is None else "--out"
+    data = {"file": str(path), "written_to": where, "segments": args.segments, "effects": effects.spec(), "variant": variant,
+            "instructions": counts, "generate_time_s": time.perf_counter() - t0}
+    print_result(args, data, _generate_table)
+    return EXIT_OK
+
+
 def _cmd_generate(args: argparse.Namespace) -> int:
+    if getattr(args, "three_d", False):
+        checkout = outputs.checkout_root()
+        out = outputs.check_folder(args.out, "--out") if args.out is not None else (checkout / "generated" if checkout is not None else None)
+        return _cmd_generate3d(args, out)
     if args.effects is not None:
         try:
             effects = EffectSet.parse(args.effects)
@@ -48,6 +93,12 @@ def _cmd_generate(args: argparse.Namespace) -> int:
             print(f"esba: generating n = {n} ({var}) into {out}", file=sys.stderr)
             path, _ = emit.write_model(n, eff, var, out)
             rows.append(path.name)
+        if args.segments is None and args.variant is None:  # the whole refresh: the 3-D family too
+            from derive import emit3d
+
+            for n, eff, var in emit3d.COMMITTED_3D:
+                print(f"esba: generating the 3-D model n = {n} ({eff}) into {out}", file=sys.stderr)
+                rows.append(emit3d.write_model3d(n, eff, var, out)[0].name)
         print_result(args, {"refreshed": rows, "folder": str(out)}, lambda d: "\n".join(f"wrote {d['folder']}/{r}" for r in d["refreshed"]))
         return EXIT_OK
     if args.segments is None:
@@ -93,6 +144,8 @@ def add_generate(sub) -> None:
     p.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default {DEFAULT_VARIANT}; with --refresh: that variant only)")
     p.add_argument("--out", default=None, metavar="DIR", help="folder to write (default: generated/ in a checkout, else the model cache)")
     p.add_argument("--refresh", action="store_true", help="regenerate the committed models (n = 1..8, both variants) and the manifest")
+    p.add_argument("--3d", dest="three_d", action="store_true",
+                   help="the spatial model family (3 rotations a joint; effects add rod, moment:K; see docs/3d.md)")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_generate)
 

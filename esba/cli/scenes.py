@@ -4,6 +4,7 @@ sensitivities and uncertainty, and its Monte Carlo (in this process or on Dask).
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 import time
@@ -33,12 +34,107 @@ DEFAULT_SOLVE_FIGURE = "esba-solve.png"
 _MAX_ITER = 100_000
 
 
+def _section_arg(items: list[str] | None) -> dict[str, float]:
+    from esba.statics.spatial import SpatialError, check_section
+
+    section: dict[str, str] = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise UsageError(f"--section {item!r}: expected NAME=VALUE, e.g. EI_side=4e5 (N*mm^2)")
+        section[name.strip()] = value.strip()
+    try:
+        return check_section(section)
+    except SpatialError as exc:
+        raise UsageError(f"--section: {exc}") from None
+
+
+def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
+    """``esba solve --3d``: the spatial model (docs/3d.md); no figure, no uncertainty yet."""
+    import numpy as np
+
+    from esba.model.spatial import load_model3d
+    from esba.statics.spatial import scene_values3d, solve_scene3d, tip_compliance
+
+    refuse(args, ["monte_carlo", "sigma", "mc_out", "mc_chunk", "seed", "history", "sensitivities"], "with --3d (the 3-D solve has none yet)")
+    section = _section_arg(args.section)
+    down = (1.0, 0.0, 0.0)
+    if args.gravity_direction is not None:
+        from esba.statics.spatial import SpatialError, check_direction
+
+        try:
+            parts = [float(v) for v in args.gravity_direction.split(",")]
+        except ValueError:
+            raise UsageError(f"--gravity-direction {args.gravity_direction!r}: expected X,Y,Z, three numbers of the base frame") from None
+        try:
+            down = tuple(check_direction("--gravity-direction", parts))
+        except SpatialError as exc:
+            raise UsageError(str(exc)) from None
+        if not scene.gravity:
+            raise UsageError("--gravity-direction turns the weight: give --gravity (or gravity = true in the scene file)")
+    if args.no_plot and args.plot is not None:
+        raise UsageError("--plot and --no-plot: give one of the two")
+    figure = outputs.figure_file(args.plot, "--plot", "esba-solve3d.png") if args.plot is not None else None  # checked first
+    page = outputs.check_file(args.html, "--html", (".html",)) if args.html is not None else None
+    result = solve_scene3d(scene, section, gravity_direction=down)
+    effects, values = scene_values3d(scene, section, down)
+    model = load_model3d(scene.segments, effects, scene.variant)
+    data = {
+        "scene": scene.describe(),
+        "model": model.path.name,
+        "converged": result.converged,
+        "stable": result.stable,
+        "ipopt": result.ipopt_status,
+        "theta_deg": np.degrees(result.theta).tolist(),
+        "psi_deg": np.degrees(result.psi).tolist(),
+        "tau_deg": np.degrees(result.tau).tolist(),
+        "tip_mm": result.tip.tolist(),
+        "min_eigenvalue": result.min_eigenvalue,
+        "notes": result.notes,
+    }
+    if result.stable:
+        C, _ = tip_compliance(model, values, result.q)
+        data["tip_compliance"] = C.tolist()
+
+    def table(d: dict) -> str:
+        rows = [f"{'scene':>10}: {d['scene']}", f"{'model':>10}: {d['model']}"]
+        for key in ("theta_deg", "psi_deg", "tau_deg", "tip_mm"):
+            rows.append(f"{key:>10}: " + "  ".join(f"{v:.4f}" for v in d[key]))
+        rows.append(f"{'state':>10}: {'stable' if d['stable'] else 'UNSTABLE (the softest mode: ' + format(d['min_eigenvalue'], '.3g') + ')'}; IPOPT {d['ipopt']}")
+        rows += [f"{'note':>10}: {n}" for n in d["notes"]]
+        return "\n".join(rows)
+
+    forces = []
+    for p in scene.payloads:
+        om, be = math.radians(p.angle_deg), math.radians(p.out_of_plane_deg)
+        forces.append((p.force * np.array([math.cos(be) * math.cos(om), -math.cos(be) * math.sin(om), math.sin(be)]), p.at))
+    if figure is not None:
+        from esba.figures.scenes import save_figure
+        from esba.figures.spatial import tube_figure
+
+        written = save_figure(tube_figure(scene.segments, result.q, values, forces, scene.describe()), figure)
+        print(f"esba: wrote {written}", file=sys.stderr)
+    if page is not None:
+        from esba.figures.spatial import tube_html
+
+        page.parent.mkdir(parents=True, exist_ok=True)
+        outputs.write_text(page, tube_html(scene.segments, result.q, values, forces, scene.describe()))
+        print(f"esba: wrote {page}", file=sys.stderr)
+    print_result(args, data, table)
+    return EXIT_OK if result.ok else EXIT_FAILED
+
+
 def _cmd_solve(args: argparse.Namespace) -> int:
     from esba.statics.equilibrium import EquilibriumError, SolverOptions, SolverOptionsError, solve
     from esba.statics.text import solve_table
 
-    figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
     scene = scene_from_args(args)
+    if args.three_d or scene.needs_3d:
+        return _cmd_solve3d(args, scene)
+    for flag, given in (("--section", args.section), ("--html", args.html), ("--gravity-direction", args.gravity_direction)):
+        if given:
+            raise UsageError(f"{flag} is for the 3-D model: give --3d (or a payload out of the plane)")
+    figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
     sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
         raise UsageError("--monte-carlo needs uncertain parameters: --sigma NAME=SIGMA or an [uncertainty] table in the scene file")
@@ -210,6 +306,10 @@ def add_solve(sub) -> None:
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--max-iter", type=count_arg("max_iter", 1, _MAX_ITER, "an equilibrium takes tens of iterations"), default=200, metavar="N", help="IPOPT iterations per solve (default 200, at most 100000)")
     p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
+    p.add_argument("--3d", dest="three_d", action="store_true", help="solve with the 3-D model (chosen by itself when a payload points out of the plane; docs/3d.md)")
+    p.add_argument("--section", action="append", metavar="NAME=VALUE", help="3-D section stiffness: EI_side=..., GJ=... (N*mm^2; repeatable)")
+    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (default 1,0,0: down, the paper's)")
+    p.add_argument("--html", metavar="FILE.html", help="with --3d: also write a view of the deformed actuator that turns with the mouse (one offline HTML file)")
     p.add_argument(
         "--history",
         type=_history_arg,

@@ -267,6 +267,10 @@ class Payload:
         bending direction (Table 2).
     at : float
         Point of application as a fraction of L from the base, 0 < at <= 1 (1 = tip).
+    out_of_plane_deg : float
+        Angle Beta of the force out of the bending plane, degrees in [-90, 90]: the force is
+        F (cos Beta cos Omega, -cos Beta sin Omega, sin Beta). 0 (the default) is the planar
+        payload; any other value needs the 3-D model (:mod:`esba.statics.spatial`, ``esba solve --3d``).
 
     Examples
     --------
@@ -281,6 +285,7 @@ class Payload:
     force: float
     angle_deg: float = 90.0
     at: float = 1.0
+    out_of_plane_deg: float = 0.0
 
     def __post_init__(self) -> None:
         force = _number("payload.force", self.force)
@@ -295,10 +300,14 @@ class Payload:
         if not 0.0 < at <= 1.0:
             raise SceneError(f"payload.at={at:g}: expected a fraction of the length with 0 < at <= 1 (1 = tip)")
         object.__setattr__(self, "at", at)
+        beta = _number("payload.out_of_plane_deg", self.out_of_plane_deg)
+        if not -90.0 <= beta <= 90.0:
+            raise SceneError(f"payload.out_of_plane_deg={beta:g}: expected an angle from -90 to 90 degrees out of the bending plane (turn angle_deg for the rest)")
+        object.__setattr__(self, "out_of_plane_deg", beta)
 
     def scaled(self, factor: float) -> Payload:
         """The same payload with its magnitude times ``factor``."""
-        return Payload(self.force * factor, self.angle_deg, self.at)
+        return Payload(self.force * factor, self.angle_deg, self.at, self.out_of_plane_deg)
 
 
 @dataclass(frozen=True)
@@ -390,8 +399,22 @@ class Scene:
         """Exactly the effects of this scene (no payload terms without payloads)."""
         return EffectSet(fibres=self.fibres, payloads=len(self.payloads), gravity=self.gravity)
 
+    @property
+    def needs_3d(self) -> bool:
+        """True when a payload points out of the bending plane (only the 3-D model carries it)."""
+        return any(p.out_of_plane_deg != 0.0 for p in self.payloads)
+
     def model(self) -> Model:
-        """The generated model for this scene's segments, effects and variant (generated if missing)."""
+        """The generated model for this scene's segments, effects and variant (generated if missing).
+
+        Raises SceneError when the scene needs the 3-D model (:attr:`needs_3d`).
+        """
+        for k, p in enumerate(self.payloads, start=1):
+            if p.out_of_plane_deg != 0.0:
+                raise SceneError(
+                    f"payload {k}: out_of_plane_deg={p.out_of_plane_deg:g} points out of the bending plane, which the planar model "
+                    "cannot carry: solve it in 3-D (esba solve --3d; esba.statics.spatial.solve_scene3d)"
+                )
         return load_model(self.segments, self.effects, self.variant)
 
     def parameters(self, pressure: float, load_factor: float = 1.0) -> dict[str, float]:
@@ -406,6 +429,7 @@ class Scene:
             values[f"F{k}"] = p.force * load_factor
             values[f"Omega{k}"] = math.radians(p.angle_deg)
             values[f"s{k}"] = p.at
+            values[f"Beta{k}"] = math.radians(p.out_of_plane_deg)
         return values
 
     # -- derived scenes ----------------------------------------------------------------------
@@ -437,7 +461,7 @@ class Scene:
         """A one-line summary, e.g. for a table header."""
         a = self.actuator
         drive = f"P={self.pressure:g} MPa" if self.pressure is not None else f"unloaded angle {self.target_angle_deg:g} deg"
-        loads = "; ".join(f"{p.force:g} N at {p.angle_deg:g} deg, s={p.at:g}" for p in self.payloads) or "no payload"
+        loads = "; ".join(f"{p.force:g} N at {p.angle_deg:g} deg" + (f" ({p.out_of_plane_deg:g} deg out of plane)" if p.out_of_plane_deg else "") + f", s={p.at:g}" for p in self.payloads) or "no payload"
         extra = (", gravity" if self.gravity else "") + ("" if self.fibres else ", no fibres")
         extra += "".join(f"; {o.describe()}" for o in self.obstacles)
         return (
@@ -457,7 +481,7 @@ MAIN_JOB = Scene(target_angle_deg=90.0, payloads=(Payload(2.0, 90.0, 1.0),), seg
 #: ``uncertainty`` (standard deviations of the parameters) is read by :func:`esba.calibration.uncertainty.load_sigmas`.
 _TOP_KEYS = {"segments", "variant", "gravity", "fibres", "actuator", "loads", "payloads", "obstacles", "uncertainty"}
 _LOAD_KEYS = {"pressure", "target_angle_deg", "g"}
-_PAYLOAD_KEYS = {"force", "angle_deg", "at"}
+_PAYLOAD_KEYS = {"force", "angle_deg", "at", "out_of_plane_deg"}
 
 
 def _check_keys(where: str, table: Any, allowed: set[str]) -> Mapping[str, Any]:

@@ -11,6 +11,7 @@ solve       ``esba bench solve --markdown docs/performance.md``       :func:`esb
 path        ``esba bench path --markdown docs/performance.md``        :func:`esba.bench.path.path_benchmark`
 maps        ``esba bench maps --markdown docs/performance.md``        :func:`esba.bench.maps.maps_benchmark`
 contact     ``esba bench contact --markdown docs/performance.md``     :func:`esba.bench.contact.contact_benchmark`
+3d          ``esba bench 3d --markdown docs/performance.md``          :func:`esba.bench.spatial.spatial_benchmark`
 ==========  ====================================================  =====================================
 
 Each renderer writes its times through :class:`esba.pages.page.Times`, so that ``esba docs --check
@@ -44,6 +45,8 @@ __all__ = [
     "maps_table",
     "ContactSettings",
     "contact_table",
+    "SpatialSettings",
+    "spatial_table",
     "PERFORMANCE_TITLE",
     "SECTIONS",
 ]
@@ -51,7 +54,7 @@ __all__ = [
 #: The title of the benchmarks' page.
 PERFORMANCE_TITLE = "# Performance"
 #: The sections, in the page's order.
-SECTIONS = ("generation", "solve", "path", "maps", "contact")
+SECTIONS = ("generation", "solve", "path", "maps", "contact", "3d")
 #: Where the commands' ``--markdown`` writes in the committed page.
 _DOC = "docs/performance.md"
 
@@ -455,13 +458,62 @@ def _contact_body(data: dict, t: Times) -> str:
 # the page
 
 
+@dataclass(frozen=True)
+class SpatialSettings:
+    """``esba bench 3d``: runs per timing and the command the section names."""
+
+    repeat: int = 3
+    command: str = f"esba bench 3d --repeat 3 --markdown {_DOC}"
+
+
+def spatial_table(data: dict, t: Times = TIMES) -> str:
+    """The 3-D benchmark as plain text, with the targets of issue 26 and whether each is met."""
+    lines = [f"{'n':>4} {'generation s':>13} {'assignments':>12} {'hess instr':>11}", "-" * 43]
+    for r in data["generation"]:
+        lines.append(f"{r['n']:>4} {t(r['seconds'], '13.2f')} {r['assignments']:>12} {r['hessian']:>11}")
+    gen30 = next(r["seconds"] for r in data["generation"] if r["n"] == 30)
+    ratio = data["solve3d_ms"] / data["planar_ms"]
+
+    def met(ok: bool) -> str:
+        return t.word("met" if ok else "NOT met")
+
+    lines += [
+        "",
+        f"solve n = 3: 3-D {t(data['solve3d_ms'], '.2f')} ms (load history + IPOPT certificate), planar {t(data['planar_ms'], '.2f')} ms, "
+        f"ratio {t(ratio, '.2f')} (target <= 2: {met(ratio <= 2)})",
+        f"naive SciPy L-BFGS-B on the 3-D energy (numeric gradient, from straight): {t(data['naive_ms'], '.1f')} ms, "
+        f"{t(data['naive_ms'] / data['solve3d_ms'], '.1f')} x esba; its angles off by {t(data['naive_error'], '.1e')} rad",
+        f"warm 3-D solve at n = 30 (90 unknowns, one call of a 3-step Newton Function): {t(data['warm30_ms'], '.2f')} ms (target <= 2 ms: {met(data['warm30_ms'] <= 2)})",
+        f"following the 3-D equilibria in the pressure at n = 3: {t(data['point_us'], '.0f')} us per point over {data['points']} points "
+        f"(natural continuation, one call of a 3-step Newton Function a point; target <= 200 us: {met(data['point_us'] <= 200)})",
+        f"generation of the n = 30 3-D model: {t(gen30, '.1f')} s (target <= 30 s: {met(gen30 <= 30)})",
+    ]
+    return "\n".join(lines)
+
+
+def _spatial_body(data: dict, t: Times) -> str:
+    return "\n".join([
+        "## The 3-D model against the planar one",
+        "",
+        "The spatial model (`docs/3d.md`: three rotations a joint, 3n unknowns) on the Table 2 scene with stiff",
+        "sideways bending and torsion (EI_side = 4e5, GJ = 1e6 N mm^2), measured in the same run as the planar",
+        "`solve`. No compiled (C) 3-D solver exists yet: the compiled limit is the planar one's (`esba bench solve`).",
+        "",
+        t.word(_versions(sympy=True)),
+        "",
+        "```",
+        spatial_table(data, t),
+        "```",
+    ])
+
+
 class PerformancePage(Page):
     """``docs/performance.md``: its settings and data are dicts by section (:data:`SECTIONS`)."""
 
     name = "performance"
 
     def settings(self) -> dict[str, Any]:
-        return {"generation": GenerationSettings(), "solve": SolveSettings(), "path": PathSettings(), "maps": MapsSettings(), "contact": ContactSettings()}
+        return {"generation": GenerationSettings(), "solve": SolveSettings(), "path": PathSettings(), "maps": MapsSettings(), "contact": ContactSettings(), "3d": SpatialSettings()}
 
     def check_settings(self) -> dict[str, Any]:
         return {k: dataclasses.replace(s, repeat=1) for k, s in self.settings().items()}
@@ -493,11 +545,15 @@ class PerformancePage(Page):
             from esba.bench.contact import contact_benchmark
 
             return contact_benchmark(repeat=settings.repeat, progress=progress)
+        if key == "3d":
+            from esba.bench.spatial import spatial_benchmark
+
+            return spatial_benchmark(repeat=settings.repeat, progress=progress)
         raise KeyError(key)
 
     def section(self, key: str, data: Any, settings: Any, times: Times = TIMES) -> str:
         """One section's block, as it stands in the page."""
-        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body, "contact": _contact_body}[key](data, times)
+        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body, "contact": _contact_body, "3d": _spatial_body}[key](data, times)
         return section_block(key, body, settings.command)
 
     def render(self, data: dict[str, Any], settings: dict[str, Any], path: Path, times: Times = TIMES) -> Rendered:
@@ -505,7 +561,7 @@ class PerformancePage(Page):
 
     def write_section(self, path: str | Path, key: str, data: Any, settings: Any) -> Path:
         """Write (or replace) one section of the page at ``path``, keeping the others as they are."""
-        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body, "contact": _contact_body}[key](data, TIMES)
+        body = {"generation": _generation_body, "solve": _solve_body, "path": _path_body, "maps": _maps_body, "contact": _contact_body, "3d": _spatial_body}[key](data, TIMES)
         return write_section(path, key, body, settings.command, PERFORMANCE_TITLE)
 
 

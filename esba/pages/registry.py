@@ -6,9 +6,9 @@ page's module when it is asked for.
 Examples
 --------
 >>> list(ENTRIES)
-['derivations', 'validation', 'design', 'paths', 'experiments', 'sensing', 'accuracy-vs-time', 'performance', 'scaling', 'equilibria', 'maps', 'contact']
+['derivations', 'validation', 'design', 'paths', 'experiments', 'sensing', 'accuracy-vs-time', 'performance', 'scaling', 'equilibria', 'maps', 'contact', '3d']
 >>> [e.name for e in ENTRIES.values() if e.slow]
-['accuracy-vs-time', 'performance', 'scaling']
+['accuracy-vs-time', 'performance', 'scaling', '3d']
 >>> check_names(["paths", "paths", "validation"])
 ['paths', 'validation']
 >>> check_names(["path"])  # doctest: +ELLIPSIS
@@ -73,6 +73,8 @@ ENTRIES: dict[str, Entry] = {
               "stability maps: fold curves, cusps, regions by stable states, designs clear of folds"),
         Entry("contact", "contact.md", "esba.pages.contact", "esba docs --write contact", False,
               "contact: the blocked-force curve, a tester through the snap, a finger closing on a cylinder, KKT checks"),
+        Entry("3d", "3d.md", "esba.pages.spatial", "esba docs --write 3d", True,
+              "the actuator in 3-D: the planar restriction, rod benchmarks B1-B5, the sideways flip, the cost"),
     )
 }
 

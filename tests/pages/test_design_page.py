@@ -30,7 +30,7 @@ def test_design_page_links_only_figures_that_are_beside_it(tmp_path):
 
 
 def test_validation_page_outside_a_checkout_links_only_figures_beside_it(capsys, tmp_path, monkeypatch):
-    """``esba validate`` in an empty folder writes ./validation.md: it names the command for each of
+    """``esba validate`` in an empty folder writes ./docs/validation.md: it names the command for each of
     the paper's figures instead of linking a figure that is not there; with ``esba figures`` run there
     first, it links them."""
     from esba.cli import main
@@ -38,13 +38,13 @@ def test_validation_page_outside_a_checkout_links_only_figures_beside_it(capsys,
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr("esba.infra.outputs.checkout_root", lambda cwd=None: None)
     assert main(["validate", "--json"]) == 0
-    text = (tmp_path / "validation.md").read_text(encoding="utf-8")
+    text = (tmp_path / "docs" / "validation.md").read_text(encoding="utf-8")
     assert not re.search(r"!\[[^\]]*\]\(figures/", text)
-    assert f"(figures/fig7b.png is not beside this page: `esba figures --only fig7b --out {tmp_path.as_posix()}/figures` draws it.)" in text
-    (tmp_path / "figures").mkdir()
+    assert f"(figures/fig7b.png is not beside this page: `esba figures --only fig7b --out {tmp_path.as_posix()}/docs/figures` draws it.)" in text
+    (tmp_path / "docs" / "figures").mkdir()
     for name in ("fig7b", "fig8c", "fig10", "fig11"):
-        (tmp_path / "figures" / f"{name}.png").write_bytes(b"\x89PNG")
+        (tmp_path / "docs" / "figures" / f"{name}.png").write_bytes(b"\x89PNG")
     assert main(["validate", "--json"]) == 0
     capsys.readouterr()
-    text = (tmp_path / "validation.md").read_text(encoding="utf-8")
+    text = (tmp_path / "docs" / "validation.md").read_text(encoding="utf-8")
     assert "is not beside this page" not in text and "![fig7b](figures/fig7b.png)" in text

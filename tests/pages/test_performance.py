@@ -92,13 +92,16 @@ def test_the_whole_page_renders_its_sections_in_order():
     contact = {"rows": [ContactBenchRow("free solve (dead-load twin)", 3, 0.008, 1e-12, "esba.solve"), ContactBenchRow("contact solve", 3, 0.016, 0.0, "from rest"),
                         ContactBenchRow("blocked-force curve, 31 pressures", 8, 0.4, float("nan"), "warm-started")],
                "ratio": 2.0, "ratio_target": 3.0, "curve_s": 0.4, "curve_target_s": 1.0, "curve_ok": True, "force_at_03": 6.5204}
-    data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row], "maps": [maps], "contact": contact}
+    spatial = {"generation": [{"n": 30, "seconds": 4.0, "assignments": 14166, "hessian": 88481}], "solve3d_ms": 4.5, "planar_ms": 2.4,
+               "naive_ms": 10.0, "naive_error": 3e-8, "warm30_ms": 1.8, "point_us": 93.0, "points": 40}
+    data = {"generation": [gen], "solve": {"rows": SOLVE_ROWS, "growth_16_128": None}, "path": [row], "maps": [maps], "contact": contact, "3d": spatial}
     text = PAGE.render(data, PAGE.settings(), ROOT / "docs" / "performance.md").text
     _, sections = read_sections(text)
     assert tuple(k for k, _ in sections) == SECTIONS
     assert "2318       3987       6510     6585" in text
     assert "omega-payload" in text and "400/400" in text and "Every cell of each grid agrees" in text
     assert "contact solve / free solve: 2.00x (target <= 3x: met)" in text and "blocked-force curve: 0.400 s (target <= 1 s: met)" in text
+    assert "ratio 1.88 (target <= 2: met)" in text and "93 us per point over 40 points" in text and "target <= 200 us: met" in text
 
 
 def test_the_committed_page_has_every_section_written_by_its_command():

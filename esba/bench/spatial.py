@@ -1,0 +1,82 @@
+"""``esba bench 3d``: what the 3-D model costs against the planar one, in the same run.
+
+Generation of the 3-D model (n = 3, 10, 30), a full 3-D solve at n = 3 (load history + IPOPT
+certificate) against the planar ``solve`` of the same scene and a naive SciPy BFGS on the 3-D
+energy, a warm 3-D solve at n = 30 (90 unknowns; :func:`esba.statics.spatial.warm3d`), and the cost per point of following the
+3-D equilibria in the pressure at n = 3 (:func:`esba.statics.spatial.follow3d`: natural continuation,
+one call of a compiled four-step Newton Function a point, checked).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import numpy as np
+
+from .timing import median_time
+
+__all__ = ["spatial_benchmark", "GENERATION_NS_3D"]
+
+GENERATION_NS_3D = (3, 10, 30)
+#: The sideways and torsional stiffnesses of the benchmark scene (N*mm^2): stiff enough that the
+#: Table 2 state is stable in 3-D.
+SECTION = {"EI_side": 4e5, "GJ": 1e6, "Beta1": 0.0}
+
+
+def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = None) -> dict:
+    from scipy.optimize import minimize
+
+    from derive.effects3d import Effects3D
+    from derive.emit3d import generate_source3d
+    from esba.model.scene import MAIN_JOB
+    from esba.model.spatial import load_model3d
+    from esba.statics.equilibrium import solve
+    from esba.statics.spatial import follow3d, solve3d, warm3d
+
+    say = progress or (lambda msg: None)
+    gen = []
+    for n in GENERATION_NS_3D:
+        t0 = time.perf_counter()
+        _, entry = generate_source3d(n, Effects3D.parse("air,axial,radial,fibres,payload"))
+        gen.append({"n": n, "seconds": time.perf_counter() - t0, "assignments": entry["_assignments"], "hessian": entry["instructions"]["hessian"]})
+        say(f"generation n = {n}")
+    planar = solve(MAIN_JOB)
+    values = {**MAIN_JOB.parameters(planar.pressure), **SECTION}
+    m3 = load_model3d(3)
+    solve3d(m3, values)  # builds the IPOPT solver once
+    t3 = median_time(lambda: solve3d(m3, values), repeat)
+    tp = median_time(lambda: solve(MAIN_JOB), repeat)
+    lb = np.concatenate([np.full(3, -0.7), np.full(6, -np.inf)])
+    naive_q = None
+
+    def naive():
+        nonlocal naive_q
+        res = minimize(lambda q: m3.energy(q, values), np.zeros(9), method="L-BFGS-B", bounds=[(b if np.isfinite(b) else None, None) for b in lb])
+        naive_q = res.x
+
+    tn = median_time(naive, repeat)
+    naive_err = float(np.abs(naive_q[:3] - planar.theta).max())
+    say("solve n = 3")
+    m30 = load_model3d(30)
+    q30 = solve3d(m30, values, certify=False).q
+    warm3d(m30, values, q30 + 1e-6)  # builds the Newton kernel once
+    tw = median_time(lambda: warm3d(m30, values, q30 + 1e-6), max(repeat, 5))
+    say("warm n = 30")
+    vals = {**MAIN_JOB.parameters(0.16), **SECTION}
+    q = solve3d(m3, vals, certify=False).q
+    pressures = np.linspace(0.16, 0.173, 41)[1:]
+
+    follow3d(m3, vals, "P", pressures, q)  # builds the Newton kernel once
+
+    def trace():
+        follow3d(m3, vals, "P", pressures, q)
+
+    tt = median_time(trace, repeat)
+    say("continuation n = 3")
+    return {
+        "generation": gen,
+        "solve3d_ms": t3 * 1e3, "planar_ms": tp * 1e3, "naive_ms": tn * 1e3, "naive_error": naive_err,
+        "warm30_ms": tw * 1e3,
+        "point_us": tt / len(pressures) * 1e6, "points": len(pressures),
+    }

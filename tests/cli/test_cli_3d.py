@@ -1,0 +1,138 @@
+"""``esba solve --3d`` and the 3-D loads of scenes, flags and the API: answers and one-line refusals."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from esba.cli import EXIT_OK, EXIT_USAGE, main
+from esba.model.scene import MAIN_JOB, Payload, Scene, SceneError, scene_from_dict
+from esba.model.spatial import load_model3d
+from esba.statics.equilibrium import solve
+from esba.statics.spatial import SpatialError, check_section, solve_scene3d, tip_compliance
+
+SECTION = ["--section", "EI_side=4e5", "--section", "GJ=1e6"]
+
+
+def run(capsys, *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_solve_3d_of_table_2_is_the_planar_answer_with_no_twist(capsys):
+    code, out, err = run(capsys, "solve", "--3d", *SECTION, "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    assert np.allclose(np.radians(d["theta_deg"]), solve(MAIN_JOB).theta, atol=1e-10)
+    assert d["psi_deg"] == [0.0] * 3 and d["tau_deg"] == [0.0] * 3 and d["stable"]
+    C = np.array(d["tip_compliance"])
+    assert C.shape == (6, 6) and np.allclose(C, C.T)
+
+
+def test_a_payload_out_of_the_plane_picks_the_3d_model_and_moves_the_tip_sideways(capsys):
+    code, out, err = run(capsys, "solve", "--payload-out-of-plane", "20", *SECTION, "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    assert d["tip_mm"][2] > 0.5 and "20 deg out of plane" in d["scene"]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["solve", "--3d", "--section", "EI_side=4e5"], "section parameter(s) GJ missing"),
+    (["solve", "--3d", "--section", "EIside=4e5", "--section", "GJ=1"], "section parameter 'EIside': unknown; allowed are EI_side, GJ"),
+    (["solve", "--3d", "--section", "GJ=nan", "--section", "EI_side=1"], "GJ='nan': expected a finite number > 0"),
+    (["solve", "--3d", "--section", "GJ"], "--section 'GJ': expected NAME=VALUE"),
+    (["solve", "--section", "GJ=1"], "--section is for the 3-D model: give --3d"),
+    (["solve", "--html", "x.html"], "--html is for the 3-D model: give --3d"),
+    (["solve", "--3d", *SECTION, "--html", "x.txt"], "--html"),
+    (["solve", "--payload-out-of-plane", "120", *SECTION], "payload.out_of_plane_deg=120: expected an angle from -90 to 90"),
+    (["solve", "--payload-out-of-plane", "nan", *SECTION], "out_of_plane_deg"),
+    (["equilibria", "--payload-out-of-plane", "10", "--no-plot"], "out_of_plane_deg=10 points out of the bending plane"),
+    (["solve", "--3d", *SECTION, "--sensitivities"], "--sensitivities is not used with --3d"),
+    (["solve", "--3d", "--gravity", "--gravity-direction", "0,0,0", *SECTION], "a zero vector has no direction"),
+    (["solve", "--3d", "--gravity", "--gravity-direction", "nan,0,1", *SECTION], "expected three finite numbers"),
+    (["solve", "--3d", "--gravity", "--gravity-direction", "down", *SECTION], "expected X,Y,Z, three numbers"),
+    (["solve", "--3d", "--gravity-direction", "0,0,1", *SECTION], "--gravity-direction turns the weight: give --gravity"),
+    (["solve", "--gravity-direction", "0,0,1"], "--gravity-direction is for the 3-D model"),
+])
+def test_bad_3d_input_is_refused_in_one_line(capsys, args, message):
+    code, _, err = run(capsys, *args)
+    assert code == EXIT_USAGE
+    assert message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_planar_scene_file_means_what_it_meant_and_a_3d_one_says_so():
+    planar = scene_from_dict({"payloads": [{"force": 1.0, "angle_deg": 90}]})
+    assert not planar.needs_3d and planar.payloads[0].out_of_plane_deg == 0.0
+    spatial = scene_from_dict({"payloads": [{"force": 1.0, "out_of_plane_deg": 30}]})
+    assert spatial.needs_3d
+    with pytest.raises(SceneError, match="out_of_plane_deg=30 points out of the bending plane"):
+        spatial.model()
+    with pytest.raises(SceneError, match="out_of_plane_deg=-91"):
+        Payload(1.0, out_of_plane_deg=-91)
+
+
+def test_the_api_solves_a_sideways_payload_and_twists_the_finger():
+    scene = Scene(target_angle_deg=90.0, payloads=(Payload(0.5, 0.0, 1.0, out_of_plane_deg=90.0),))
+    r = solve_scene3d(scene, {"EI_side": 4e5, "GJ": 2e4})
+    assert r.ok and abs(r.tip[2]) > 0.1 and np.abs(r.tau).max() > 0
+    with pytest.raises(SpatialError, match="unknown"):
+        check_section({"EI": 1.0, "GJ": 1.0, "EI_side": 1.0})
+
+
+def test_the_tip_compliance_of_a_straight_rod_has_the_closed_form_rotations():
+    """Moments at the tip of a straight rod: rotations L/GJ, L/EI_side, L/EI at any n; the coupling of
+    the in-plane moment to the deflection is L^2/(2 EI); the axial direction is rigid."""
+    m = load_model3d(3, "rod,payload")
+    vals = dict(L=2.0, EI=3.0, EI_side=5.0, GJ=7.0, kappa0=0.0, F1=0.0, Omega1=0.0, Beta1=0.0, s1=1.0)
+    C, K = tip_compliance(m, vals, np.zeros(9))
+    assert np.diag(C)[3:] == pytest.approx([2 / 7, 2 / 5, 2 / 3], rel=1e-8)
+    assert C[1, 5] == pytest.approx(2.0**2 / (2 * 3.0), rel=1e-8) and abs(C[0, 0]) < 1e-12
+    assert np.allclose(K @ C @ K, K, atol=1e-6 * np.abs(K).max())
+
+
+def test_the_numpy_centreline_passes_through_the_generated_segment_ends_and_the_tube_is_drawn(tmp_path, capsys):
+    from esba.model.spatial import centreline3d
+
+    m = load_model3d(3)
+    q = np.array([0.3, 0.5, 0.2, -0.1, 0.2, 0.05, 0.1, -0.3, 0.2])
+    pts, frames = centreline3d(3, q, 135.0, per_segment=4)
+    tip, rot, ends = m.pose(q, 135.0)
+    assert np.abs(pts[::4] - ends.T).max() < 1e-12 and np.abs(frames[-1] - rot).max() < 1e-12
+    code, _, err = run(capsys, "solve", "--payload-out-of-plane", "40", *SECTION, "--plot", str(tmp_path / "tube.png"))
+    assert code == EXIT_OK and (tmp_path / "tube.png").stat().st_size > 10_000, err
+
+
+def test_the_interactive_view_is_one_offline_html_file(tmp_path, capsys):
+    page = tmp_path / "view.html"
+    code, _, err = run(capsys, "solve", "--payload-out-of-plane", "30", *SECTION, "--html", str(page))
+    assert code == EXIT_OK, err
+    text = page.read_text()
+    assert text.startswith("<!DOCTYPE html>") and "<canvas" in text and '"rings"' in text and "30 deg out of plane" in text
+    assert "src=" not in text and "http" not in text  # nothing to fetch: it works offline
+
+
+def test_a_moment_or_rod_is_refused_by_the_planar_family_and_named():
+    from derive.effects import EffectError, EffectSet
+
+    with pytest.raises(EffectError, match="unknown effect 'moment'"):
+        EffectSet.parse("air,moment")
+    with pytest.raises(EffectError, match="unknown effect 'rod'"):
+        EffectSet.parse("rod,payload")
+    m = load_model3d(2, "rod,moment")
+    assert m.parameters == ("L", "EI_side", "GJ", "EI", "kappa0", "mx1", "my1", "mz1", "sm1")
+
+
+def test_the_weight_in_3d_is_the_planar_weight_and_turns_with_the_mount():
+    """Gravity along x (the paper's) gives the planar gravity solve to 1e-10; along z it bends the
+    finger out of its plane."""
+    scene = Scene(target_angle_deg=90.0, payloads=(Payload(1.0, 0.0),), gravity=True)
+    planar = solve(scene)
+    r = solve_scene3d(scene, {"EI_side": 4e5, "GJ": 1e6})
+    assert np.abs(r.theta - planar.theta).max() < 1e-10 and np.abs(r.q[3:]).max() == 0.0
+    turned = solve_scene3d(scene, {"EI_side": 4e5, "GJ": 1e6}, gravity_direction=(0.0, 0.0, 2.0))
+    assert turned.ok and turned.tip[2] > 0.0
+    with pytest.raises(SpatialError, match="a zero vector has no direction"):
+        solve_scene3d(scene, {"EI_side": 4e5, "GJ": 1e6}, gravity_direction=(0, 0, 0))
