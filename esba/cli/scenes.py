@@ -44,7 +44,7 @@ def _section_arg(items: list[str] | None) -> dict[str, float]:
             raise UsageError(f"--section {item!r}: expected NAME=VALUE, e.g. EI_side=4e5 (N*mm^2)")
         section[name.strip()] = value.strip()
     try:
-        return check_section(section)
+        return check_section(section, complete=False)  # the scene's section fills in what is not given
     except SpatialError as exc:
         raise UsageError(f"--section: {exc}") from None
 
@@ -90,6 +90,8 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
         "tau_deg": np.degrees(result.tau).tolist(),
         "tip_mm": result.tip.tolist(),
         "min_eigenvalue": result.min_eigenvalue,
+        "section_nmm2": {name: values[name] for name in ("EI_side", "GJ")},
+        "section_from": "given" if len(section) == 2 else ("the eccentric section (esba section)" if not section else "given in part, the rest from the eccentric section (esba section)"),
         "notes": result.notes,
     }
     if result.stable:
@@ -97,7 +99,8 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
         data["tip_compliance"] = C.tolist()
 
     def table(d: dict) -> str:
-        rows = [f"{'scene':>10}: {d['scene']}", f"{'model':>10}: {d['model']}"]
+        rows = [f"{'scene':>10}: {d['scene']}", f"{'model':>10}: {d['model']}",
+                f"{'section':>10}: EI_side {d['section_nmm2']['EI_side']:.6g} N mm^2, GJ {d['section_nmm2']['GJ']:.6g} N mm^2 ({d['section_from']})"]
         for key in ("theta_deg", "psi_deg", "tau_deg", "tip_mm"):
             rows.append(f"{key:>10}: " + "  ".join(f"{v:.4f}" for v in d[key]))
         rows.append(f"{'state':>10}: {'stable' if d['stable'] else 'UNSTABLE (the softest mode: ' + format(d['min_eigenvalue'], '.3g') + ')'}; IPOPT {d['ipopt']}")

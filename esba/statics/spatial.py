@@ -226,11 +226,13 @@ class SpatialError(ValueError):
     """A bad input to the 3-D solve (one line naming it)."""
 
 
-def check_section(section: Mapping[str, float] | None) -> dict[str, float]:
+def check_section(section: Mapping[str, float] | None, scene=None, complete: bool = True) -> dict[str, float]:
     """The section stiffnesses by name: every name known, every value finite and > 0.
 
-    Until the section module (``esba.model.section``) supplies their defaults from the eccentric
-    section, both must be given.
+    A stiffness not given is the eccentric section's (:func:`esba.model.section.section_stiffness`
+    of the scene's r1, r2, d, E and fibre angle, with that module's documented defaults for what the
+    paper does not give: the layer's width and thickness, the fibres slack), when ``scene`` is given;
+    ``complete=False`` checks only the names and values given.
     """
     section = dict(section or {})
     for name, value in section.items():
@@ -244,12 +246,15 @@ def check_section(section: Mapping[str, float] | None) -> dict[str, float]:
             raise SpatialError(f"section parameter {name}={value!r}: expected a finite number > 0 (N*mm^2)")
         section[name] = v
     missing = [k for k in SECTION_PARAMETERS if k not in section]
-    if missing:
-        try:
-            from esba.model.section import section_stiffness  # noqa: F401  (the section helper, when present)
-        except ImportError:
-            raise SpatialError(f"section parameter(s) {', '.join(missing)} missing: give them (N*mm^2), e.g. EI_side=4e5 GJ=2e4") from None
-        raise SpatialError(f"section parameter(s) {', '.join(missing)} missing: give them (N*mm^2)")
+    if missing and (complete or scene is not None):
+        if scene is None:
+            raise SpatialError(f"section parameter(s) {', '.join(missing)} missing: give them (N*mm^2), e.g. EI_side=4e5 GJ=2e4, or a scene to derive them from")
+        from esba.model.section import section_stiffness
+
+        a = scene.actuator
+        k = section_stiffness(a.r1, a.r2, a.d, a.E, rho_deg=a.rho_deg)
+        derived = {"EI_side": k.EI_side, "GJ": k.GJ}
+        section.update({name: derived[name] for name in missing})
     return section
 
 
@@ -277,7 +282,7 @@ def scene_values3d(scene, section: Mapping[str, float] | None = None, gravity_di
     from derive.effects3d import Effects3D
     from esba.model.closed_form import pressure_for_angle
 
-    sec = check_section(section)
+    sec = check_section(section, scene)
     pressure = scene.pressure if scene.pressure is not None else pressure_for_angle(scene.unloaded())  # payloads do not enter it
     values = scene.parameters(pressure)
     values.update(sec)

@@ -40,7 +40,7 @@ def test_a_payload_out_of_the_plane_picks_the_3d_model_and_moves_the_tip_sideway
 
 
 @pytest.mark.parametrize("args, message", [
-    (["solve", "--3d", "--section", "EI_side=4e5"], "section parameter(s) GJ missing"),
+    (["solve", "--3d", "--section", "EI_side=-4e5"], "EI_side='-4e5': expected a finite number > 0"),
     (["solve", "--3d", "--section", "EIside=4e5", "--section", "GJ=1"], "section parameter 'EIside': unknown; allowed are EI_side, GJ"),
     (["solve", "--3d", "--section", "GJ=nan", "--section", "EI_side=1"], "GJ='nan': expected a finite number > 0"),
     (["solve", "--3d", "--section", "GJ"], "--section 'GJ': expected NAME=VALUE"),
@@ -136,3 +136,18 @@ def test_the_weight_in_3d_is_the_planar_weight_and_turns_with_the_mount():
     assert turned.ok and turned.tip[2] > 0.0
     with pytest.raises(SpatialError, match="a zero vector has no direction"):
         solve_scene3d(scene, {"EI_side": 4e5, "GJ": 1e6}, gravity_direction=(0, 0, 0))
+
+
+def test_section_stiffnesses_not_given_come_from_the_eccentric_section(capsys):
+    """EI_side and GJ default to the section's (esba section: silicone, layer and fibres); one given
+    keeps its value and the other is the section's."""
+    from esba.model.section import section_stiffness
+
+    k = section_stiffness(8.0, 3.0, 4.0, 0.54, rho_deg=10.0)
+    code, out, _ = run(capsys, "solve", "--3d", "--payload", "0.5", "--no-plot", "--json")
+    d = json.loads(out)
+    assert d["section_nmm2"] == pytest.approx({"EI_side": k.EI_side, "GJ": k.GJ}, rel=1e-12)
+    code, out, _ = run(capsys, "solve", "--3d", "--payload", "0.5", "--no-plot", "--json", "--section", "GJ=2e4")
+    d = json.loads(out)
+    assert d["section_nmm2"]["GJ"] == 2e4 and d["section_nmm2"]["EI_side"] == pytest.approx(k.EI_side, rel=1e-12)
+    assert d["section_from"].startswith("given in part")
