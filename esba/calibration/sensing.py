@@ -699,7 +699,7 @@ def _levenberg_marquardt(prob: _Problem, x: np.ndarray, thetas: list[np.ndarray]
             if t_new is not None:
                 r_new, J_new, parts_new = prob.evaluate(x_new, t_new)
                 cost_new = float(r_new @ r_new)
-                if np.isfinite(cost_new) and cost_new <= cost:
+                if np.isfinite(cost_new) and cost_new <= cost and _same_stability(parts, parts_new):
                     small = np.max(np.abs(x_new - x) / scale) < 1e3 * options.tol or cost - cost_new <= 1e-14 * max(cost, 1e-30)
                     x, thetas, r, J, parts, cost = x_new, t_new, r_new, J_new, parts_new, cost_new
                     mu = max(mu / 5.0, 1e-12)
@@ -711,6 +711,23 @@ def _levenberg_marquardt(prob: _Problem, x: np.ndarray, thetas: list[np.ndarray]
             converged = converged or float(np.max(np.abs(J.T @ r))) < 1e-6 * max(1.0, math.sqrt(cost))
             break
     return x, thetas, cost, J, parts, it, converged
+
+
+#: Residual sums (chi-square) closer than this are one: which of two runs that explain the data
+#: equally well comes first (the estimate) is then the order of the starts, not round-off.
+CHI2_RESOLUTION = 1e-8
+
+
+def _ranked(runs: list) -> list:
+    """The runs by their residual sum to :data:`CHI2_RESOLUTION`, in the order they ran among equals."""
+    return sorted(runs, key=lambda r: round(r[0] / CHI2_RESOLUTION))
+
+
+def _same_stability(parts: list, parts_new: list) -> bool:
+    """Whether each pose's state keeps its stability over a step (a stable branch ends at a fold: the
+    iteration does not follow it on to the unstable branch, where the prediction's Jacobian blows up
+    and where the last digits of round-off, a BLAS kernel or a compiled kernel, decide where it ends)."""
+    return all((np.linalg.eigvalsh(a[0])[0] > 0) == (np.linalg.eigvalsh(b[0])[0] > 0) for a, b in zip(parts, parts_new))
 
 
 def _start_loads(prob: _Problem, base_z: np.ndarray, options: SensingOptions) -> list[tuple[str, np.ndarray]]:
@@ -739,10 +756,10 @@ def _start_loads(prob: _Problem, base_z: np.ndarray, options: SensingOptions) ->
 
 def _other_states(pm: _PoseModel, p: np.ndarray, theta: np.ndarray) -> list[np.ndarray]:
     """The other stable states of the load ``p`` (the equilibria search)."""
-    from esba.statics.equilibria import equilibria
+    from esba.statics.equilibria import EquilibriaOptions, equilibria
 
-    try:
-        res = equilibria(with_parameters(pm.scene, dict(zip(pm.names, p))))
+    try:  # the state in hand is a start (no history of its own to trace); no barriers are asked
+        res = equilibria(with_parameters(pm.scene, dict(zip(pm.names, p))), EquilibriaOptions(history=False, connect=False), [theta])
     except (SceneError, EquilibriumError):
         return []
     return [np.asarray(s.theta, float) for s in res.stable if float(np.max(np.abs(np.asarray(s.theta) - theta))) > 1e-6]
@@ -931,17 +948,22 @@ def estimate_load(
                        "no start converged: no load found whose equilibrium the iteration could follow")
     chi_k = float(stats.chi2.ppf(options.level, prob.size))
     if options.branches:
-        # every other stable state of each load found that explains the data, and, when none explains
-        # them within the noise, of each start load too: a shape on a branch no load history reaches
+        # every other stable state of each load found that explains the data, and of each start load
+        # too: a shape on a branch no load history reaches. The start loads always: whether a run
+        # from a start happens to cross to another branch is not something to count on (it depends
+        # on the last digits of the arithmetic), the list of starts is.
         best = min(r[0] for r in runs)
         loads: list[tuple[np.ndarray, list | None]] = []
-        for cost, x, thetas, _, _, _ in sorted(runs, key=lambda r: r[0]):
-            same = any(np.max(np.abs(x - y) / prob.scales(x)) < 1e-6 and all(np.max(np.abs(a - b)) < 1e-6 for a, b in zip(thetas, ts))
-                       for y, ts in loads)
+        for cost, x, thetas, _, _, _ in _ranked(runs):
+            same = any(not _distinct(_wrap(x, prob), _wrap(y, prob), prob, np.zeros(prob.size), np.ones(prob.size, bool))
+                       and all(np.max(np.abs(a - b)) < 1e-6 for a, b in zip(thetas, ts)) for y, ts in loads)
             if cost <= best + chi_k and not same:  # each distinct load (and state) searched once
                 loads.append((x, thetas))
-        if best > float(stats.chi2.ppf(options.level, max(m - prob.size, 1))):
-            loads += [(prob.project(x0), None) for _, x0 in starts]
+        for _, x0 in starts:
+            x0 = prob.project(x0)
+            if not any(ts is None and not _distinct(_wrap(x0, prob), _wrap(y, prob), prob, np.zeros(prob.size), np.ones(prob.size, bool))
+                       for y, ts in loads):
+                loads.append((x0, None))
         for x, thetas in loads:
             for i, pm in enumerate(prob.pm):
                 p = pm.params(prob.z_of(x, i))
@@ -955,7 +977,7 @@ def estimate_load(
                     t0s[i] = other
                     run(x, t0s, f"another stable state of {pm.pose.label or f'pose {i + 1}'} at the load " + ", ".join(
                         f"{lab}={v:.4g}" for lab, v in zip(prob.labels, x)))
-    runs.sort(key=lambda r: r[0])
+    runs[:] = _ranked(runs)
     # among the loads that explain the data equally well, one whose states the actuator can hold comes first
     stable_runs = [r for r in runs if r[0] <= runs[0][0] + chi_k and all(np.linalg.eigvalsh(part[0])[0] > 0 for part in r[4])]
     if stable_runs:
