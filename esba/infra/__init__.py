@@ -3,6 +3,6 @@
 The per-user cache (:mod:`.cache`, :mod:`.fncache`), where commands write (:mod:`.outputs`), the files
 users give, read bounded and only when regular (:mod:`.inputs`), the
 terminal (:mod:`.console`), JSON without NaN (:mod:`.jsonsafe`), one BLAS thread (:mod:`.threads`),
-Ctrl-C (:mod:`.interrupts`), value checks (:mod:`.checks`), the example files shipped in the package
+Ctrl-C (:mod:`.interrupts`), value checks (:mod:`.checks`), round-off printed without its noise digits (:mod:`.roundoff`), the example files shipped in the package
 (:mod:`.examples`) and the error hierarchy (:mod:`.errors`). Imports nothing of esba's (only ``esba.__version__``).
 """
