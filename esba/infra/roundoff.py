@@ -4,14 +4,15 @@ A relative difference of two computations of the same thing (a closed form again
 against IPOPT), or the ratio of a round-off eigenvalue to a real one, is noise below some floor: its
 digits change with the BLAS kernel, the thread count and the compiler, so a page or a message that
 printed them would differ from machine to machine. :func:`floored` prints such a number as it is
-above its floor and as ``< floor`` below it (the floor is printed, so the reader knows what it is).
+above its floor and as ``< floor`` below it (``within ±floor`` for a signed difference; the floor is
+printed, so the reader knows what it is).
 
 Examples
 --------
 >>> floored(3.3e-16, ".1e", 1e-15), floored(0.0, ".1e", 1e-15), floored(2.5e-3, ".1e", 1e-15)
 ('< 1e-15', '< 1e-15', '2.5e-03')
 >>> floored(-7.0e-10, "+.2e", 1e-8), floored(-2.07e-3, "+.2e", 1e-8)
-('< 1e-08 in size', '-2.07e-03')
+('within ±1e-08', '-2.07e-03')
 """
 
 from __future__ import annotations
@@ -29,8 +30,8 @@ ROUNDOFF_RATIO = 1e-12
 
 
 def floored(value: float, spec: str, floor: float) -> str:
-    """``format(value, spec)``, or ``< floor`` where ``|value| < floor`` (``< floor in size`` for a
+    """``format(value, spec)``, or ``< floor`` where ``|value| < floor`` (``within ±floor`` for a
     signed ``spec``: the sign of noise is noise too)."""
     if math.isfinite(value) and abs(value) < floor:
-        return f"< {floor:.0e}" + (" in size" if spec.startswith(("+", " ")) else "")
+        return f"within ±{floor:.0e}" if spec.startswith(("+", " ")) else f"< {floor:.0e}"
     return format(value, spec)

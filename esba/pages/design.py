@@ -169,7 +169,7 @@ def render_page(cases: DesignCases, t: Times = TIMES, page_dir: Path | None = No
         f"IPOPT: {t(p.ipopt.solve_time_s * 1000, '.0f')} ms; PSO: {t(p.pso.solve_time_s, '.2f')} s, {t(p.speedup, '.0f')} times as long, "
         f"in the same run (IPOPT's one-off set-up, building the NLP and its derivatives: {t(p.ipopt.setup_time_s, '.2f')} s). "
         f"Differences below {ROUND_OFF_MM:g} mm, or {100 * ROUND_OFF_REL:g} % of an objective, lie within both solvers' tolerance "
-        "and are printed as \"< floor\" (their digits would change with the machine's arithmetic)."
+        "and are printed as \"within ±floor\" (their digits would change with the machine's arithmetic)."
     )
     L.append("")
     L.append(
