@@ -15,14 +15,16 @@ The state theta(z) is an equilibrium of the generated model, followed from the c
 Newton on the generated gradient and Hessian with the first-order predictor
 theta + dtheta/dz dz (the implicit function theorem, dtheta/dz = -H^-1 dG/dz, CasADi AD), so the
 Levenberg-Marquardt iteration in z stays on the branch the data chose; a step whose Newton does not
-converge (a fold in between) is refused and shortened.
+converge, or whose state changes stability (a fold in between), is refused and shortened.
 
 **The starts.** A shape can have been reached by more than one history, and a load can hold more
 than one shape. The iteration therefore runs from several loads (``starts``: magnitudes up to
 ``max_force`` and directions all round, and the scene's own payload), each from the state the
-load history (inflate, then load) reaches at that load. Then, at each load found, every other
-stable state of that load (:func:`esba.statics.equilibria.equilibria`, deflated Newton) starts it
-again: a load that explains the data on a branch no load history reaches is found too.
+load history (inflate, then load) reaches at that load. Then, at each start load and each load
+found, every other stable state of that load (:func:`esba.statics.equilibria.equilibria`, deflated
+Newton) starts it again: a load that explains the data on a branch no load history reaches is found
+too. The list of starts decides what is found, not round-off: runs whose residual sums agree to
+:data:`CHI2_RESOLUTION` keep the order of their starts (the first is the estimate).
 
 **Unique?** Every distinct load whose weighted residual sum lies within the ``level`` quantile of
 chi-square with k degrees of freedom (k unknowns) of the best one explains the data equally well
