@@ -79,6 +79,7 @@ from esba.analysis.sensitivity import implicit_functions, model_values, paramete
 from esba.calibration.fit import fisher_correlation, identifiability_rule
 from esba.infra import checks, jsonsafe
 from esba.infra.errors import InputError
+from esba.infra.threads import single_threaded
 from esba.model import resolution
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Payload, Scene, SceneError
@@ -873,6 +874,7 @@ def _check(poses: Any, base: Any, carried: Any, carried_covariance: Any) -> tupl
     return tuple(poses), carried, cov
 
 
+@single_threaded  # one BLAS thread, as solve() has: the answer does not change with OMP_NUM_THREADS
 def estimate_load(
     poses: Sequence[Pose] | Pose,
     free: Sequence[str] = ("F1", "Omega1"),
@@ -1107,6 +1109,7 @@ def predict_pose(scene: Scene, kinds: Sequence[Measured], theta: np.ndarray | No
     return theta, pm.call(theta, pm.p0)[3]
 
 
+@single_threaded
 def information(scene: Scene, kinds: Sequence[Measured], free: Sequence[str] = ("F1", "Omega1"), options: SensingOptions | None = None,
                 theta: np.ndarray | None = None) -> Information:
     """What the layout ``kinds`` (their kinds, points and standard deviations; their values are not
