@@ -70,6 +70,7 @@ from esba.analysis.sensitivity import (
 from esba.infra import checks, jsonsafe
 from esba.infra.errors import InputError
 from esba.infra.report import Report
+from esba.infra.roundoff import ROUNDOFF_RATIO, floored
 from esba.model.scene import Payload, Scene, SceneError
 from esba.model.validity import assess_angles
 from esba.solvers.eqnlp import EquilibriumNLP, model_gradient
@@ -521,7 +522,7 @@ def identifiability_rule(F: np.ndarray, count: int, free: tuple[str, ...], scale
             involved = np.abs(full) > 1e-2
             unknown |= involved
             names = [free[j] for j in range(k) if involved[j]]
-            head = (f"not identifiable: the Fisher matrix is nearly singular (smallest / largest eigenvalue {sub_ratio:.2g} < {tol:g}, "
+            head = (f"not identifiable: the Fisher matrix is nearly singular (smallest / largest eigenvalue {floored(sub_ratio, '.2g', ROUNDOFF_RATIO)}, below {tol:g}, "
                     "relative parameter changes): ")
             if len(names) == 1:
                 j = free.index(names[0])

@@ -15,14 +15,18 @@ The state theta(z) is an equilibrium of the generated model, followed from the c
 Newton on the generated gradient and Hessian with the first-order predictor
 theta + dtheta/dz dz (the implicit function theorem, dtheta/dz = -H^-1 dG/dz, CasADi AD), so the
 Levenberg-Marquardt iteration in z stays on the branch the data chose; a step whose Newton does not
-converge (a fold in between) is refused and shortened.
+converge, or whose state changes stability (a fold in between), is refused and shortened.
 
 **The starts.** A shape can have been reached by more than one history, and a load can hold more
 than one shape. The iteration therefore runs from several loads (``starts``: magnitudes up to
 ``max_force`` and directions all round, and the scene's own payload), each from the state the
-load history (inflate, then load) reaches at that load. Then, at each load found, every other
-stable state of that load (:func:`esba.statics.equilibria.equilibria`, deflated Newton) starts it
-again: a load that explains the data on a branch no load history reaches is found too.
+load history (inflate, then load) reaches at that load. Then, at each start load and each load
+found, every other stable state of that load (:func:`esba.statics.equilibria.equilibria`, deflated
+Newton) starts it again: a load that explains the data on a branch no load history reaches is found
+too. Each pose's states at such a load are ranked by how well each alone explains that pose, and
+run r starts every pose from its r-th best, so the runs are one per rank, not one per pose and
+state (the work stays linear in the poses). The list of starts decides what is found, not round-off: runs whose residual sums agree to
+:data:`CHI2_RESOLUTION` keep the order of their starts (the first is the estimate).
 
 **Unique?** Every distinct load whose weighted residual sum lies within the ``level`` quantile of
 chi-square with k degrees of freedom (k unknowns) of the best one explains the data equally well
@@ -78,6 +82,7 @@ from esba.calibration.fit import fisher_correlation, identifiability_rule
 from esba.infra import checks, jsonsafe
 from esba.infra.errors import InputError
 from esba.infra.report import Report
+from esba.infra.threads import single_threaded
 from esba.model import resolution
 from esba.model.generated import Model, near_domain_bound
 from esba.model.scene import Payload, Scene, SceneError
@@ -726,7 +731,7 @@ def _levenberg_marquardt(prob: _Problem, x: np.ndarray, thetas: list[np.ndarray]
             if t_new is not None:
                 r_new, J_new, parts_new = prob.evaluate(x_new, t_new)
                 cost_new = float(r_new @ r_new)
-                if np.isfinite(cost_new) and cost_new <= cost:
+                if np.isfinite(cost_new) and cost_new <= cost and _same_stability(parts, parts_new):
                     small = np.max(np.abs(x_new - x) / scale) < 1e3 * options.tol or cost - cost_new <= 1e-14 * max(cost, 1e-30)
                     x, thetas, r, J, parts, cost = x_new, t_new, r_new, J_new, parts_new, cost_new
                     mu = max(mu / 5.0, 1e-12)
@@ -738,6 +743,23 @@ def _levenberg_marquardt(prob: _Problem, x: np.ndarray, thetas: list[np.ndarray]
             converged = converged or float(np.max(np.abs(J.T @ r))) < 1e-6 * max(1.0, math.sqrt(cost))
             break
     return x, thetas, cost, J, parts, it, converged
+
+
+#: Residual sums (chi-square) closer than this are one: which of two runs that explain the data
+#: equally well comes first (the estimate) is then the order of the starts, not round-off.
+CHI2_RESOLUTION = 1e-8
+
+
+def _ranked(runs: list) -> list:
+    """The runs by their residual sum to :data:`CHI2_RESOLUTION`, in the order they ran among equals."""
+    return sorted(runs, key=lambda r: round(r[0] / CHI2_RESOLUTION))
+
+
+def _same_stability(parts: list, parts_new: list) -> bool:
+    """Whether each pose's state keeps its stability over a step (a stable branch ends at a fold: the
+    iteration does not follow it on to the unstable branch, where the prediction's Jacobian blows up
+    and where the last digits of round-off, a BLAS kernel or a compiled kernel, decide where it ends)."""
+    return all((np.linalg.eigvalsh(a[0])[0] > 0) == (np.linalg.eigvalsh(b[0])[0] > 0) for a, b in zip(parts, parts_new))
 
 
 def _start_loads(prob: _Problem, base_z: np.ndarray, options: SensingOptions) -> list[tuple[str, np.ndarray]]:
@@ -770,8 +792,9 @@ OTHER_STATES = EquilibriaOptions(check=False, connect=False, history=False)
 
 def _other_states(pm: _PoseModel, p: np.ndarray, theta: np.ndarray) -> list[np.ndarray]:
     """The other stable states of the load ``p`` (the equilibria search)."""
-    try:  # the stable states only: no completeness check, barriers or history of its own (the run has one)
-        res = equilibria(with_parameters(pm.scene, dict(zip(pm.names, p))), OTHER_STATES)
+    try:  # the stable states only: no completeness check, barriers or history of its own (the run has one);
+        # the state in hand is one of the search's starts
+        res = equilibria(with_parameters(pm.scene, dict(zip(pm.names, p))), OTHER_STATES, [theta])
     except (SceneError, EquilibriumError):
         return []
     return [np.asarray(s.theta, float) for s in res.stable if float(np.max(np.abs(np.asarray(s.theta) - theta))) > 1e-6]
@@ -883,6 +906,7 @@ def _check(poses: Any, base: Any, carried: Any, carried_covariance: Any) -> tupl
     return tuple(poses), carried, cov
 
 
+@single_threaded  # one BLAS thread, as solve() has: the answer does not change with OMP_NUM_THREADS
 def estimate_load(
     poses: Sequence[Pose] | Pose,
     free: Sequence[str] = ("F1", "Omega1"),
@@ -974,17 +998,22 @@ def estimate_load(
                        "no start converged: no load found whose equilibrium the iteration could follow")
     chi_k = float(stats.chi2.ppf(options.level, prob.size))
     if options.branches:
-        # every other stable state of each load found that explains the data, and, when none explains
-        # them within the noise, of each start load too: a shape on a branch no load history reaches
+        # every other stable state of each load found that explains the data, and of each start load
+        # too: a shape on a branch no load history reaches. The start loads always: whether a run
+        # from a start happens to cross to another branch is not something to count on (it depends
+        # on the last digits of the arithmetic), the list of starts is.
         best = min(r[0] for r in runs)
         loads: list[tuple[np.ndarray, list | None]] = []
-        for cost, x, thetas, _, _, _ in sorted(runs, key=lambda r: r[0]):
-            same = any(np.max(np.abs(x - y) / prob.scales(x)) < 1e-6 and all(np.max(np.abs(a - b)) < 1e-6 for a, b in zip(thetas, ts))
-                       for y, ts in loads)
+        for cost, x, thetas, _, _, _ in _ranked(runs):
+            same = any(not _distinct(_wrap(x, prob), _wrap(y, prob), prob, np.zeros(prob.size), np.ones(prob.size, bool))
+                       and all(np.max(np.abs(a - b)) < 1e-6 for a, b in zip(thetas, ts)) for y, ts in loads)
             if cost <= best + chi_k and not same:  # each distinct load (and state) searched once
                 loads.append((x, thetas))
-        if best > float(stats.chi2.ppf(options.level, max(m - prob.size, 1))):
-            loads += [(prob.project(x0), None) for _, x0 in starts]
+        for _, x0 in starts:
+            x0 = prob.project(x0)
+            if not any(ts is None and not _distinct(_wrap(x0, prob), _wrap(y, prob), prob, np.zeros(prob.size), np.ones(prob.size, bool))
+                       for y, ts in loads):
+                loads.append((x0, None))
         bar.total += len(loads)
         bar.refresh()
         for x, thetas in loads:
@@ -1007,7 +1036,7 @@ def estimate_load(
                 run(x, t0s, f"another stable state of {', '.join(moved[:3])}{' and more' if len(moved) > 3 else ''} at the load " + ", ".join(
                     f"{lab}={v:.4g}" for lab, v in zip(prob.labels, x)))
     bar.close()
-    runs.sort(key=lambda r: r[0])
+    runs[:] = _ranked(runs)
     # among the loads that explain the data equally well, one whose states the actuator can hold comes first
     stable_runs = [r for r in runs if r[0] <= runs[0][0] + chi_k and all(np.linalg.eigvalsh(part[0])[0] > 0 for part in r[4])]
     if stable_runs:
@@ -1221,6 +1250,7 @@ def predict_pose(scene: Scene, kinds: Sequence[Measured], theta: np.ndarray | No
     return theta, pm.call(theta, pm.p0)[3]
 
 
+@single_threaded
 def information(scene: Scene, kinds: Sequence[Measured], free: Sequence[str] = ("F1", "Omega1"), options: SensingOptions | None = None,
                 theta: np.ndarray | None = None) -> Information:
     """What the layout ``kinds`` (their kinds, points and standard deviations; their values are not

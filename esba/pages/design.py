@@ -16,6 +16,7 @@ import numpy as np
 
 from esba.design.cases import MAX_PRESSURE, MIN_STIFFNESS, WALLS, DesignCases, design_cases
 from esba.design.optimise import DEFAULT_DESIGN_OPTIONS, Comparison, DesignOptions, DesignResult
+from esba.infra.roundoff import floored
 from esba.solvers.pso import PSOOptions
 
 from .page import TIMES, Page, Progress, Rendered, Times, figure_link
@@ -29,13 +30,19 @@ DOC_COMMAND = ENTRIES["design"].command
 
 
 
-#: Differences of designs below this (mm) are round-off of the solvers (both stop at 1e-10
-#: relative), not a difference: the page shows them as 0 so that it does not change with it.
-ROUND_OFF_MM = 1e-12
+#: Differences of designs below this (mm) and of objectives below ``ROUND_OFF_REL`` (relative) are
+#: the solvers' own tolerance (both stop at 1e-10 relative), not a difference: the page prints them
+#: as "< floor" so that it does not change with the last digits of the arithmetic.
+ROUND_OFF_MM = 1e-8
+ROUND_OFF_REL = 1e-9
 
 
-def _mm(x: float) -> float:
-    return 0.0 if abs(x) < ROUND_OFF_MM else x
+def _mm(x: float, spec: str) -> str:
+    return floored(x, spec, ROUND_OFF_MM)
+
+
+def _percent(rel: float, spec: str) -> str:
+    return floored(100 * rel, spec, 100 * ROUND_OFF_REL)
 
 def _fmt_active(r: DesignResult) -> str:
     if not r.active_constraints:
@@ -68,7 +75,7 @@ def _comparison_block(title: str, c: Comparison, t: Times) -> list[str]:
     lines = [f"**{title}.** {c.ipopt.problem.describe()}.", "", _HEAD, _row(c.ipopt, t), _row(c.pso, t), ""]
     if c.ipopt.ok and c.pso.ok:
         lines.append(
-            f"PSO - IPOPT: r2 {_mm(c.r2_diff_mm):+.2e} mm, d {_mm(c.d_diff_mm):+.2e} mm, objective {100 * c.objective_rel_diff:+.2e} %; "
+            f"PSO - IPOPT: r2 {_mm(c.r2_diff_mm, '+.2e')} mm, d {_mm(c.d_diff_mm, '+.2e')} mm, objective {_percent(c.objective_rel_diff, '+.2e')} %; "
             f"{'they agree' if c.agree else '**they do not agree**'} (design within 0.01 mm, objective within 0.1 %); PSO took "
             f"{t(c.speedup, '.0f')} times as long as IPOPT."
         )
@@ -158,9 +165,11 @@ def render_page(cases: DesignCases, t: Times = TIMES, page_dir: Path | None = No
     L.append(
         f"**r2 = {best.r2_mm:.4f} mm, d = {best.d_mm:.4f} mm, K = {best.stiffness_n_per_m:.4f} N/m at P = "
         f"{best.pressure_mpa:.5f} MPa** (the Table 1 design: K = {t1.stiffness[0]:.2f} N/m at {t1.pressure[0]:.5f} MPa). "
-        f"PSO - IPOPT: r2 {_mm(p.r2_diff_mm):+.1e} mm, d {_mm(p.d_diff_mm):+.1e} mm, K {100 * p.stiffness_rel_diff:+.1e} %. "
+        f"PSO - IPOPT: r2 {_mm(p.r2_diff_mm, '+.1e')} mm, d {_mm(p.d_diff_mm, '+.1e')} mm, K {_percent(p.stiffness_rel_diff, '+.1e')} %. "
         f"IPOPT: {t(p.ipopt.solve_time_s * 1000, '.0f')} ms; PSO: {t(p.pso.solve_time_s, '.2f')} s, {t(p.speedup, '.0f')} times as long, "
-        f"in the same run (IPOPT's one-off set-up, building the NLP and its derivatives: {t(p.ipopt.setup_time_s, '.2f')} s)."
+        f"in the same run (IPOPT's one-off set-up, building the NLP and its derivatives: {t(p.ipopt.setup_time_s, '.2f')} s). "
+        f"Differences below {ROUND_OFF_MM:g} mm, or {100 * ROUND_OFF_REL:g} % of an objective, lie within both solvers' tolerance "
+        "and are printed as \"within ±floor\" (their digits would change with the machine's arithmetic)."
     )
     L.append("")
     L.append(

@@ -28,6 +28,7 @@ from esba.calibration.experiments import (
 )
 from esba.calibration.fit import FitResult, Prediction
 from esba.figures.fit import Series, measured_vs_predicted
+from esba.infra.roundoff import ROUNDOFF_RATIO, floored
 
 from .page import TIMES, Page, Progress, Rendered, Times
 from .registry import ENTRIES
@@ -124,7 +125,7 @@ def _fold_block(col: Column, fold: Fold, title: str) -> list[str]:
         f"(rho held at 10°; residual variance s² = {_g(f.residual_variance, 3)} on {f.dof} degree{'s' if f.dof != 1 else ''} of freedom).",
         "",
         "E and rho together from these rows (at the paper's values): " + (
-            f"identifiable (Fisher ratio {both.ratio:.2g})." if both.identifiable
+            f"identifiable (Fisher ratio {floored(both.ratio, '.2g', ROUNDOFF_RATIO)})." if both.identifiable
             else "**not identifiable**: " + "; ".join(w.removeprefix("not identifiable: ") for w in both.warnings) + "."
         ),
         "",
@@ -277,8 +278,8 @@ def render(comparison: PaperComparison, figure_path: str = f"figures/{FIGURE_NAM
         "- **At a target angle rho drops out altogether.** When the pressure is the one that bends the unloaded actuator to 90°, the "
         "pressure follows rho so that the net moment is the same: every loaded state at the 90° pressure is independent of rho "
         "(`esba solve --sensitivities` gives d/drho = 0 there). The FEM column's loaded rows cannot determine rho at all (Fisher ratio "
-        f"{fem.folds[1].both.ratio:.1g}); the EXP column's can only through the optimised prototype, tested at a given pressure (ratio "
-        f"{exp.folds[1].both.ratio:.1g}).",
+        f"{floored(fem.folds[1].both.ratio, '.1g', ROUNDOFF_RATIO)}); the EXP column's can only through the optimised prototype, tested at a given pressure (ratio "
+        f"{floored(exp.folds[1].both.ratio, '.1g', ROUNDOFF_RATIO)}).",
         f"- **All rows together determine both** (EXP: Fisher ratio at the paper's values {_g(comparison.identifiability_all['EXP'], 2)}; FEM "
         f"{_g(comparison.identifiability_all['FEM'], 2)}), through the combination of free bends (E against rho) and payload rows (E alone).",
         "",

@@ -15,6 +15,7 @@ import numpy as np
 
 from esba.analysis.path_cases import COLUMN_NS, FOLD_NS, WINDOW_TO, PathCases, path_cases
 from esba.figures.paths import path_figure
+from esba.infra.roundoff import RELATIVE_FLOOR, floored
 from esba.paths.continuation import SIDES
 
 from .page import TIMES, Page, Progress, Rendered, Times
@@ -241,13 +242,14 @@ def render_page(data: PathCases, command: str) -> str:
         "Eq. 13) and X'' the Hessian of the tip's x (`esba.analysis.path_analysis.column_buckling_load`).",
         "The two sides of the crossing branch are named by the way they bend: the chamber lies on the convex",
         "side of a theta > 0 bend (inflating bends the actuator away from its chamber), so theta > 0 bends",
-        "*away from* the chamber and theta < 0 *towards* it. The trace finds:",
+        "*away from* the chamber and theta < 0 *towards* it. The trace finds (a relative difference below",
+        f"{RELATIVE_FLOOR:.0e}, a few units in the last place of a double, is round-off and printed as \"< {RELATIVE_FLOOR:.0e}\"):",
         "",
         "| n | closed form (N) | traced (N) | relative difference | type | bending away from the chamber (theta > 0) | bending towards it (theta < 0) |",
         "|---|---|---|---|---|---|---|",
     ]
     for row in data.buckling:
-        diff = "-" if row["traced_n"] is None else f"{abs(row['traced_n'] / row['closed_form_n'] - 1):.1e}"
+        diff = "-" if row["traced_n"] is None else floored(abs(row["traced_n"] / row["closed_form_n"] - 1), ".1e", RELATIVE_FLOOR)
         traced = "-" if row["traced_n"] is None else f"{row['traced_n']:.6f}"
         sides = {s["direction"]: s for s in row["sides"]}
 

@@ -748,7 +748,9 @@ def search(
             outside += 1
             continue
         states.append(_state(model, pv, theta, options.critical_tol, label, scene, pressure))
-    states.sort(key=lambda s: s.energy)
+    # by energy to 1e-6 N mm, then by total bend: two states whose energies differ by round-off
+    # (a symmetric pair) come in the same order on every machine
+    states.sort(key=lambda s: (round(s.energy, 6), round(s.total_angle_deg, 6)))
     # polishing may merge two that the search told apart only at its tolerance
     unique: list[State] = []
     for s in states:

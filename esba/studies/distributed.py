@@ -56,6 +56,7 @@ import re
 import signal
 import socket
 import threading
+import time
 import uuid
 from concurrent.futures import CancelledError
 from contextlib import contextmanager
@@ -91,6 +92,16 @@ WINDOW_PER_WORKER = 4
 
 #: Longest wait for a scheduler to answer or for its first worker, seconds.
 MAX_TIMEOUT_S = 3600.0
+
+#: A study stops when none of its chunks has come back and no worker of the cluster has run any of
+#: them for this long, seconds (every worker gone and none coming back, or a chunk the scheduler
+#: holds but gives to no worker): the wait ends in one line instead of never. A chunk that runs
+#: for hours is not stopped: a worker is running it. A restarted worker is back in seconds.
+STALL_S = 120.0
+#: How often the wait for a chunk looks at the cluster, seconds.
+POLL_S = 0.2
+#: How often it asks the scheduler what its workers are running, seconds.
+LOOK_S = 2.0
 
 _TASK_LOCK = threading.Lock()
 
@@ -289,10 +300,11 @@ class DaskRunner:
         Chunks in flight or waiting to be handed back (default :data:`WINDOW_PER_WORKER` per worker).
     """
 
-    def __init__(self, client, description: str, window: int | None = None) -> None:
+    def __init__(self, client, description: str, window: int | None = None, stall_s: float = STALL_S) -> None:
         self.client = client
         self.description = description
         self.window = window if window is not None else WINDOW_PER_WORKER * max(1, self.workers)
+        self.stall_s = stall_s
 
     @property
     def workers(self) -> int:
@@ -343,7 +355,7 @@ class DaskRunner:
                     nxt += 1
                     fill()
                     continue
-                fut = next(queue)
+                fut = self._next_done(queue, pending)
                 i, _ = pending.pop(fut.key)
                 try:
                     ready[i] = fut.result()
@@ -365,6 +377,35 @@ class DaskRunner:
                     self.client.cancel([f for _, f in pending.values()])
                 except Exception:  # noqa: BLE001 - the cluster is going away; nothing left to cancel there
                     pass
+
+    def _next_done(self, queue, pending: dict[str, tuple[int, Any]]):
+        """The next chunk to finish; :class:`StudyStopped` when none finishes and no worker runs
+        any of them for :attr:`stall_s` seconds (see :data:`STALL_S`)."""
+        quiet_since = last_look = time.monotonic()
+        while not queue.has_ready():
+            time.sleep(POLL_S)
+            now = time.monotonic()
+            if now - last_look < LOOK_S:
+                continue
+            last_look = now
+            if self._running(pending):
+                quiet_since = now
+            elif now - quiet_since > self.stall_s:
+                first = min(i for i, _ in pending.values())
+                address = getattr(getattr(self.client, "scheduler", None), "address", None) or "?"
+                raise StudyStopped(
+                    f"chunk {first} waited {self.stall_s:g} s on the Dask cluster at {address} with no worker running it or any other "
+                    f"chunk of the study ({self.workers} worker processes connected): the study stops"
+                )
+        return next(queue)
+
+    def _running(self, pending: dict[str, tuple[int, Any]]) -> bool:
+        """Whether the scheduler has a worker running one of the chunks ``pending`` (True when it cannot tell)."""
+        try:
+            processing = self.client.processing()
+        except Exception:  # noqa: BLE001 - a lost connection is the result's to report, as it does
+            return True
+        return any(str(k) in pending for keys in processing.values() for k in keys)
 
     def _lost(self, i: int, reason: str) -> str:
         """Why chunk i did not come back: the connection to the scheduler was lost, or it was cancelled."""

@@ -151,13 +151,5 @@ def test_the_registry_imports_no_numerics():
     assert out.strip() == "[]"
 
 
-# ---------------------------------------------------------------------------------------------
-# the cheap pages: fresh against their computation (the design, paths and experiments pages are
-# checked in their own test files; the benchmarks by `esba docs --check NAME`)
-
-
-@pytest.mark.parametrize("name", ["derivations", "validation", "paths", "design"])
-def test_committed_page_is_fresh(name):
-    p = page(name)
-    check = p.check(ROOT / "docs" / p.file)
-    assert check.ok, f"{check.describe()}: run `esba docs --write {name}` and commit it"
+# (every computed page against a fresh computation, as `esba docs --check` finds it, and the
+# benchmark pages' structure: tests/pages/test_committed_pages.py)

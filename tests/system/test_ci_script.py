@@ -27,7 +27,7 @@ done
 
 
 @pytest.mark.skipif(shutil.which("bash") is None, reason="needs bash")
-@pytest.mark.parametrize("exit_code", [0, 1])
+@pytest.mark.parametrize("exit_code", [0, 1, 5])  # 5: pytest collected no test, a failure too
 def test_ci_run_removes_its_temporary_files(tmp_path, exit_code):
     checkout = tmp_path / "checkout"
     (checkout / ".ci").mkdir(parents=True)
@@ -42,3 +42,9 @@ def test_ci_run_removes_its_temporary_files(tmp_path, exit_code):
     proc = subprocess.run(["bash", str(checkout / ".ci" / "run")], env=env, capture_output=True, text=True, timeout=60)
     assert proc.returncode == exit_code, proc.stderr
     assert list(temp.iterdir()) == []  # the venv, the model cache and every tool's temporary files: gone
+
+
+def test_ci_runs_the_readmes_test_command():
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    command = next(line.strip() for line in readme.splitlines() if line.strip().startswith('pip install -e ".[test]" && pytest'))
+    assert command in (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
