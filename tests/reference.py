@@ -14,10 +14,10 @@ from functools import lru_cache
 
 import sympy as sp
 
-from derive import energy
-from derive import symbols as S
-from derive.effects import EffectSet
-from derive.kinematics import chord, fraction_in_segment
+from esba.derive import energy
+from esba.derive import symbols as S
+from esba.derive.effects import EffectSet
+from esba.derive.kinematics import chord, fraction_in_segment
 
 
 def point(thetas, s_value: float, n: int):

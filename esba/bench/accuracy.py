@@ -101,8 +101,8 @@ def model_cost(n: int, effects: str, variant: str = "paper", repeat: int = 3) ->
     The fresh file is copied into the model cache when that has none, so the solves that
     follow do not generate it a second time (the emission is deterministic: same bytes).
     """
-    from derive.effects import EffectSet
-    from derive.emit import write_model
+    from esba.derive.effects import EffectSet
+    from esba.derive.emit import write_model
 
     eff = EffectSet.parse(effects)
     with tempfile.TemporaryDirectory(prefix="esba-bench-") as tmp:

@@ -27,8 +27,8 @@ SECTION = {"EI_side": 4e5, "GJ": 1e6, "Beta1": 0.0}
 def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = None) -> dict:
     from scipy.optimize import minimize
 
-    from derive.effects3d import Effects3D
-    from derive.emit3d import generate_source3d
+    from esba.derive.effects3d import Effects3D
+    from esba.derive.emit3d import generate_source3d
     from esba.model.scene import MAIN_JOB
     from esba.model.spatial import load_model3d
     from esba.statics.equilibrium import solve

@@ -52,9 +52,9 @@ def _naive_generation(n: int) -> float:
     """The first thing one writes: the POE tip position expanded, then sympy.diff twice."""
     import sympy as sp
 
-    from derive import energy
-    from derive import symbols as S
-    from derive.effects import EffectSet
+    from esba.derive import energy
+    from esba.derive import symbols as S
+    from esba.derive.effects import EffectSet
 
     t0 = time.perf_counter()
     th = S.theta(n)
@@ -80,8 +80,8 @@ def generation(ns: Sequence[int] = GENERATION_NS, repeat: int = 3, naive: bool =
     """Generation time and size against n, and the per-call time of the generated Functions."""
     import casadi as ca
 
-    from derive.effects import EffectSet
-    from derive.emit import _exec_source, generate_source
+    from esba.derive.effects import EffectSet
+    from esba.derive.emit import _exec_source, generate_source
 
     eff = EffectSet.parse(BENCH_EFFECTS)
     values = {"L": 135.0, "r1": 8.0, "r2": 3.0, "d": 4.0, "rho": 0.1745, "E": 0.54, "P": 0.12, "F1": 2.0, "Omega1": 1.5708, "s1": 1.0}

@@ -24,7 +24,7 @@ import sys
 import warnings
 from typing import Callable, Sequence
 
-from derive.effects import EffectError
+from esba.derive.effects import EffectError
 from esba import __version__
 from esba.infra import console
 from esba.infra.errors import EsbaError

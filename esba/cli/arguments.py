@@ -11,7 +11,7 @@ import re
 import sys
 from typing import Callable, Sequence
 
-from derive.effects import DEFAULT_VARIANT, VARIANTS
+from esba.derive.effects import DEFAULT_VARIANT, VARIANTS
 from esba.infra import checks, outputs
 from esba.infra.errors import InputError
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from derive.effects import VARIANTS
+from esba.derive.effects import VARIANTS
 
 from .arguments import UsageError, float_arg, load_scene_file, scene_changes, scene_figure, segments_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result

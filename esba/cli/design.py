@@ -6,7 +6,7 @@ import argparse
 import math
 import sys
 
-from derive.effects import DEFAULT_VARIANT, VARIANTS
+from esba.derive.effects import DEFAULT_VARIANT, VARIANTS
 from esba.infra import outputs
 
 from .arguments import UsageError, actuator_changes, add_actuator_flags, count_arg, float_arg, refuse, segments_arg

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from derive.effects import DEFAULT_EFFECTS, DEFAULT_VARIANT, VARIANTS, EffectError, EffectSet
+from esba.derive.effects import DEFAULT_EFFECTS, DEFAULT_VARIANT, VARIANTS, EffectError, EffectSet
 from .arguments import Parser, UsageError, segments_arg
 from .results import EXIT_OK, print_result
 

@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from derive.effects import VARIANTS
+from esba.derive.effects import VARIANTS
 from esba.infra import outputs
 
 from .arguments import UsageError, actuator_changes, add_actuator_flags, output_file_arg, segments_arg

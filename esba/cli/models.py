@@ -6,7 +6,7 @@ import argparse
 import sys
 import time
 
-from derive.effects import (
+from esba.derive.effects import (
     DEFAULT_EFFECTS,
     DEFAULT_VARIANT,
     VARIANTS,
@@ -21,10 +21,10 @@ from .results import EXIT_FAILED, EXIT_OK, print_result
 
 def _cmd_generate3d(args: argparse.Namespace, out) -> int:
     """``esba generate --3d``: the spatial family (derive/emit3d.py)."""
-    from derive.effects3d import DEFAULT_EFFECTS_3D, Effects3D
+    from esba.derive.effects3d import DEFAULT_EFFECTS_3D, Effects3D
 
     if args.refresh:
-        from derive import emit3d  # SymPy: only for this command
+        from esba.derive import emit3d  # SymPy: only for this command
 
         refuse(args, ["effects"], "with --refresh: the committed models have the default effects (drop --refresh to generate others)")
         if out is None:
@@ -50,7 +50,7 @@ def _cmd_generate3d(args: argparse.Namespace, out) -> int:
         model = load_model3d(args.segments, effects, variant)
         path, counts, where = model.path, {k: f.n_instructions() for k, f in model.functions.items()}, "the model cache"
     else:
-        from derive import emit3d  # SymPy: only for this command
+        from esba.derive import emit3d  # SymPy: only for this command
 
         path, entry = emit3d.write_model3d(args.segments, effects, variant, out)
         counts, where = entry["instructions"], "the checkout's generated/" if args.out is None else "--out"
@@ -79,7 +79,7 @@ def _cmd_generate(args: argparse.Namespace) -> int:
     elif checkout is not None:
         out = checkout / "generated"
     if args.refresh:
-        from derive import emit  # SymPy: only for this command
+        from esba.derive import emit  # SymPy: only for this command
 
         refuse(args, ["effects"], "with --refresh: the committed models have the default effects (drop --refresh to generate others)")
         if out is None:
@@ -94,7 +94,7 @@ def _cmd_generate(args: argparse.Namespace) -> int:
             path, _ = emit.write_model(n, eff, var, out)
             rows.append(path.name)
         if args.segments is None and args.variant is None:  # the whole refresh: the 3-D family too
-            from derive import emit3d
+            from esba.derive import emit3d
 
             for n, eff, var in emit3d.COMMITTED_3D:
                 print(f"esba: generating the 3-D model n = {n} ({eff}) into {out}", file=sys.stderr)
@@ -111,7 +111,7 @@ def _cmd_generate(args: argparse.Namespace) -> int:
         path, entry = generate_into_cache(args.segments, effects, variant)
         where = "the model cache"
     else:
-        from derive import emit  # SymPy: only for this command
+        from esba.derive import emit  # SymPy: only for this command
 
         print(f"esba: generating n = {args.segments} ({effects.spec()}, {variant}) into {out}", file=sys.stderr)
         path, entry = emit.write_model(args.segments, effects, variant, out)

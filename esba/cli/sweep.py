@@ -6,7 +6,7 @@ import argparse
 import os
 import sys
 
-from derive.effects import VARIANTS
+from esba.derive.effects import VARIANTS
 from esba.infra import outputs
 
 from .arguments import (

@@ -27,7 +27,7 @@ from typing import Sequence
 import casadi as ca
 import numpy as np
 
-from derive.effects import EffectSet
+from esba.derive.effects import EffectSet
 from esba.model.closed_form import unloaded_pressure
 from esba.model.generated import Model, load_model
 from esba.solvers.newton import Acceptance, correction_function, natural_expression, parts_function

@@ -16,7 +16,7 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
-from derive.effects import DEFAULT_VARIANT, VARIANTS
+from esba.derive.effects import DEFAULT_VARIANT, VARIANTS
 from esba.infra import checks
 from esba.infra.errors import InputError
 from esba.model import resolution

@@ -43,7 +43,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from derive.effects import DEFAULT_EFFECTS, DEFAULT_VARIANT, EffectError, EffectSet, check_variant
+from esba.derive.effects import DEFAULT_EFFECTS, DEFAULT_VARIANT, EffectError, EffectSet, check_variant
 from esba import __version__
 from esba.infra import cache, checks
 from esba.infra.errors import InputError, RunError

@@ -44,14 +44,14 @@ from typing import Any, Callable, Mapping, Sequence
 import casadi as ca
 import numpy as np
 
-from derive import effects as _effects
-from derive.effects import (
+from esba.derive import effects as _effects
+from esba.derive.effects import (
     DEFAULT_EFFECTS,
     DEFAULT_VARIANT,
     check_variant,
     model_filename,
 )
-from derive.provenance import GENERATED_DIR, source_hash
+from esba.derive.provenance import GENERATED_DIR, source_hash
 from esba.infra import cache, checks, fncache
 from esba.infra.errors import InputError
 
@@ -441,7 +441,7 @@ def generate_into_cache(n: int, effects: EffectSet, variant: str, announce: bool
             "generating the model for n = %d (%s, %s) into %s: a one-off that takes seconds to minutes (SymPy)",
             n, effects.spec(), variant, folder,
         )
-    from derive.emit import generate_source  # SymPy is imported only here
+    from esba.derive.emit import generate_source  # SymPy is imported only here
 
     progress = (lambda msg: _log.info("  n = %d: %s", n, msg)) if announce else None
     text, entry = generate_source(n, effects, variant, progress)

@@ -71,7 +71,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
+from esba.derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
 from esba.infra import checks, inputs
 from esba.infra.errors import InputError
 

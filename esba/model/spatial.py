@@ -31,9 +31,9 @@ from typing import Mapping
 import casadi as ca
 import numpy as np
 
-from derive.effects import EffectError, check_variant
-from derive.effects3d import DEFAULT_EFFECTS_3D, FORMAT_3D, MANIFEST_3D, Effects3D, model3d_filename, source_hash_3d
-from derive.provenance import GENERATED_DIR
+from esba.derive.effects import EffectError, check_variant
+from esba.derive.effects3d import DEFAULT_EFFECTS_3D, FORMAT_3D, MANIFEST_3D, Effects3D, model3d_filename, source_hash_3d
+from esba.derive.provenance import GENERATED_DIR
 from esba.infra import cache, checks, fncache
 from esba.model.generated import _exec_model
 
@@ -178,7 +178,7 @@ def _locate_or_generate(n: int, effects: Effects3D, variant: str) -> tuple[Path,
             cache.discard(cached)
         folder = cache.usable_root(cache_dir3d())
         _log.info("generating the 3-D model for n = %d (%s, %s) into %s: a one-off (SymPy, seconds)", n, effects.spec(), variant, folder)
-        from derive.emit3d import generate_source3d  # SymPy is imported only here
+        from esba.derive.emit3d import generate_source3d  # SymPy is imported only here
 
         text, entry = generate_source3d(n, effects, variant)
         cache.write_text(folder / filename, text)

@@ -35,12 +35,12 @@ class DerivationsPage(Page):
     name = "derivations"
 
     def compute(self, settings: None = None, progress: Progress | None = None) -> Audit:
-        from derive import audit  # SymPy: only for this page
+        from esba.derive import audit  # SymPy: only for this page
 
         return Audit(tuple(audit.entries()), tuple(audit.table_checks()))
 
     def render(self, data: Audit, settings: None, path: Path, times: Times = TIMES) -> Rendered:
-        from derive import audit_page
+        from esba.derive import audit_page
 
         return Rendered(audit_page.render_entries(data.entries, data.table_checks))
 

@@ -123,8 +123,8 @@ class SpatialPage(Page):
                 d.twists.append((eis, gj, None if hit is None else hit[0], None if hit is None else float(m3.tip(hit[1], side["L"])[2])))
         # --- cost
         say("cost")
-        from derive.emit3d import generate_source3d
-        from derive.effects3d import Effects3D
+        from esba.derive.emit3d import generate_source3d
+        from esba.derive.effects3d import Effects3D
         from esba.model.generated import load_model
 
         gen = {}
@@ -147,7 +147,7 @@ class SpatialPage(Page):
         return d
 
     def render(self, d: SpatialData, settings: None, path: Path, times: Times = TIMES) -> Rendered:
-        from derive.effects3d import COORDINATES  # noqa: F401  (documented below)
+        from esba.derive.effects3d import COORDINATES  # noqa: F401  (documented below)
 
         R = d.restriction
         out = [

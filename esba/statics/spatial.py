@@ -279,7 +279,7 @@ def scene_values3d(scene, section: Mapping[str, float] | None = None, gravity_di
     paper's; any direction for an actuator mounted another way), with g of the scene.
     """
     down = check_direction("gravity direction", gravity_direction)
-    from derive.effects3d import Effects3D
+    from esba.derive.effects3d import Effects3D
     from esba.model.closed_form import pressure_for_angle
 
     sec = check_section(section, scene)

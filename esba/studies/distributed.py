@@ -200,7 +200,7 @@ def code_digest() -> str:
     """Hash of the code that computes a study's rows (every module of :data:`COMPUTING_PACKAGES`)
     and of the derivation source: two processes with the same digest compute the same answers
     from the same inputs."""
-    from derive.provenance import source_hash
+    from esba.derive.provenance import source_hash
 
     root = Path(__file__).resolve().parents[1]
     h = hashlib.sha256(source_hash().encode())

@@ -115,7 +115,7 @@ def test_the_interactive_view_is_one_offline_html_file(tmp_path, capsys):
 
 
 def test_a_moment_or_rod_is_refused_by_the_planar_family_and_named():
-    from derive.effects import EffectError, EffectSet
+    from esba.derive.effects import EffectError, EffectSet
 
     with pytest.raises(EffectError, match="unknown effect 'moment'"):
         EffectSet.parse("air,moment")

@@ -48,3 +48,21 @@ def test_sweep_warnings_are_worded_alike_in_memory_and_streamed(capsys, tmp_path
     assert capsys.readouterr().err == in_memory
     assert main([*grid, "--out", str(tmp_path / "b.csv"), "--resume"]) == EXIT_OK  # every row read back
     assert capsys.readouterr().err == in_memory
+
+
+def test_a_users_own_derive_and_generated_modules_do_not_break_esba(tmp_path):
+    """esba installed top-level packages `derive` and `generated`: a user's derive.py in the working
+    folder broke `esba solve` and `from esba import solve` ('derive' is not a package). They install
+    as esba.derive and esba.generated now; the user's modules are theirs."""
+    import subprocess
+    import sys
+
+    (tmp_path / "derive.py").write_text("raise ImportError('the user derive.py was imported')\n")
+    (tmp_path / "generated.py").write_text("raise ImportError('the user generated.py was imported')\n")
+    run = subprocess.run([sys.executable, "-m", "esba", "solve", "--no-plot", "--json"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    code = "import derive, generated"
+    mine = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert "the user derive.py was imported" in mine.stderr  # the name is the user's
+    api = subprocess.run([sys.executable, "-c", "from esba import solve, Scene; print(solve(Scene()).ok)"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert api.returncode == 0 and api.stdout.strip() == "True", api.stderr

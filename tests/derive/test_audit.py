@@ -14,10 +14,10 @@ import pytest
 import sympy as sp
 from scipy.integrate import quad
 
-from derive import audit, audit_page, paper
-from derive import energy as En
-from derive import kinematics as K
-from derive import symbols as S
+from esba.derive import audit, audit_page, paper
+from esba.derive import energy as En
+from esba.derive import kinematics as K
+from esba.derive import symbols as S
 from esba import cli
 
 ROOT = Path(__file__).resolve().parents[2]

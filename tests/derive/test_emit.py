@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from derive import emit
-from derive.effects import EffectSet, model_filename
-from derive.provenance import GENERATED_DIR, source_hash
+from esba.derive import emit
+from esba.derive.effects import EffectSet, model_filename
+from esba.derive.provenance import GENERATED_DIR, source_hash
 from esba.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -57,7 +57,7 @@ def test_every_model_file_says_do_not_edit():
 
 def _generate_in_subprocess(folder: Path, seed: str) -> bytes:
     code = (
-        "import sys; from derive.emit import write_model; "
+        "import sys; from esba.derive.emit import write_model; "
         "write_model(4, 'air,axial,radial,fibres,payload:2,gravity', 'printed', sys.argv[1], manifest=False)"
     )
     env = dict(os.environ, PYTHONHASHSEED=seed)
@@ -130,13 +130,13 @@ def test_generate_rejects_bad_input(argv, needle, capsys):
 def test_generation_sources_cover_what_emission_imports():
     """Every derive module that the emitter imports is hashed into the provenance."""
     code = (
-        "import sys; import derive.emit; "
-        "print(' '.join(sorted(m.split('.')[1] + '.py' for m in sys.modules if m.startswith('derive.'))))"
+        "import sys; import esba.derive.emit; "
+        "print(' '.join(sorted(m.split('.')[2] + '.py' for m in sys.modules if m.startswith('esba.derive.'))))"
     )
     out = subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT, capture_output=True, text=True).stdout.split()
-    from derive.provenance import GENERATION_SOURCES
+    from esba.derive.provenance import GENERATION_SOURCES
 
-    assert set(out) <= set(GENERATION_SOURCES)
+    assert out and set(out) <= set(GENERATION_SOURCES)
 
 
 def test_written_files_are_readable_by_others(tmp_path):

@@ -7,8 +7,8 @@ import random
 import pytest
 import sympy as sp
 
-from derive import symbols as S
-from derive.kinematics import (
+from esba.derive import symbols as S
+from esba.derive.kinematics import (
     arc_chain,
     chain_sum_derivatives,
     chord,
@@ -20,7 +20,7 @@ from derive.kinematics import (
     skew,
     twist,
 )
-from derive.smooth import SINC_SWITCH, sinc, versinc
+from esba.derive.smooth import SINC_SWITCH, sinc, versinc
 
 
 def test_twist_of_a_joint_through_0_l_0_about_z():

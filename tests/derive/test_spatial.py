@@ -10,11 +10,11 @@ import pytest
 import scipy.linalg as sl
 import sympy as sp
 
-from derive import spatial as X
-from derive.effects import EffectError
-from derive.effects3d import Effects3D, source_hash_3d
-from derive.emit import _exec_source
-from derive.provenance import GENERATED_DIR
+from esba.derive import spatial as X
+from esba.derive.effects import EffectError
+from esba.derive.effects3d import Effects3D, source_hash_3d
+from esba.derive.emit import _exec_source
+from esba.derive.provenance import GENERATED_DIR
 
 VALUES = dict(L=135.0, r1=8.0, r2=3.0, d=4.0, rho=0.17, E=0.54, P=0.05, EI_side=2000.0, GJ=1500.0, EI=3000.0, kappa0=0.002,
               F1=1.5, Omega1=0.7, Beta1=0.4, s1=0.73, F2=0.8, Omega2=-0.3, Beta2=-1.1, s2=0.21,
@@ -72,7 +72,7 @@ def test_segment_template_is_the_matrix_exponential_and_its_derivatives(template
 
 def test_with_psi_and_tau_zero_the_segment_is_the_papers_twist():
     """Xi_i = [L/n, 0, 0, 0, 0, theta_i] is the planar xi_i theta_i of Eq. (1)-(2) (symbolically)."""
-    from derive.kinematics import segment_twist
+    from esba.derive.kinematics import segment_twist
 
     n = sp.Symbol("n", positive=True)
     t = sp.Symbol("t", positive=True)
@@ -92,7 +92,7 @@ def test_smooth_functions_are_exact_at_zero_and_across_the_switch():
 @pytest.fixture(scope="module")
 def all_loads():
     """A small model with every load: n = 2, two payloads, a moment and gravity (generated here)."""
-    from derive.emit3d import generate_source3d
+    from esba.derive.emit3d import generate_source3d
 
     eff = Effects3D.parse("air,axial,radial,fibres,payload:2,moment,gravity")
     text, _ = generate_source3d(2, eff)
@@ -120,8 +120,8 @@ def test_generated_gradient_and_hessian_match_finite_differences(all_loads):
 
 def test_committed_3d_models_are_listed_with_this_derivation():
     data = json.loads((GENERATED_DIR / "manifest3d.json").read_text())
-    from derive.emit3d import COMMITTED_3D
-    from derive.effects3d import model3d_filename
+    from esba.derive.emit3d import COMMITTED_3D
+    from esba.derive.effects3d import model3d_filename
 
     assert sorted(data["models"]) == sorted(model3d_filename(n, Effects3D.parse(e), v) for n, e, v in COMMITTED_3D)
     for name, entry in data["models"].items():
@@ -133,7 +133,7 @@ def test_committed_3d_models_are_listed_with_this_derivation():
 @pytest.mark.ci
 def test_committed_3d_models_are_fresh(tmp_path):
     """Regenerate every committed 3-D model: the bytes must match (else `esba generate --refresh`)."""
-    from derive.emit3d import refresh3d
+    from esba.derive.emit3d import refresh3d
 
     paths = refresh3d(tmp_path)
     stale = [p.name for p in paths if p.read_bytes() != (GENERATED_DIR / p.name).read_bytes()]

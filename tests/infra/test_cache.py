@@ -55,16 +55,16 @@ def test_usable_root(tmp_path, monkeypatch):
 
 
 def test_model_format_constant_agrees_with_the_generator():
-    from derive.emit import FORMAT_VERSION
+    from esba.derive.emit import FORMAT_VERSION
     from esba.model.generated import MODEL_FORMAT
 
     assert MODEL_FORMAT == FORMAT_VERSION
 
 
 def test_committed_models_pass_the_file_check():
-    from derive.effects import EffectSet, model_filename
-    from derive.emit import COMMITTED
-    from derive.provenance import GENERATED_DIR
+    from esba.derive.effects import EffectSet, model_filename
+    from esba.derive.emit import COMMITTED
+    from esba.derive.provenance import GENERATED_DIR
     from esba.model.generated import model_file_problem
 
     for n, effects, variant in COMMITTED:

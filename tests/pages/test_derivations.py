@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from derive import audit, audit_page
+from esba.derive import audit, audit_page
 from esba.pages.derivations import PAGE
 
 
