@@ -124,7 +124,7 @@ def _cmd_grasp(args: argparse.Namespace) -> int:
 
 def _common(p: argparse.ArgumentParser, figure: str) -> None:
     p.add_argument("scene", nargs="?", default=None, metavar="SCENE.toml", help="the actuator (default: Table 1, n = 3); its pressure is replaced by --pressure")
-    p.add_argument("--pressure", type=_values_arg, default=_values_arg(DEFAULT_PRESSURES), metavar="VALUES", help=f"pressures, MPa (start:stop:count or v1,v2,...; default {DEFAULT_PRESSURES})")
+    p.add_argument("--pressure", type=_values_arg, default=DEFAULT_PRESSURES, metavar="VALUES", help=f"pressures, MPa (start:stop:count or v1,v2,...; default {DEFAULT_PRESSURES})")
     p.add_argument("--segments", "-n", type=segments_arg, help="segment count n, 1 to 256")
     p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant")

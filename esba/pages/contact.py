@@ -13,6 +13,7 @@ import numpy as np
 
 from esba.analysis.contact_cases import CYLINDER, TESTER_PRESSURE, ContactCases, contact_cases
 from esba.figures.contact import blocked_figure, grasp_figure, tester_figure
+from esba.infra.roundoff import floored
 
 from .page import TIMES, Page, Progress, Rendered, Times
 
@@ -20,6 +21,13 @@ __all__ = ["PAGE", "ContactPage", "ContactSettings", "render_page", "FIGURES"]
 
 #: The page's figures, in ``figures/`` beside it.
 FIGURES = {"blocked": "contact-blocked.png", "tester": "contact-tester.png", "grasp": "contact-grasp.png"}
+
+
+#: KKT numbers below this are round-off: printed as ``< 1e-12`` (esba.infra.roundoff).
+FLOOR = 1e-12
+#: The dead-load check's bound (the issue's 1e-9 rad): differences below it are printed as ``< 1e-09``,
+#: their digits being the solvers' last ones.
+DEAD_LOAD_BOUND = 1e-9
 
 
 def _kkt_rows(path, picks) -> list[str]:
@@ -33,7 +41,8 @@ def _kkt_rows(path, picks) -> list[str]:
         where = "; ".join(f"{c.where}, {c.s:.3f}, {c.force:.4f}" for c in p.contacts) or "none"
         eig = ", ".join(f"{v:.1f}" for v in k.reduced_eigenvalues[:3]) + (", ..." if len(k.reduced_eigenvalues) > 3 else "")
         lines.append(
-            f"| {p.pressure:.2f} | {where} | {k.stationarity:.1e} | {k.min_gap:.1e} | {k.min_force:.1e} | {k.complementarity:.1e} | {eig} | {p.status} |"
+            f"| {p.pressure:.2f} | {where} | {floored(k.stationarity, '.1e', FLOOR)} | {floored(k.min_gap, ' .1e', FLOOR)} | {floored(k.min_force, ' .1e', FLOOR)} "
+            f"| {floored(k.complementarity, '.1e', FLOOR)} | {eig} | {p.status} |"
         )
     return lines
 
@@ -99,10 +108,11 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         "## The checks",
         "",
         f"Every result carries its KKT numbers. Over the {len(b.points)} points of the blocked-force curve and the",
-        f"{len(data.grasp.points)} of the grasp below: stationarity of the Lagrangian at most **{kkt_max['stationarity']:.1e} N mm/rad**,",
-        f"complementarity |lambda gap| at most **{kkt_max['complementarity']:.1e} N mm**, the least gap **{kkt_max['gap']:.1e} mm**",
-        f"(no penetration), the least force **{kkt_max['force']:.1e} N**, and every reduced Hessian (the Lagrangian's, on the",
-        "tangent space of the active constraints) positive definite: stable on the constrained set.",
+        f"{len(data.grasp.points)} of the grasp below: stationarity of the Lagrangian at most **{floored(kkt_max['stationarity'], '.1e', FLOOR)} N mm/rad**,",
+        f"complementarity |lambda gap| at most **{floored(kkt_max['complementarity'], '.1e', FLOOR)} N mm**, the least gap **{floored(kkt_max['gap'], ' .1e', FLOOR)} mm**",
+        f"(no penetration), the least force **{floored(kkt_max['force'], ' .1e', FLOOR)} N**, and every reduced Hessian (the Lagrangian's, on the",
+        f"tangent space of the active constraints) positive definite: stable on the constrained set. (Numbers below {FLOOR:.0e} are",
+        "round-off and printed as such, not with their digits.)",
         "",
         "A check esba can do on itself: the probe at the tip is a horizontal dead load of the contact force's size.",
         "The contact solve against `solve` with `Payload(force, 90 deg, at = 1)` from the same state:",
@@ -111,7 +121,7 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         "|---|---|---|---|",
     ]
     for n, p, f, d in data.dead_load:
-        lines.append(f"| {n} | {p:g} | {f:.6f} | {d:.1e} |")
+        lines.append(f"| {n} | {p:g} | {f:.6f} | {floored(d, '.1e', DEAD_LOAD_BOUND)} |")
     lines += [
         "",
         "## The blocked-force curve",

@@ -119,9 +119,9 @@ def test_cli_writes_and_checks_the_page(tmp_path, capsys, comparison, monkeypatc
     assert not any("rho = 0.0°" in t for t in legend)
     assert main(["experiments", "--check", str(page)]) == EXIT_OK
     capsys.readouterr()
-    monkeypatch.chdir(page.parent)  # outside a checkout the page is ./experiments.md, as for esba validate --check
+    monkeypatch.chdir(tmp_path)  # outside a checkout the page is ./docs/experiments.md, where the README's --write-doc docs/experiments.md wrote it
     assert main(["experiments", "--check"]) == EXIT_OK
-    assert capsys.readouterr().out.strip() == f"{Path.cwd() / 'experiments.md'} is up to date"
+    assert capsys.readouterr().out.strip() == f"{Path.cwd() / 'docs' / 'experiments.md'} is up to date"
     page.write_text("stale\n", encoding="utf-8")
     assert main(["experiments", "--check", str(page)]) == EXIT_FAILED
     assert "is stale" in capsys.readouterr().err
