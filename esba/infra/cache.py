@@ -228,6 +228,7 @@ def discard(path: str | Path) -> None:
 #: The kinds of file in the cache: its top-level folders, and what each holds.
 KINDS = {
     "models": "models generated on demand (Python source, one folder per derivation source)",
+    "models3d": "3-D models generated on demand (Python source, one folder per derivation source)",
     "functions": "built CasADi Functions, serialised and compressed (a model loads in milliseconds, not seconds)",
     "compiled": "compiled Newton kernels and batch solvers (shared libraries)",
     "export": "C code generated for esba export c",
