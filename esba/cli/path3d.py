@@ -100,11 +100,13 @@ def cmd_equilibria3d(args: argparse.Namespace, scene) -> int:
     section = _section_arg(args.section)
     down = gravity_direction_arg(args, scene)
     try:
-        result = search3d(scene, section, gravity_direction=down, starts=args.starts)
+        result = search3d(scene, section, gravity_direction=down, starts=args.starts, check=not args.no_check)
     except SpatialError as exc:
         raise UsageError(str(exc)) from None
     data = result.to_dict()
     print_result(args, data, search3d_table)
+    if result.complete is False:
+        print(f"esba: warning: the completeness check found {result.check_found} equilibria the first search had not: raise --starts", file=sys.stderr)
     if not data["states"]:
         print("esba: failed: no equilibrium found", file=sys.stderr)
         return EXIT_FAILED

@@ -51,6 +51,7 @@ def test_b5_prandtl_from_the_engine_within_half_a_percent():
     assert abs(limit / PRANDTL - 1.0) < 0.005
 
 
+@pytest.mark.slow
 def test_the_paper_actuator_flips_sideways_past_a_branch_point_and_the_ramp_follows_it():
     r = analyse3d(MAIN_JOB, "payload", 2.0, start=0.0)
     (bp,) = r.main.branch_points
