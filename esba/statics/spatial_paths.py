@@ -105,8 +105,8 @@ COMPILE_MAX_SEGMENTS = 4
 
 def _kernel(model: Model3D, which: str) -> Kernel:
     """A packed Function of a 3-D model's path as a :class:`Kernel`: ``ghl`` (g, H, dg/dlambda),
-    compiled up to :data:`COMPILE_MAX_SEGMENTS`; ``slope`` (v . H v and its derivative along a
-    direction (t_q, t_lambda)) and ``fold`` (the extended systems' third derivatives, a few calls a special point: an MX
+    and ``slope`` (v . H v and its derivative along a direction (t_q, t_lambda)), compiled up to
+    :data:`COMPILE_MAX_SEGMENTS`; ``fold`` (the extended systems' third derivatives, a few calls a special point: an MX
     graph, interpreted, so that neither SymPy-sized expressions nor gcc are spent on it)."""
     key = ("path3d", which)
     found = model.registry.get(key)
@@ -132,10 +132,125 @@ def _kernel(model: Model3D, which: str) -> Kernel:
                 mu = ca.dot(v, ca.mtimes(h, v))
                 slope = ca.jtimes(mu, q, t[: model.size]) + ca.jtimes(mu, p, dp) * t[model.size]
                 fun = ca.Function("esba3d_path_slope", [q, p, dp, v, t], [mu, slope], opts)
-                mode = "never"
         found = Kernel(packed(fun, f"{fun.name()}_packed"), mode, model.n)
         model.registry[key] = found
     return found
+
+
+def _ldl(h, N: int):
+    """LDL^T of a symmetric SX matrix without pivoting, unrolled: (L, d). Its pivots d have the
+    eigenvalues' signs (Sylvester's law) wherever the factorisation exists."""
+    L = [[None] * N for _ in range(N)]
+    d = [None] * N
+    for j in range(N):
+        dj = h[j, j]
+        for k in range(j):
+            dj = dj - L[j][k] * L[j][k] * d[k]
+        d[j] = dj
+        for i in range(j + 1, N):
+            v = h[i, j]
+            for k in range(j):
+                v = v - L[i][k] * L[j][k] * d[k]
+            L[i][j] = v / dj
+    return L, d
+
+
+def _ldl_solve(L, d, b, N: int):
+    y = [None] * N
+    for i in range(N):
+        v = b[i]
+        for k in range(i):
+            v = v - L[i][k] * y[k]
+        y[i] = v
+    x = [None] * N
+    for i in reversed(range(N)):
+        v = y[i] / d[i]
+        for k in range(i + 1, N):
+            v = v - L[k][i] * x[k]
+        x[i] = v
+    return ca.vertcat(*x)
+
+
+def _bordered_sx(problem: SpatialPathProblem) -> ca.Function:
+    """One Newton step on the bordered system of a 3-D model as one SX Function with the packed input
+    and output of :func:`esba.solvers.newton.bordered_function` (iterations = 1): the block
+    elimination by an unrolled dense LDL^T of H (O(N^3) operations, N = 3n: for small n), its
+    pivots giving the Morse index, and u = (-H^-1 g_lambda, 1) at the step's end."""
+    model = problem.model
+    N, npar = model.size, len(model.parameters)
+    zin = ca.SX.sym("z", 2 * (N + 1) + 2 + 2 * npar)
+    x0, c, c0, crit = zin[: N + 1], zin[N + 1: 2 * N + 2], zin[2 * N + 2], zin[2 * N + 3]
+    p0, dp = zin[2 * N + 4: 2 * N + 4 + npar], zin[2 * N + 4 + npar:]
+    names = list(model.parameters)
+
+    def terms(x):
+        q, lam = x[:N], x[N]
+        p = p0 + lam * dp
+        args = ca.vertsplit(p)
+        g = model["gradient"](q, *args)
+        h = model["hessian"](q, *args)
+        h = 0.5 * (h + h.T)
+        return q, p, g, h
+
+    def g_lambda(q, p):
+        ps = ca.SX.sym("ps", npar)
+        gs = model["gradient"](q, *ca.vertsplit(ps))
+        return ca.substitute(ca.jtimes(gs, ps, dp), ps, p)
+
+    def margin(q, p):
+        L = p[names.index("L")]
+        m = L
+        if "r1" in names:
+            r1, r2, d = (p[names.index(k)] for k in ("r1", "r2", "d"))
+            m = ca.fmin(ca.fmin(m, r1), ca.fmin(r2, ca.fmin(r1 - r2 - d, d + r1)))
+            if model.effects.radial:
+                lb = domain_lower_bound(model.n, L, r1, r2, d, maximum=ca.fmax)
+                m = ca.fmin(m, ca.mmin(q[: model.n] - lb))
+        return m
+
+    q, p, g, h = terms(x0)
+    gl = g_lambda(q, p)
+    Lf, d = _ldl(h, N)
+    ct, cl = c[:N], c[N]
+    r_c = ca.dot(c, x0) - c0
+    y = _ldl_solve(Lf, d, g, N)
+    zz = _ldl_solve(Lf, d, gl, N)
+    dlam = (ca.dot(ct, y) - r_c) / (cl - ca.dot(ct, zz))
+    dx = ca.vertcat(-y - zz * dlam, dlam)
+    x1 = x0 + dx
+    q1, p1, g1, h1 = terms(x1)
+    gl1 = g_lambda(q1, p1)
+    L1, d1 = _ldl(h1, N)
+    piv = ca.vertcat(*d1)
+    scale = ca.mmax(ca.fabs(piv)) + 1e-300
+    morse = ca.sum1(piv < -crit * scale)
+    u = -_ldl_solve(L1, d1, gl1, N)
+    out = ca.vertcat(x1, ca.mmax(ca.fabs(g)), ca.mmax(ca.fabs(g1)), ca.fabs(r_c), ca.fabs(ca.dot(c, x1) - c0), ca.mmax(ca.fabs(dx)),
+                     margin(q, p), margin(q1, p1), morse, ca.mmin(piv) / scale, ca.mmin(ca.fabs(piv)) / scale, scale, u, 1.0)
+    return ca.Function("esba3d_bordered", [zin], [out], ["z"], ["out"], {"cse": True})
+
+
+def _critical_sx(problem: SpatialPathProblem, iterations: int = 10) -> ca.Function:
+    """:func:`esba.solvers.newton.critical_function` for a dense Hessian: inverse iteration from v0
+    by the unrolled LDL^T, mu = v . H v and its rate along t, one SX Function [q, lambda, v0, t, p0, dp] -> [v, mu, slope]."""
+    model = problem.model
+    N, npar = model.size, len(model.parameters)
+    q, lam, v0, t = ca.SX.sym("q", N), ca.SX.sym("lam"), ca.SX.sym("v0", N), ca.SX.sym("t", N + 1)
+    p0, dp = ca.SX.sym("p0", npar), ca.SX.sym("dp", npar)
+    p = p0 + lam * dp
+    h = model["hessian"](q, *ca.vertsplit(p))
+    h = 0.5 * (h + h.T)
+    Lf, d = _ldl(h, N)
+    v = v0 / ca.norm_2(v0)
+    for _ in range(iterations):
+        w = _ldl_solve(Lf, d, v, N)
+        v = w / ca.norm_2(w)
+    vf = ca.SX.sym("vf", N)
+    mu_of = ca.dot(vf, ca.mtimes(h, vf))
+    mu = ca.substitute(mu_of, vf, v)
+    slope = ca.substitute(ca.jtimes(mu_of, ca.vertcat(q, lam), t), vf, v)
+    z = ca.vertcat(q, lam, v0, t, p0, dp)
+    return ca.Function("esba3d_critical", [z], [ca.vertcat(v, mu, slope)], ["z"], ["out"], {"cse": True})
 
 
 class _Bordered:
@@ -421,8 +536,11 @@ class SpatialPathProblem:
         """> 0 exactly where the model is defined: finite, a real geometry, theta inside Eq. 10's domain."""
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(p))):
             return -1.0
-        names = list(self.model.parameters)
-        get = {k: float(p[names.index(k)]) for k in ("L", "r1", "r2", "d") if k in names}
+        where = self.registry.get("geometry")
+        if where is None:
+            names = list(self.model.parameters)
+            where = self.registry["geometry"] = {k: names.index(k) for k in ("L", "r1", "r2", "d") if k in names}
+        get = {k: float(p[i]) for k, i in where.items()}
         geo = [get["L"]]
         if "r1" in get:
             L, r1, r2, d = get["L"], get["r1"], get["r2"], get["d"]
@@ -458,7 +576,23 @@ class SpatialPathProblem:
         """(bordered kernel, Newton steps per call, critical kernel) for :class:`esba.paths.corrector.Corrector`."""
         key = "kernels"
         if key not in self.registry:
-            self.registry[key] = (_Bordered(self), 1, _Critical(self))
+            bordered = _Bordered(self)
+            if self.segments <= COMPILE_MAX_SEGMENTS and compile != "never":
+                mkey = ("path3d", "bordered")
+                kernel = self.model.registry.get(mkey)
+                if kernel is None:
+                    kernel = self.model.registry[mkey] = Kernel(_bordered_sx(self), compile, self.segments)
+                if kernel.compiled:
+                    bordered = kernel
+            critical = _Critical(self)
+            if self.segments <= COMPILE_MAX_SEGMENTS and compile != "never":
+                ckey = ("path3d", "critical")
+                kernel = self.model.registry.get(ckey)
+                if kernel is None:
+                    kernel = self.model.registry[ckey] = Kernel(_critical_sx(self), compile, self.segments)
+                if kernel.compiled:
+                    critical = kernel
+            self.registry[key] = (bordered, 1, critical)
         return self.registry[key]
 
     def minimum(self, q0: np.ndarray, lam: float, tol: float) -> tuple[np.ndarray | None, int]:
