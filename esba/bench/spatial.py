@@ -37,7 +37,8 @@ def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = 
     from esba.model.scene import MAIN_JOB
     from esba.model.spatial import load_model3d
     from esba.statics.equilibrium import solve
-    from esba.paths.continuation import PathOptions, trace
+    from esba.paths.continuation import PathOptions
+    from esba.paths.continuation import trace as arclength_trace
     from esba.statics.spatial import follow3d, solve3d, warm3d
     from esba.statics.spatial_paths import SpatialPathProblem
 
@@ -85,7 +86,7 @@ def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = 
     arc = {}
 
     def arclength():
-        arc["branch"] = trace(problem, q, float(vals["P"]), to=float(pressures[-1]), options=options)
+        arc["branch"] = arclength_trace(problem, q, float(vals["P"]), to=float(pressures[-1]), options=options)
 
     arclength()  # builds and compiles the kernels once
     ta = median_time(arclength, repeat)

@@ -90,6 +90,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
     if args.three_d or scene.needs_3d:
         from .path3d import cmd_path3d
 
+        _check_path_size(args.max_steps, 3 * scene.segments)  # 3n unknowns a point
         return cmd_path3d(args, scene, out, plot)
     from .path3d import planar_only_flags
 

@@ -49,11 +49,8 @@ def cmd_path3d(args: argparse.Namespace, scene, out, plot) -> int:
         raise UsageError("--3d: a scene with obstacles has no 3-D path yet (contact is planar)")
     if args.locate != "extended":
         raise UsageError(f"--locate {args.locate}: with --3d folds and branch points are located by their extended systems only (--locate extended)")
-    from .path import _check_path_size
-
     section = _section_arg(args.section)
     down = gravity_direction_arg(args, scene)
-    _check_path_size(args.max_steps, 3 * scene.segments)
     param = args.param
     if args.payload_index != 1:
         if param not in ("payload", "omega", "at", "beta"):
