@@ -23,7 +23,7 @@ import numpy as np
 
 from esba.paths.branch import Branch, SpecialPoint
 from esba.paths.continuation import PathOptions, bifurcating_branches, trace
-from esba.paths.loading import Ramp, history
+from esba.paths.loading import Ramp, follow
 from esba.paths.problem import PathError
 from esba.statics.spatial import solve3d
 from esba.statics.spatial_paths import SpatialPathProblem
@@ -118,6 +118,56 @@ def _side_label(b: Branch, point: SpecialPoint, n: int, label: str) -> str:
     return f"{label}in the plane, {'bend up' if float(np.sum(dq[:n])) > 0 else 'bend down'}"
 
 
+#: How far past a branch point met from a crossing branch a ramp looks for the stable state (times the parameter's typical size).
+PAST_TOUCH = 1e-4
+#: At most this many such branch points a ramp passes.
+MAX_TOUCHES = 8
+
+
+def _touch(ramp: Ramp, direction: float) -> SpecialPoint | None:
+    """The last point where the ramp's stable branch turned back in lambda with its critical eigenvalue
+    touching zero and no change of stability (Morse index 0 on both sides): where a sideways branch
+    meets the in-plane one it came off (a supercritical pitchfork seen from its crossing branch)."""
+    for piece in reversed(ramp.pieces):
+        for sp in reversed(piece.special):
+            if sp.kind == "fold" and sp.morse_before == 0 and sp.morse_after == 0 and (sp.lam - ramp.start) * direction >= 0:
+                return sp
+    return None
+
+
+def ramps3d(problem: SpatialPathProblem, q0, lam0: float, values, options: PathOptions | None = None) -> list[Ramp]:
+    """Quasi-static ramps from ``lam0`` to each value in turn (:func:`esba.paths.loading.follow`), and
+    one thing more: a ramp that comes back along a sideways branch to the branch point where it left
+    the in-plane branch turns back there in lambda with no loss of stability, so the engine's trace
+    does not stop; the actuator goes on along the in-plane branch (the only stable state just past
+    it), found by IPOPT just past the point and followed on. The ramp then lists the point among
+    its ``branch_points`` (passed without a jump)."""
+    out: list[Ramp] = []
+    q, lam = np.asarray(q0, dtype=float), float(lam0)
+    for target in values:
+        target = float(target)
+        direction = 1.0 if target >= lam else -1.0
+        r = follow(problem, q, lam, target, options)
+        for _ in range(MAX_TOUCHES):
+            if r.reached:
+                break
+            sp = _touch(r, direction)
+            if sp is None:
+                break
+            lam_j = sp.lam + direction * PAST_TOUCH * problem.scale
+            qj, _ = problem.minimum(sp.theta, lam_j, 1e-10)
+            if qj is None:
+                break
+            rest = follow(problem, qj, lam_j, target, options)
+            r = dataclasses.replace(rest, start=r.start, jumps=r.jumps + rest.jumps, branch_points=r.branch_points + (sp,) + rest.branch_points,
+                                    pieces=r.pieces + rest.pieces)
+        out.append(r)
+        if not r.reached:
+            break
+        q, lam = r.theta, r.lam
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class PathAnalysis3D:
     """What :func:`analyse3d` found (the fields of :class:`esba.analysis.path_analysis.PathAnalysis`)."""
@@ -209,7 +259,7 @@ def analyse3d(scene, parameter: str, to: float, *, start: float | None = None, o
         for k, bp in enumerate(main.branch_points, start=1):
             for b in bifurcating_branches(problem, bp, bounds=window, options=options, label=f"BP{k} "):
                 crossing.append(dataclasses.replace(b, label=_side_label(b, bp, n, f"BP{k} ")))
-    ramps = tuple(history(problem, first.q, lam_from, [to, lam_from], options)) if loading and to != lam_from else ()
+    ramps = tuple(ramps3d(problem, first.q, lam_from, [to, lam_from], options)) if loading and to != lam_from else ()
     sec = {k: problem.values(lam_from)[k] for k in ("EI_side", "GJ")}
     return PathAnalysis3D(scene, problem, first.q, main, tuple(crossing), ramps, lam_from, to, sec)
 

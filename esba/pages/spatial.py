@@ -137,10 +137,11 @@ class SpatialPage(Page):
         (bp,) = flip.main.branch_points
         ends = [(b.label, float(b.lam[-1]), bool(np.all(b.stable[len(b) // 2:])), split_angles(b.theta[-1], 3), tuple(float(v) for v in b.tip[-1]))
                 for b in flip.crossing]
-        up = flip.loading[0]
+        up, down = flip.loading
         d.paths["flip"] = {"bp": bp.lam, "kind": bp.bifurcation, "angle": split_angles(bp.theta, 3)[0], "ends": sorted(ends),
                            "section": (flip.section["EI_side"], flip.section["GJ"]), "up_reached": up.reached, "up_jumps": len(up.jumps),
-                           "up_crossed": [s.lam for s in up.branch_points]}
+                           "up_crossed": [s.lam for s in up.branch_points], "down_reached": down.reached, "down_jumps": len(down.jumps),
+                           "down_crossed": [s.lam for s in down.branch_points]}
         found = search3d(MAIN_JOB, starts=4)
         d.paths["search"] = {"complete": found.complete, "states": [(s.stability, s.energy, s.angles_deg(), tuple(float(v) for v in s.tip), s.certified)
                                                                    for s in found.states]}
@@ -329,7 +330,9 @@ class SpatialPage(Page):
                 "",
                 "  Loaded quasi-statically from 0 to 2 N the actuator " + ("passes the branch point at " + ", ".join(f"{x:.4f}" for x in f["up_crossed"])
                                                                         + " N and goes on along a stable sideways branch" if f["up_crossed"] else "does not pass a branch point")
-                + (" without a jump." if not f["up_jumps"] else f" with {f['up_jumps']} jump(s)."),
+                + (" without a jump" if not f["up_jumps"] else f" with {f['up_jumps']} jump(s)")
+                + ("; unloaded back to 0 it returns along that branch to the branch point" + (" and on along the in-plane one" if f["down_crossed"] else "")
+                   + (", without a jump." if not f["down_jumps"] else f", with {f['down_jumps']} jump(s).") if f["down_reached"] else "; unloaded, it does NOT get back to 0."),
                 "- **Every equilibrium at 2 N** (`esba equilibria --3d`: deflated Newton in the 3n unknowns from the planar states,",
                 "  their unstable modes and a grid; " + ("the completeness check from fresh starts found nothing new):" if d.paths["search"]["complete"] else "the completeness check found more):"),
                 "",

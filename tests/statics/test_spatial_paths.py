@@ -63,6 +63,9 @@ def test_the_paper_actuator_flips_sideways_past_a_branch_point_and_the_ramp_foll
     up = r.loading[0]
     assert up.reached and not up.jumps and [s.lam for s in up.branch_points] == [bp.lam]
     assert abs(abs(float(np.sum(up.theta[3:6]))) - abs(float(np.sum(r.crossing[0].theta[-1][3:6])))) < 1e-6
+    down = r.loading[1]  # back along the sideways branch to the branch point, then on along the in-plane branch
+    assert down.reached and not down.jumps and [s.lam for s in down.branch_points] == pytest.approx([bp.lam], rel=1e-8)
+    assert np.abs(down.theta[3:]).max() < 1e-8
     assert "branch point" in path3d_table(d)
     # the in-plane state past the branch point is unstable: the planar answer is not what the actuator does
     assert not r.main.stable[-1]
