@@ -39,7 +39,7 @@ import numpy as np
 from esba.model.generated import domain_lower_bound
 from esba.model.spatial import Model3D
 from esba.paths.problem import OPEN_END_INSET, PathError
-from esba.solvers.native import Kernel, packed
+from esba.solvers.native import HOT_RUNS, Kernel, packed
 from esba.solvers.newton import bordered_layout
 
 from .spatial import SpatialError, _ipopt, load_names
@@ -132,7 +132,7 @@ def _kernel(model: Model3D, which: str) -> Kernel:
                 mu = ca.dot(v, ca.mtimes(h, v))
                 slope = ca.jtimes(mu, q, t[: model.size]) + ca.jtimes(mu, p, dp) * t[model.size]
                 fun = ca.Function("esba3d_path_slope", [q, p, dp, v, t], [mu, slope], opts)
-        found = Kernel(packed(fun, f"{fun.name()}_packed"), mode, model.n)
+        found = Kernel(packed(fun, f"{fun.name()}_packed"), mode, model.n, HOT_RUNS if mode == "auto" else 0)
         model.registry[key] = found
     return found
 
@@ -576,24 +576,28 @@ class SpatialPathProblem:
         """(bordered kernel, Newton steps per call, critical kernel) for :class:`esba.paths.corrector.Corrector`."""
         key = "kernels"
         if key not in self.registry:
-            bordered = _Bordered(self)
-            if self.segments <= COMPILE_MAX_SEGMENTS and compile != "never":
-                mkey = ("path3d", "bordered")
-                kernel = self.model.registry.get(mkey)
-                if kernel is None:
-                    kernel = self.model.registry[mkey] = Kernel(_bordered_sx(self), compile, self.segments)
-                if kernel.compiled:
-                    bordered = kernel
-            critical = _Critical(self)
-            if self.segments <= COMPILE_MAX_SEGMENTS and compile != "never":
-                ckey = ("path3d", "critical")
-                kernel = self.model.registry.get(ckey)
-                if kernel is None:
-                    kernel = self.model.registry[ckey] = Kernel(_critical_sx(self), compile, self.segments)
-                if kernel.compiled:
-                    critical = kernel
+            bordered, critical = _Bordered(self), _Critical(self)
+            if self.segments <= COMPILE_MAX_SEGMENTS:
+                # one SX Function each, interpreted by CasADi at first and compiled to C once it has run
+                # HOT_RUNS times in this process (a long trace, the benchmark): a short trace pays no gcc
+                after = HOT_RUNS if compile == "auto" else 0
+                for name, build in (("bordered", _bordered_sx), ("critical", _critical_sx)):
+                    mkey = ("path3d", name, compile)
+                    if mkey not in self.model.registry:
+                        self.model.registry[mkey] = Kernel(build(self), compile, self.segments, after)
+                bordered, critical = self.model.registry[("path3d", "bordered", compile)], self.model.registry[("path3d", "critical", compile)]
             self.registry[key] = (bordered, 1, critical)
         return self.registry[key]
+
+    def compile_kernels(self) -> bool:
+        """Compile the path's kernels now (they are otherwise compiled after HOT_RUNS runs): True when
+        they run compiled (a C compiler was found and n <= COMPILE_MAX_SEGMENTS)."""
+        kernels = [_kernel(self.model, "ghl"), _kernel(self.model, "slope")]
+        bordered, _, critical = self.corrector_kernels()
+        kernels += [k for k in (bordered, critical) if isinstance(k, Kernel)]
+        for k in kernels:
+            k.count(HOT_RUNS)
+        return all(k.compiled for k in kernels)
 
     def minimum(self, q0: np.ndarray, lam: float, tol: float) -> tuple[np.ndarray | None, int]:
         """IPOPT from q0 at lambda: the stable state it lands in (None if it fails), and 0 (IPOPT's

@@ -23,7 +23,7 @@ def _b5_branch(n: int, top: float = 6.0):
 
 
 def test_b5_is_a_sideways_pitchfork_located_by_the_engine_where_brent_finds_the_singular_hessian():
-    n = 4
+    n = 3  # a committed model: nothing to generate
     problem, branch = _b5_branch(n)
     assert branch.stopped == "bound" and branch.lam[-1] == 6.0
     (bp,) = branch.branch_points
@@ -90,12 +90,12 @@ def test_bad_3d_path_parameters_are_refused_in_one_line(parameter, message):
 
 
 def test_a_path_problem_of_any_model_parameter_and_a_load_factor():
-    model = load_model3d(4, "rod,payload")  # B5's model above: its kernels are built
+    model = load_model3d(3, "rod,payload")  # B5's model above
     vals = rod_values(EI=1.0, F=1.0)
     p = SpatialPathProblem.from_values(model, vals, "GJ")
     assert p.name == "GJ" and p.lam0 == 1.0
     p = SpatialPathProblem.from_values(model, vals, "load")
-    q, ok, _ = newton3d(model, vals, np.zeros(12))
+    q, ok, _ = newton3d(model, vals, np.zeros(9))
     assert ok
     g, h, gl = p.ghl(q, 1.0)
     assert np.abs(g).max() < 1e-10 and np.allclose(h, model.hessian(q, vals))
