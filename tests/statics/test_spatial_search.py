@@ -25,6 +25,7 @@ def test_for_in_plane_loads_the_3d_search_finds_the_planar_equilibria():
     assert all(s.in_plane for s in res.states)  # stiff sideways: no state leaves the plane
 
 
+@pytest.mark.slow  # the CLI test (tests/cli/test_cli_path3d.py) and docs/3d.md's check find the same three states in CI
 def test_the_paper_actuator_under_2_n_flips_sideways_and_the_in_plane_state_is_unstable():
     res = search3d(MAIN_JOB, starts=2, check=False)
     planar = [s for s in res.states if s.in_plane]
