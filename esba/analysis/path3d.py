@@ -250,7 +250,8 @@ def analyse3d(scene, parameter: str, to: float, *, start: float | None = None, o
     first = solve3d(problem.model, problem.values(lam_from))
     if not first.ok:
         why = "not converged" if not first.converged else f"unstable (smallest eigenvalue {first.min_eigenvalue:.3g})"
-        raise RuntimeError(f"no stable 3-D equilibrium at the start ({problem.describe(lam_from)}) to trace from: {why}")
+        raise RuntimeError(f"no stable 3-D equilibrium at the start ({problem.describe(lam_from)}) to trace from: {why}; "
+                           f"start where the actuator is stable (--from), e.g. with no load, or see every equilibrium there with esba equilibria --3d")
     window = trace_window(problem, lam_from, to)
     main = trace(problem, first.q, lam_from, to=to, bounds=window, options=options, label="main")
     crossing: list[Branch] = []
