@@ -803,8 +803,8 @@ def continuation(
         raise PathError(f"Natural continuation takes no {', '.join(sorted(kwargs))}: those are PALC's (trace's)")
     if to is None:
         raise PathError("Natural continuation needs to=: the value lambda is ramped to")
-    if not is_path_problem(problem):
-        raise PathError(f"problem={problem!r}: expected a PathProblem")
+    if not isinstance(problem, PathProblem):  # its compiled O(n) graph stands on the planar chain's structure
+        raise PathError(f"problem={problem!r}: Natural() continuation is the planar model's (a PathProblem); use PALC()")
     lam0 = checks.finite("lam0", lam0, PathError)
     theta0 = _check_vector("theta0", theta0, problem.n)
     _interval(problem, lam0, to, None)

@@ -284,6 +284,8 @@ def follow(
     if natural is not None:
         if not isinstance(natural, Natural):
             raise PathError(f"natural={natural!r}: expected a Natural() or None")
+        if not isinstance(problem, PathProblem):
+            raise PathError("natural: Natural() continuation is the planar model's (a PathProblem); leave natural=None")
         fast = natural_branch(problem, theta, lam, to, natural, "stable")
         if fast.stopped == "bound":
             return Ramp(problem, float(lam0), to, to, fast.theta[-1].copy(), True, (), (), (fast,), "", 0, "Natural")

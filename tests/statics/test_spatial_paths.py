@@ -101,3 +101,12 @@ def test_a_path_problem_of_any_model_parameter_and_a_load_factor():
     assert np.abs(g).max() < 1e-10 and np.allclose(h, model.hessian(q, vals))
     with pytest.raises(PathError, match="no payload, moment or weight"):
         SpatialPathProblem.from_values(model, rod_values(EI=1.0, F=0.0), "load")
+
+
+def test_natural_continuation_is_refused_for_a_3d_problem_in_one_line():
+    from esba.paths.continuation import Natural, continuation
+
+    model = load_model3d(3, "rod,payload")
+    problem = SpatialPathProblem.from_values(model, rod_values(EI=1.0, F=0.0), "payload")
+    with pytest.raises(PathError, match=r"Natural\(\) continuation is the planar model's"):
+        continuation(problem, np.zeros(9), 0.0, to=1.0, algorithm=Natural())
