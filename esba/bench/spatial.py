@@ -12,6 +12,7 @@ folds and branch points watched) over the same pressures.
 
 from __future__ import annotations
 
+import os
 import time
 from typing import Callable
 
@@ -99,4 +100,13 @@ def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = 
         "warm30_ms": tw * 1e3,
         "point_us": tt / len(pressures) * 1e6, "points": len(pressures),
         "arc_point_us": ta / len(branch) * 1e6, "arc_points": len(branch), "arc_stopped": branch.stopped,
+        "load_average": _load_average(), "cpus": os.cpu_count() or 0,
     }
+
+
+def _load_average() -> float | None:
+    """The machine's 1-minute load average at the end of the run (None where the OS has none)."""
+    try:
+        return float(os.getloadavg()[0])
+    except (AttributeError, OSError):
+        return None

@@ -494,6 +494,8 @@ def spatial_table(data: dict, t: Times = TIMES) -> str:
     lines += [
         f"generation of the n = 30 3-D model: {t(gen30, '.1f')} s (target <= 30 s: {met(gen30 <= 30)})",
     ]
+    if data.get("load_average") is not None:
+        lines.append(t.word(f"load average at the end of the run: {data['load_average']:.1f} on {data['cpus']} cores (the times above grow with it)"))
     return "\n".join(lines)
 
 
