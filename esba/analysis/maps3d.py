@@ -548,7 +548,7 @@ def _kind(out: Outcome) -> str:
     return base + (" (not located)" if "not located" in out.kind else "")
 
 
-def path_points(plane: Plane3D, xrange, yrange, lines: int = 11) -> tuple[list[PathPoint], list[str]]:
+def path_points(plane: Plane3D, xrange, yrange, lines: int = 11, axes: tuple[str, ...] = ("x", "y")) -> tuple[list[PathPoint], list[str]]:
     """The first loss of stability along paths in x (at ``lines`` values of y) and in y (at ``lines``
     values of x), each rising from the low end and falling from the high end, started from the
     principal state there: the fold curves and branch points of the map, sampled, each point
@@ -557,6 +557,8 @@ def path_points(plane: Plane3D, xrange, yrange, lines: int = 11) -> tuple[list[P
     notes: list[str] = []
     n = plane.n
     for along, (rng, other_rng) in (("x", (xrange, yrange)), ("y", (yrange, xrange))):
+        if along not in axes:
+            continue
         name = plane.x if along == "x" else plane.y
         if name not in _PARAM:
             notes.append(f"{name} turns two angles of the payload at once: no paths along it (its boundaries are the raster's)")
