@@ -315,9 +315,11 @@ def follow(plane: Plane3D, values: Mapping[str, float], param: str, start: float
                 x_star = brentq(smallest, lo, trial, xtol=1e-15 * scale, rtol=4 * np.finfo(float).eps, maxiter=200)
                 pp = p.copy()
                 pp[index] = start + sign * x_star
-                qs, _, Hs = _newton(fun, pp, qa + (x_star - lo) * rate, lb)
+                qs, oks, Hs = _newton(fun, pp, qa + (x_star - lo) * rate, lb)
                 w, V = np.linalg.eigh(Hs)
-                return Outcome(start + sign * x_star, "branch point", _share(model, V[:, 0]), V[:, 0], qs, states)
+                # a true crossing: the state there is the branch's (close to the last one) and its Hessian singular
+                if oks and abs(w[0]) <= 1e-6 * np.abs(w).max() and float(np.abs(qs - qa).max()) <= MAX_MOVE:
+                    return Outcome(start + sign * x_star, "branch point", _share(model, V[:, 0]), V[:, 0], qs, states)
             except (RuntimeError, ValueError):
                 pass  # fall through: halve as at a fold
         h *= 0.5
