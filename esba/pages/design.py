@@ -119,11 +119,22 @@ def _off_plane_lines(c: OffPlaneCheck) -> list[str]:
             flips = "no, up to twice the bound" if not np.isfinite(r.sideways_payload) else f"{r.sideways_payload:.4f}"
             planar = "clear" if r.planar.clear else ("snaps inside" if r.planar.inside else "within the margin")
             L.append(f"| {name} | {r2:.4f}, {d:.4f} | {K:.4f} | {sec} | {planar} | {flips} | {r.twist_deg:.2f} | {'**yes**' if r.clear else '**no**'} |")
+    def why(r) -> str:
+        if r.clear:
+            return "survives"
+        reasons = []
+        if not r.planar.clear:
+            reasons.append("it snaps in the plane")
+        if r.sideways_value < 0:
+            reasons.append(f"it flips sideways at {r.sideways_payload:.3f} N")
+        if r.twist_value < 0:
+            reasons.append(f"it twists {r.twist_deg:.0f} deg")
+        return "does not survive (" + ", ".join(reasons) + ")"
+
     verdict = []
     for name, *_ in c.designs:
         e, s = c.results[(name, "eccentric")], c.results[(name, "stiff")]
-        verdict.append(f"{name} " + ("survives" if e.clear else "does not survive")
-                       + " with its eccentric section" + (" and " if e.clear == s.clear else " but ") + ("survives" if s.clear else "does not survive") + " with the stiff one")
+        verdict.append(f"{name} {why(e)} with its eccentric section and {why(s)} with the stiff one")
     L += [
         "",
         "So " + "; ".join(verdict) + ". With the stiffnesses the eccentric section gives (the layer's width and thickness and",
