@@ -47,7 +47,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from esba.infra.errors import InputError
-from esba.model.scene import Payload, Scene
+from esba.model.scene import Scene
 
 __all__ = [
     "AXES3D", "CLASSES", "REGIONS", "Map3DError", "Plane3D", "Outcome", "principal", "Boundary", "StabilityMap3D",

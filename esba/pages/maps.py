@@ -264,7 +264,7 @@ def _spatial_lines(c: Map3DCases, fig: Path, times: Times) -> list[str]:
     """The 3-D section: the gripper map and the pressure paths' folds and branch points."""
     g = c.gripper
     reg = g.regions()
-    (xn, xr), (yn, yr) = GRIPPER["x"], GRIPPER["y"]
+    (_, xr), (_, yr) = GRIPPER["x"], GRIPPER["y"]
     ck = c.check
     agree = ck.k * ck.k - ck.mismatches - ck.near_mismatches
     counts = sorted({int(cell[4]) for cell in ck.cells})
@@ -297,7 +297,7 @@ def _spatial_lines(c: Map3DCases, fig: Path, times: Times) -> list[str]:
         f"![the gripper map]({fig / FIGURES['gripper-3d']})",
         "",
         f"`{GRIPPER_COMMAND}` draws this map: the Table 1 actuator under a 0.5 N tip payload whose direction turns",
-        f"about the actuator's base axis (around = 0: horizontal in the bending plane, the Table 2 direction; 90 would be",
+        "about the actuator's base axis (around = 0: horizontal in the bending plane, the Table 2 direction; 90 would be",
         f"straight out of the plane) from {yr[0]:g} to {yr[1]:g} deg, over pressures {xr[0]:g} to {xr[1]:g} MPa, with the eccentric",
         f"section's stiffnesses (`esba section`: EI_side = {c.section['EI_side']:.0f} N mm^2, GJ = {c.section['GJ']:.0f} N mm^2).",
         "",
@@ -326,7 +326,7 @@ def _spatial_lines(c: Map3DCases, fig: Path, times: Times) -> list[str]:
         f"from bent, sideways and twisted starts, `esba.analysis.maps3d.check_grid3d`) finds the classes {', '.join(brute)} and "
         f"{' or '.join(str(k) for k in counts)} stable state{'s' if counts[-1] != 1 else ''} per cell; the map agrees in **{agree} of {ck.k * ck.k}** cells"
         + (f" ({ck.mismatches + ck.near_mismatches} disagree)" if ck.mismatches + ck.near_mismatches else "")
-        + f", and the multistart finds the map's state among the stable ones wherever it is stable"
+        + ", and the multistart finds the map's state among the stable ones wherever it is stable"
         + (f" (missed in {ck.missed})." if ck.missed else "."),
         "",
         "### The pressure paths in 3-D",
