@@ -136,7 +136,7 @@ def add_map(sub) -> None:
     p.add_argument("--plot", metavar="FILE", help=f"the figure (default {DEFAULT_MAP_FIGURE})")
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--points", action="store_true", help="with --json: print every point of the fold curves")
-    p.add_argument("--write-doc", metavar="FILE", help="compute the maps of docs/maps.md (Table 1: three stability maps, the design plane; about two minutes) and write the page and its figures")
+    p.add_argument("--write-doc", metavar="FILE", help="compute the maps of docs/maps.md (Table 1: three stability maps, the design plane, the 3-D gripper map and pressure paths; a few minutes) and write the page and its figures")
     from .map3d import add_map3d_flags
 
     add_map3d_flags(p)
