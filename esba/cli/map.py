@@ -52,7 +52,8 @@ def _map_write_doc(args: argparse.Namespace) -> int:
     from esba.pages.maps import PAGE, MapsSettings
 
     write_page(args, "map", PAGE, MapsSettings, (("--x", args.x), ("--y", args.y), ("--out", args.out), ("--plot", args.plot),
-                                                ("--check-grid", args.check_grid), ("SCENE.toml", args.scene)))
+                                                ("--check-grid", args.check_grid), ("SCENE.toml", args.scene),
+                                                ("--3d", args.three_d or None), ("--section", args.section), ("--max-twist", args.max_twist)))
     return EXIT_OK
 
 
