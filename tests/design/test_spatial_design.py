@@ -80,11 +80,11 @@ def test_with_a_cone_of_zero_and_a_stiff_section_the_optimum_is_the_planar_one()
 
 @pytest.mark.slow
 def test_the_twist_constrained_optimum_agrees_with_pso():
-    """A cone of 30 deg and a twist bound of 8 deg: the paper's optimum twists past it, the map-based
+    """A cone of 30 deg and a twist bound of 10 deg: the paper's optimum twists past it (10.7 deg), the map-based
     optimum is clear and on the bound, and the swarm lands near it."""
     from esba.solvers.pso import PSOOptions
 
-    spatial = SpatialEnvelope(Envelope(0.3, 1.0), 30.0, 8.0, {"EI_side": 4e5, "GJ": 2e4})
+    spatial = SpatialEnvelope(Envelope(0.3, 1.0), 30.0, 10.0, {"EI_side": 4e5, "GJ": 2e4})
     m, p = optimise_envelope3d(None, spatial, "both", pso_options=PSOOptions(particles=8, iterations=6))
     assert m.status == "optimal" and m.clearance.clear and not m.unconstrained["clearance"]["clear"]
     assert "fold clearance" in m.active
