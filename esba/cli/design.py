@@ -18,7 +18,8 @@ def _envelope_table(d: dict) -> str:
         c = r["clearance"] or {}
         near = c.get("nearest_fold")
         where = "none up to twice the payload bound" if not near else (
-            f"{near['kind']} at P = {near['pressure_mpa']:.6g} MPa, F = {near['payload_n']:.6g} N, Omega = {near['direction_deg']:g} deg"
+            f"{near['kind']} at P = {near['pressure_mpa']:.6g} MPa, F = {near['payload_n']:.6g} N, Omega = {near.get('omega_deg', near['direction_deg']):.6g} deg"
+            + (f", Beta = {near['beta_deg']:.6g} deg" if near.get("beta_deg") else "")
         )
         lines = [
             f"    status: {r['status']}" + (f": {r['message']}" if r.get("message") else ""),
@@ -27,6 +28,12 @@ def _envelope_table(d: dict) -> str:
             f" stiffness: {r['stiffness_n_per_m']:.5f} N/m",
             f"      fold: nearest {where}; clear: {c.get('clear')} (c = {c.get('value') if c.get('value') is None else format(c['value'], '.3g')})",
             f"    active: {', '.join(r['active_constraints']) or 'none'}",
+        ]
+        if "sideways_value" in c:
+            side = "none up to twice the payload bound" if c["sideways_payload_n"] is None else f"{c['sideways_payload_n']:.6g} N"
+            lines.append(f"  sideways: loses stability sideways at {side} (c = {c['sideways_value'] if c['sideways_value'] is None else format(c['sideways_value'], '.3g')}); "
+                         f"largest twist at the payload bound {c['twist_deg']:.4g} deg (c = {c['twist_value']:.3g}); section EI_side {c['section_nmm2']['EI_side']:.6g}, GJ {c['section_nmm2']['GJ']:.6g} N mm^2")
+        lines += [
             f"      time: {r['solve_time_s']:.2f} s ({r['evaluations']} designs)",
         ]
         return lines
@@ -72,7 +79,21 @@ def _cmd_envelope(args: argparse.Namespace) -> int:
                                  seed=0 if args.seed is None else args.seed)
     except (DesignError, PSOOptionsError) as exc:
         raise UsageError(str(exc)) from None
-    run = optimise_envelope(problem, envelope, method, options, pso_options)
+    spatial = None
+    if args.cone is not None or args.max_twist is not None or args.section:
+        from esba.design.spatial import SpatialEnvelope, optimise_envelope3d
+
+        from .scenes import _section_arg
+
+        section = _section_arg(args.section)
+        try:
+            spatial = SpatialEnvelope(envelope, 0.0 if args.cone is None else args.cone, 10.0 if args.max_twist is None else args.max_twist, section)
+        except DesignError as exc:
+            flag = "--cone" if "cone" in str(exc) else ("--max-twist" if "twist" in str(exc) else "--section")
+            raise UsageError(f"{flag}: {exc}") from None
+        run = optimise_envelope3d(problem, spatial, method, options, pso_options)
+    else:
+        run = optimise_envelope(problem, envelope, method, options, pso_options)
     if method == "both":
         m, p = run
         data = {"method": "both", "map": m.to_dict(), "pso": p.to_dict(),
@@ -80,7 +101,7 @@ def _cmd_envelope(args: argparse.Namespace) -> int:
         results = [m, p]
     else:
         data, results = run.to_dict(), [run]
-    data["envelope_text"] = envelope.describe()
+    data["envelope_text"] = envelope.describe() if spatial is None else spatial.describe()
     print_result(args, data, _envelope_table)
     bad = [r for r in results if r.status != "optimal"]
     for r in bad:
@@ -89,7 +110,7 @@ def _cmd_envelope(args: argparse.Namespace) -> int:
 
 
 def _cmd_design(args: argparse.Namespace) -> int:
-    if any(getattr(args, k) is not None for k in ("envelope_pressure", "envelope_payload", "envelope_angle", "envelope_at", "fold_margin")):
+    if any(getattr(args, k) is not None for k in ("envelope_pressure", "envelope_payload", "envelope_angle", "envelope_at", "fold_margin", "cone", "max_twist", "section")):
         return _cmd_envelope(args)
     from esba.design.optimise import (
         DesignError,
@@ -228,6 +249,9 @@ def add_design(sub) -> None:
     p.add_argument("--envelope-angle", type=float_arg, action="append", metavar="DEG", help="a payload direction of the envelope, degrees from the vertical (repeatable; default 90)")
     p.add_argument("--envelope-at", type=float_arg, metavar="FRACTION", help="the envelope's payload point, a fraction of L (default 1, the tip)")
     p.add_argument("--fold-margin", type=float_arg, metavar="M", help="no fold up to (1 + M) times the envelope (default 0.1)")
+    p.add_argument("--cone", type=float_arg, metavar="DEG", help="with an envelope: also no lateral-torsional buckling (3-D model) for payload directions within DEG of the envelope's (0 to 90; docs/design.md)")
+    p.add_argument("--max-twist", type=float_arg, metavar="DEG", help="with an envelope: the twist |sum tau| at the payload bound at most DEG over the cone (default 10 with --cone)")
+    p.add_argument("--section", action="append", metavar="NAME=VALUE", help="with --cone: section stiffnesses EI_side=..., GJ=... for every design (N*mm^2; default each design's eccentric section)")
     p.add_argument("--json", action="store_true", help="print JSON")
     add_actuator_flags(p, DESIGN_ACTUATOR, note="; the chamber r2, d is what the design finds")
     p.set_defaults(func=_cmd_design)

@@ -260,11 +260,11 @@ def _active(problem: DesignProblem, envelope: Envelope, r2: float, d: float, pre
     return tuple(out)
 
 
-def _unconstrained(problem: DesignProblem, envelope: Envelope, options: DesignOptions) -> tuple[dict[str, Any], FoldClearance | None, Any]:
+def _unconstrained(problem: DesignProblem, envelope: Envelope, options: DesignOptions, clearance=None) -> tuple[dict[str, Any], FoldClearance | None, Any]:
     run = optimise_ipopt(problem, options)
     if run.status != "optimal":
         return {"status": run.status, "message": run.message}, None, run
-    c = fold_clearance(problem, envelope, run.r2_mm, run.d_mm)
+    c = (clearance or fold_clearance)(problem, envelope, run.r2_mm, run.d_mm)
     return {
         "status": run.status,
         "r2_mm": run.r2_mm,
@@ -275,17 +275,18 @@ def _unconstrained(problem: DesignProblem, envelope: Envelope, options: DesignOp
     }, c, run
 
 
-def _score(problem: DesignProblem, envelope: Envelope, options: DesignOptions, r2: np.ndarray, d: np.ndarray):
-    """K (nan where it fails), the pressure and the fold constraint's value of designs."""
+def _score(problem: DesignProblem, envelope: Envelope, options: DesignOptions, r2: np.ndarray, d: np.ndarray, clearance=None):
+    """K (nan where it fails), the pressure and the fold constraint's value of designs (``clearance``:
+    the constraint, :func:`fold_clearance` unless given, e.g. :func:`esba.design.spatial.sideways_clearance`)."""
     e = evaluate(problem, r2, d, options)
     # the folds only where the rest is met (a design over the pressure budget is out anyway)
-    c = np.array([fold_clearance(problem, envelope, a, b).value if ok and p <= problem.max_pressure else -math.inf for a, b, ok, p in zip(r2, d, e.ok, e.pressure)])
+    c = np.array([(clearance or fold_clearance)(problem, envelope, a, b).value if ok and p <= problem.max_pressure else -math.inf for a, b, ok, p in zip(r2, d, e.ok, e.pressure)])
     return np.where(e.ok, e.stiffness, np.nan), e.pressure, c
 
 
-def _finish(method, problem, envelope, options, r2, d, evaluations, seconds, unconstrained, pso=None, status="optimal", message="") -> EnvelopeDesign:
+def _finish(method, problem, envelope, options, r2, d, evaluations, seconds, unconstrained, pso=None, status="optimal", message="", clearance=None) -> EnvelopeDesign:
     e = evaluate(problem, [r2], [d], options)
-    c = fold_clearance(problem, envelope, r2, d)
+    c = (clearance or fold_clearance)(problem, envelope, r2, d)
     if status == "optimal" and not (c.clear and e.ok[0]):
         status, message = "failed", message or "the design found is not clear of folds"
     return EnvelopeDesign(
@@ -294,14 +295,14 @@ def _finish(method, problem, envelope, options, r2, d, evaluations, seconds, unc
     )
 
 
-def _map_method(problem: DesignProblem, envelope: Envelope, options: DesignOptions) -> EnvelopeDesign:
+def _map_method(problem: DesignProblem, envelope: Envelope, options: DesignOptions, clearance=None) -> EnvelopeDesign:
     from scipy.optimize import minimize as scipy_minimize
 
     t0 = time.perf_counter()
-    info, c0, run = _unconstrained(problem, envelope, options)
+    info, c0, run = _unconstrained(problem, envelope, options, clearance)
     if c0 is not None and c0.clear:
         return _finish("map", problem, envelope, options, run.r2_mm, run.d_mm, 1, time.perf_counter() - t0, info,
-                       message="IPOPT's optimum without the fold constraint is clear of folds: the constraint is inactive")
+                       message="IPOPT's optimum without the fold constraint is clear of folds: the constraint is inactive", clearance=clearance)
     room = problem.actuator.r1 - problem.wall
     r2s, ds = np.meshgrid(np.linspace(options.r2_min + 0.05, room - 0.05, GRID), np.linspace(0.0, room - 0.1, GRID))
     keep = r2s + ds <= room
@@ -313,19 +314,19 @@ def _map_method(problem: DesignProblem, envelope: Envelope, options: DesignOptio
     x0 = None
     for i in order:
         evaluations += 1
-        if fold_clearance(problem, envelope, r2s[i], ds[i]).clear:
+        if (clearance or fold_clearance)(problem, envelope, r2s[i], ds[i]).clear:
             x0 = np.array([r2s[i], ds[i]])
             break
     if x0 is None:
         return _finish("map", problem, envelope, options, run.r2_mm if c0 is not None else r2s[0], run.d_mm if c0 is not None else ds[0],
                        evaluations, time.perf_counter() - t0, info, status="infeasible",
-                       message=f"no design of the {GRID} x {GRID} grid is clear of folds in the envelope")
+                       message=f"no design of the {GRID} x {GRID} grid is clear of folds in the envelope", clearance=clearance)
     memo: dict[tuple[float, float], tuple[float, float, float]] = {}
 
     def score(x) -> tuple[float, float, float]:
         key = (float(x[0]), float(x[1]))
         if key not in memo:
-            k_, p_, c_ = _score(problem, envelope, options, np.array([key[0]]), np.array([key[1]]))
+            k_, p_, c_ = _score(problem, envelope, options, np.array([key[0]]), np.array([key[1]]), clearance)
             # finite stand-ins where a design fails or is over the pressure budget: SLSQP needs numbers
             memo[key] = (float(k_[0]) if np.isfinite(k_[0]) else 0.0, float(p_[0]) if np.isfinite(p_[0]) else 10.0 * problem.max_pressure,
                          float(c_[0]) if np.isfinite(c_[0]) else -1.0)
@@ -362,22 +363,22 @@ def _map_method(problem: DesignProblem, envelope: Envelope, options: DesignOptio
     if not (score(x)[2] >= -CLEAR_TOL and np.isfinite(score(x)[0])):
         x = x0
     return _finish("map", problem, envelope, options, float(x[0]), float(x[1]), evaluations + len(memo), time.perf_counter() - t0, info,
-                   message="" if res.success else f"SLSQP: {res.message}")
+                   message="" if res.success else f"SLSQP: {res.message}", clearance=clearance)
 
 
-def _pso_method(problem: DesignProblem, envelope: Envelope, options: DesignOptions, pso_options: PSOOptions, info=None) -> EnvelopeDesign:
+def _pso_method(problem: DesignProblem, envelope: Envelope, options: DesignOptions, pso_options: PSOOptions, info=None, clearance=None) -> EnvelopeDesign:
     t0 = time.perf_counter()
     room = problem.actuator.r1 - problem.wall
 
     def swarm(X: np.ndarray):
-        K, P, c = _score(problem, envelope, options, X[:, 0], X[:, 1])
+        K, P, c = _score(problem, envelope, options, X[:, 0], X[:, 1], clearance)
         v = np.maximum(0.0, -c) + np.maximum(0.0, (P - problem.max_pressure) / problem.max_pressure)
         return -K, np.where(np.isfinite(K), v, np.inf)
 
     res = minimize(swarm, [options.r2_min, 0.0], [room, room], linear=([[1.0, 1.0]], [room]), options=pso_options)
     status = "optimal" if res.feasible else "infeasible"
     return _finish("pso", problem, envelope, options, float(res.x[0]), float(res.x[1]), res.evaluations, time.perf_counter() - t0, info or {},
-                   pso=res, status=status, message="" if res.feasible else "the swarm found no design clear of folds")
+                   pso=res, status=status, message="" if res.feasible else "the swarm found no design clear of folds", clearance=clearance)
 
 
 def optimise_envelope(
@@ -386,8 +387,11 @@ def optimise_envelope(
     method: str = "map",
     options: DesignOptions | None = None,
     pso_options: PSOOptions | None = None,
+    clearance=None,
 ) -> EnvelopeDesign | tuple[EnvelopeDesign, EnvelopeDesign]:
-    """The stiffest design clear of folds in ``envelope`` (see the module); ``"both"`` returns (map, pso)."""
+    """The stiffest design clear of folds in ``envelope`` (see the module); ``"both"`` returns (map, pso).
+    ``clearance``: the constraint (problem, envelope, r2, d) -> its value and more, :func:`fold_clearance`
+    unless given (:func:`esba.design.spatial.sideways_clearance` adds sideways buckling and twist)."""
     if method not in ENVELOPE_METHODS:
         raise DesignError(f"method={method!r}: allowed are {', '.join(ENVELOPE_METHODS)}")
     if not isinstance(envelope, Envelope):
@@ -396,11 +400,11 @@ def optimise_envelope(
     options = DEFAULT_DESIGN_OPTIONS if options is None else options
     pso_options = PSOOptions(particles=12, iterations=15) if pso_options is None else pso_options
     if method == "map":
-        return _map_method(problem, envelope, options)
+        return _map_method(problem, envelope, options, clearance)
     if method == "pso":
-        return _pso_method(problem, envelope, options, pso_options)
-    m = _map_method(problem, envelope, options)
-    return m, _pso_method(problem, envelope, options, pso_options, m.unconstrained)
+        return _pso_method(problem, envelope, options, pso_options, clearance=clearance)
+    m = _map_method(problem, envelope, options, clearance)
+    return m, _pso_method(problem, envelope, options, pso_options, m.unconstrained, clearance)
 
 
 # ---------------------------------------------------------------------------------------------

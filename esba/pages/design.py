@@ -16,6 +16,7 @@ import numpy as np
 
 from esba.design.cases import MAX_PRESSURE, MIN_STIFFNESS, WALLS, DesignCases, design_cases
 from esba.design.optimise import DEFAULT_DESIGN_OPTIONS, Comparison, DesignOptions, DesignResult
+from esba.design.spatial import AZIMUTHS, PRESSURES, OffPlaneCheck, off_plane_check
 from esba.infra.roundoff import floored
 from esba.solvers.pso import PSOOptions
 
@@ -90,7 +91,62 @@ def _comparison_block(title: str, c: Comparison, t: Times) -> list[str]:
     return lines + [""]
 
 
-def render_page(cases: DesignCases, t: Times = TIMES, page_dir: Path | None = None) -> str:
+def _off_plane_lines(c: OffPlaneCheck) -> list[str]:
+    """Do the paper's optimum and today's snap-free design survive an off-plane load of the envelope's size?"""
+    sp = c.spatial["eccentric"]
+    env = sp.envelope
+    L = [
+        "## Off the plane: do these designs survive a sideways load?",
+        "",
+        "The designs above are planar: nothing in them stops a load out of the bending plane from flipping the finger",
+        "sideways (lateral-torsional buckling) or twisting it. `esba design --envelope-pressure P --envelope-payload F --cone DEG",
+        "--max-twist DEG` (`esba/design/spatial.py`) adds both to the envelope's fold constraint, in the 3-D model: every",
+        "payload up to (1 + margin) F within DEG of the envelope's direction, at every pressure up to (1 + margin) P, must be",
+        "carried from the unloaded state without a loss of stability sideways and with the twist |sum tau_i| within the bound",
+        f"(sampled: {PRESSURES} pressures; the envelope's direction and {AZIMUTHS} directions on each of the circles at half the cone and",
+        "at the cone). The optimum is checked against PSO on the same constraint as the planar envelope's.",
+        "",
+        f"Here the envelope of `docs/maps.md` ({env.describe()}) with payloads within {sp.cone_deg:g} deg of it and a twist",
+        f"bound of {sp.max_twist_deg:g} deg (`esba.design.spatial.off_plane_check`):",
+        "",
+        "| design | r2, d (mm) | K (N/m) | section (EI_side, GJ; N mm^2) | planar fold constraint | flips sideways at (N) | largest twist at the payload bound (deg) | survives |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, r2, d, K in c.designs:
+        for key in ("eccentric", "stiff"):
+            r = c.results[(name, key)]
+            sec = f"{r.section['EI_side']:.0f}, {r.section['GJ']:.0f}" + (" (its eccentric section)" if key == "eccentric" else " (assumed)")
+            flips = "no, up to twice the bound" if not np.isfinite(r.sideways_payload) else f"{r.sideways_payload:.4f}"
+            planar = "clear" if r.planar.clear else ("snaps inside" if r.planar.inside else "within the margin")
+            L.append(f"| {name} | {r2:.4f}, {d:.4f} | {K:.4f} | {sec} | {planar} | {flips} | {r.twist_deg:.2f} | {'**yes**' if r.clear else '**no**'} |")
+    def why(r) -> str:
+        if r.clear:
+            return "survives"
+        reasons = []
+        if not r.planar.clear:
+            reasons.append("it snaps in the plane")
+        if r.sideways_value < 0:
+            reasons.append(f"it flips sideways at {r.sideways_payload:.3f} N")
+        if r.twist_value < 0:
+            reasons.append(f"it twists {r.twist_deg:.0f} deg")
+        return "does not survive (" + ", ".join(reasons) + ")"
+
+    verdict = []
+    for name, *_ in c.designs:
+        e, s = c.results[(name, "eccentric")], c.results[(name, "stiff")]
+        verdict.append(f"{name} {why(e)} with its eccentric section and {why(s)} with the stiff one")
+    L += [
+        "",
+        "So " + "; ".join(verdict) + ". With the stiffnesses the eccentric section gives (the layer's width and thickness and",
+        "the fibres' state assumed, `docs/3d.md`), a payload of the envelope's size tilted out of the plane turns the finger",
+        "far beyond any bound: the torsional stiffness, which the paper does not give, decides whether a snap-free design is",
+        "also safe sideways, and `--cone` with `--section` makes it part of the design.",
+        "",
+    ]
+    return L
+
+
+def render_page(cases: DesignCases, t: Times = TIMES, page_dir: Path | None = None, spatial: OffPlaneCheck | None = None) -> str:
     """The Markdown of ``docs/design.md`` from :func:`esba.design.cases.design_cases`; with
     ``page_dir`` (the page's folder) a figure that is not in ``figures/`` there is named, not linked."""
 
@@ -300,6 +356,8 @@ def render_page(cases: DesignCases, t: Times = TIMES, page_dir: Path | None = No
         f"Newton ramp), against IPOPT's {p.ipopt.iterations} iterations of the full-space NLP over {p.ipopt.evaluations} starts."
     )
     L.append("")
+    if spatial is not None:
+        L += _off_plane_lines(spatial)
     L.append("## Limits")
     L.append("")
     L.append(
@@ -320,6 +378,18 @@ def render_page(cases: DesignCases, t: Times = TIMES, page_dir: Path | None = No
     return "\n".join(L)
 
 
+@dataclass(frozen=True, eq=False)
+class DesignData:
+    """What the page computes: the planar design cases and the off-plane check of two of its designs
+    (attributes not found here are the cases')."""
+
+    cases: DesignCases
+    spatial: OffPlaneCheck
+
+    def __getattr__(self, name: str):
+        return getattr(self.__dict__["cases"], name) if "cases" in self.__dict__ else super().__getattribute__(name)
+
+
 @dataclass(frozen=True)
 class DesignSettings:
     """What ``esba design --write-doc`` takes: the segment count, IPOPT's starts and the swarm."""
@@ -337,12 +407,14 @@ class DesignPage(Page):
     def settings(self) -> DesignSettings:
         return DesignSettings()
 
-    def compute(self, settings: DesignSettings | None = None, progress: Progress | None = None) -> DesignCases:
+    def compute(self, settings: DesignSettings | None = None, progress: Progress | None = None) -> DesignData:
         settings = self.settings() if settings is None else settings
-        return design_cases(settings.segments, settings.options, settings.pso_options, progress)
+        return DesignData(design_cases(settings.segments, settings.options, settings.pso_options, progress), off_plane_check(progress))
 
-    def render(self, data: DesignCases, settings: DesignSettings, path: Path, times: Times = TIMES) -> Rendered:
-        return Rendered(render_page(data, times, path.parent))
+    def render(self, data: DesignData, settings: DesignSettings, path: Path, times: Times = TIMES) -> Rendered:
+        if isinstance(data, DesignCases):  # the planar cases alone
+            return Rendered(render_page(data, times, path.parent))
+        return Rendered(render_page(data.cases, times, path.parent, data.spatial))
 
 
 PAGE = DesignPage()

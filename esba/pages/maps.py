@@ -14,7 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from esba.analysis.map3d_cases import GRIPPER, GRIPPER_COMMAND, PATH_PAYLOADS, PATH_RANGE, STIFF_SECTION, Map3DCases, map3d_cases
 from esba.analysis.map_cases import MapCaseResult, map_cases
+from esba.analysis.maps3d import BRUTE_STARTS, BRUTE_STEPS, CLASSES
 from esba.analysis.maps import MAX_STARTS, STARTS_PER_SEGMENT
 from esba.design.envelope import DesignPlane, Envelope, design_plane
 from esba.figures.maps import design_plane_figure, map_figure
@@ -30,13 +32,14 @@ R2_GRID = tuple(float(v) for v in np.linspace(0.25, 7.75, 16))
 D_GRID = tuple(float(v) for v in np.linspace(0.0, 7.5, 16))
 #: The page's figures, in ``figures/`` beside it.
 FIGURES = {"pressure-payload": "map-pressure-payload.png", "omega-payload": "map-omega-payload.png",
-           "pressure-omega": "map-pressure-omega.png", "design": "map-design-plane.png"}
+           "pressure-omega": "map-pressure-omega.png", "design": "map-design-plane.png", "gripper-3d": "map-3d-gripper.png"}
 
 
 @dataclass(frozen=True, eq=False)
 class MapsData:
     maps: list[MapCaseResult]
     design: DesignPlane
+    spatial: Map3DCases
 
 
 def _unit(u: str) -> str:
@@ -226,6 +229,7 @@ def render_page(data: MapsData, command: str, times: Times = TIMES) -> str:
             f"`esba design --envelope-pressure {env.max_pressure:g} --envelope-payload {env.max_payload:g} --fold-margin {env.margin:g} --method both` runs both.",
             "",
         ]
+    lines += _spatial_lines(data.spatial, fig, times)
     # --- designer
     lines += [
         "## What a designer should take from each map",
@@ -256,6 +260,126 @@ def render_page(data: MapsData, command: str, times: Times = TIMES) -> str:
     return "\n".join(line for line in lines)
 
 
+def _spatial_lines(c: Map3DCases, fig: Path, times: Times) -> list[str]:
+    """The 3-D section: the gripper map and the pressure paths' folds and branch points."""
+    g = c.gripper
+    reg = g.regions()
+    (_, xr), (_, yr) = GRIPPER["x"], GRIPPER["y"]
+    ck = c.check
+    agree = ck.k * ck.k - ck.mismatches - ck.near_mismatches
+    counts = sorted({int(cell[4]) for cell in ck.cells})
+    brute = sorted({CLASSES[int(cell[3])] for cell in ck.cells})
+    bps = [p for p in g.paths if p.kind == "branch point"]
+    twist = sorted((b for b in g.boundaries if b.kind == "twist bound" and b.along == "y"), key=lambda b: (b.x, b.y))
+    low = [b for b in twist if b.y < 90.0]
+    high = [b for b in twist if b.y >= 90.0]
+    lines = [
+        "## In 3-D: in the plane, flipped sideways, or snapped",
+        "",
+        "The maps above are planar. In space a payload can also turn the finger out of its plane: at a **branch point**",
+        "the in-plane state loses a sideways-twist mode (lateral-torsional buckling; the 3n x 3n Hessian of the 3-D model",
+        "singular while its in-plane block stays positive definite), and a payload that points out of the plane twists",
+        "the finger more and more (the same branch point made imperfect: a smooth twist, or a fold of the twisted branch).",
+        "`esba map --3d` (`esba/analysis/maps3d.py`) classifies every point of a plane of two of pressure, payload,",
+        "its in-plane angle Omega, its angle out of the plane Beta, its direction *around* the actuator (turned about the",
+        "base axis from the scene's direction) and its point, by the state the history *pressurise, then raise the",
+        "payload from 0* reaches there: **in plane** (stable all the way, the total twist |sum tau_i| within a bound,",
+        "10 deg here), **twisted** (stable, but twisted beyond the bound), **flips** (it lost stability on the way at a",
+        "sideways mode) or **snaps** (it lost stability at an in-plane mode: a fold). Along the ramp the state is",
+        "continued by Newton's method with step control; a converged step onto an indefinite Hessian brackets a branch",
+        "point (Brent's method on the smallest eigenvalue), steps that shrink to nothing mark a fold (Newton on the",
+        "extended system, `esba.statics.spatial.fold3d`). Boundaries between cells of different regions are located by",
+        "Brent's method on the critical load minus the load, or on the twist minus the bound; paths along each axis",
+        "(rising and falling) give the folds and branch points of the plane.",
+        "",
+        "### The gripper map",
+        "",
+        f"![the gripper map]({fig / FIGURES['gripper-3d']})",
+        "",
+        f"`{GRIPPER_COMMAND}` draws this map: the Table 1 actuator under a 0.5 N tip payload whose direction turns",
+        "about the actuator's base axis (around = 0: horizontal in the bending plane, the Table 2 direction; 90 would be",
+        f"straight out of the plane) from {yr[0]:g} to {yr[1]:g} deg, over pressures {xr[0]:g} to {xr[1]:g} MPa, with the eccentric",
+        f"section's stiffnesses (`esba section`: EI_side = {c.section['EI_side']:.0f} N mm^2, GJ = {c.section['GJ']:.0f} N mm^2).",
+        "",
+        f"On the {len(g.grid_x)} x {len(g.grid_y)} raster the finger **stays in its plane** on {100 * reg['stays in its plane']:.1f} %, "
+        f"**flips sideways** on {100 * reg['flips sideways']:.1f} % and **snaps** on {100 * reg['snaps']:.1f} %.",
+    ]
+    if bps:
+        lines += [
+            "",
+            "In the plane (around = 0) the pressure path loses the in-plane state at branch points, "
+            + ", ".join(f"{p.x:.8f} MPa ({p.direction})" for p in bps)
+            + ": between them a 0.5 N horizontal payload flips the finger sideways.",
+        ]
+    if low or high:
+        lines += [
+            "Turned out of the plane, the payload twists the finger past 10 deg smoothly (no loss of stability): at "
+            + ", ".join(f"{b.x:g} MPa beyond {b.y:.3f} deg" for b in low[:4])
+            + (" and, from the other side, below " + ", ".join(f"{b.y:.3f} deg at {b.x:g} MPa" for b in high[:4]) if high else "")
+            + ("; at these pressures it stays in its plane only for loads within "
+               + f"{min(low, key=lambda b: b.y).y:.1f} deg (at {min(low, key=lambda b: b.y).x:g} MPa) to {max(low, key=lambda b: b.y).y:.1f} deg (at {max(low, key=lambda b: b.y).x:g} MPa) of it." if low else "."),
+        ]
+    lines += [
+        "",
+        f"Brute force at the centres of a {ck.k} x {ck.k} grid (a fixed ramp of {BRUTE_STEPS} equal steps of the damped Newton method, "
+        f"classified by the same rules, and a multistart of {BRUTE_STARTS[0] * BRUTE_STARTS[1] * BRUTE_STARTS[2]} damped Newton descents "
+        f"from bent, sideways and twisted starts, `esba.analysis.maps3d.check_grid3d`) finds the classes {', '.join(brute)} and "
+        f"{' or '.join(str(k) for k in counts)} stable state{'s' if counts[-1] != 1 else ''} per cell; the map agrees in **{agree} of {ck.k * ck.k}** cells"
+        + (f" ({ck.mismatches + ck.near_mismatches} disagree)" if ck.mismatches + ck.near_mismatches else "")
+        + ", and the multistart finds the map's state among the stable ones wherever it is stable"
+        + (f" (missed in {ck.missed})." if ck.missed else "."),
+        "",
+        "### The pressure paths in 3-D",
+        "",
+        f"The pressure raised from {PATH_RANGE[0]:g} MPa and lowered from {PATH_RANGE[1]:g} MPa under a horizontal tip payload (Omega = 90 deg,",
+        "in the plane), followed in 3-D until the state loses stability (`esba.analysis.maps3d.path_points`). With a section",
+        f"stiff out of the plane (EI_side = {STIFF_SECTION['EI_side']:g}, GJ = {STIFF_SECTION['GJ']:g} N mm^2) the losses are the planar folds (the first",
+        "map's fold curve; they agree with the planar path engine's to 1e-10 MPa in `tests/analysis/test_maps3d.py`, their",
+        "mode has no sideways part); with the eccentric section the in-plane state flips sideways first:",
+        "",
+        "| payload (N) | stiff section: rising, falling (MPa) | eccentric section: rising, falling (MPa) |",
+        "|---|---|---|",
+    ]
+
+    def cell(pts) -> str:
+        out = []
+        for direction in ("rising", "falling"):
+            hit = [p for p in pts if p[0] == direction]
+            if not hit:
+                out.append("none")
+            elif hit[0][2] == "unstable at the start":
+                out.append(f"unstable at {hit[0][1]:g}")
+            else:
+                out.append(f"{hit[0][2]} at {hit[0][1]:.8f}")
+        return "; ".join(out)
+
+    for f in PATH_PAYLOADS:
+        lines.append(f"| {f:g} | {cell(c.stiff[f])} | {cell(c.eccentric[f])} |")
+    from esba.model.closed_form import pressure_for_angle
+    from esba.model.scene import MAIN_JOB
+
+    p90 = pressure_for_angle(MAIN_JOB.unloaded())
+
+    def flipped(pts) -> bool:  # the in-plane state at p90 lies past the rising loss and before the falling one
+        up = [p[1] for p in pts if p[0] == "rising"]
+        down = [p[1] for p in pts if p[0] == "falling"]
+        return bool(up) and up[0] < p90 and (not down or down[0] > p90)
+
+    unstable = [f for f in PATH_PAYLOADS if flipped(c.eccentric[f])]
+    stable = [f for f in PATH_PAYLOADS if f not in unstable]
+    lines += [
+        "",
+        f"At the 90 degree pressure ({p90:.5f} MPa), with the stiffnesses the eccentric section gives (the layer's width and thickness",
+        "and the fibres' state assumed, `docs/3d.md`), the in-plane state under a horizontal payload of "
+        + (", ".join(f"{f:g}" for f in unstable) + " N lies past the rising path's branch point (and before the falling path's, where it has one): "
+           "it is sideways-unstable" if unstable else "none of these payloads is sideways-unstable")
+        + ("; under " + ", ".join(f"{f:g}" for f in stable) + " N it is stable" if stable else "")
+        + ". Whether the real finger flips depends on the torsional stiffness the paper does not give.",
+        "",
+    ]
+    return lines
+
+
 @dataclass(frozen=True)
 class MapsSettings:
     """The page's one setting: the command it names as its writer."""
@@ -276,12 +400,19 @@ class MapsPage(Page):
         if progress:
             progress("design plane")
         design = design_plane(None, ENVELOPE, R2_GRID, D_GRID, optimum="both", progress=progress)
-        return MapsData(maps, design)
+        return MapsData(maps, design, map3d_cases(progress))
 
     def render(self, data: MapsData, settings: MapsSettings, path: Path, times: Times = TIMES) -> Rendered:
         figures: dict[Path, Any] = {path.parent / "figures" / FIGURES[r.case.name]: (lambda r=r: map_figure(r.map, r.case.title)) for r in data.maps}
         figures[path.parent / "figures" / FIGURES["design"]] = lambda: design_plane_figure(data.design)
+        figures[path.parent / "figures" / FIGURES["gripper-3d"]] = lambda: _gripper_figure(data.spatial)
         return Rendered(render_page(data, settings.command, times), figures)
+
+
+def _gripper_figure(c: Map3DCases):
+    from esba.figures.maps3d import map3d_figure
+
+    return map3d_figure(c.gripper, "3-D: 0.5 N tip payload turned around the actuator, eccentric section (Table 1)")
 
 
 PAGE = MapsPage()

@@ -26,7 +26,8 @@ def test_committed_page_matches_a_fresh_computation(tmp_path):
     assert matches(rendered.text, (DOCS / "maps.md").read_text())
     # what the page says it found: the cusp near 1.645 N and every grid check agreeing
     text = (DOCS / "maps.md").read_text()
-    assert "F = 1.6452" in text and text.count("the map agrees in **") == 3
+    assert "F = 1.6452" in text and text.count("the map agrees in **") == 4  # three planar maps and the 3-D gripper map
     for r in data.maps:
         assert r.check.mismatches == 0 and r.check.near_mismatches == 0
+    assert data.spatial.check.agrees and data.spatial.check.near_mismatches == 0
     assert data.design.optimum[0].status == "optimal" and data.design.optimum[0].unconstrained["clearance"]["snaps_inside"]
