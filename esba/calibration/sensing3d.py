@@ -22,7 +22,11 @@ quantile of chi-square (k unknowns) of the best one is listed: the estimate is u
 
 **Intervals** ``estimate +- z_level std_error`` from (J^T J)^-1, J the Jacobian of the whitened
 residuals: the stated standard deviations taken as they are; the residual chi-square and its
-p-value say whether they fit (status ``misfit`` below p = 1e-3).
+p-value say whether they fit (status ``misfit`` below p = 1e-3). The joint confidence region is
+the force vector's ellipsoid (``force``, ``force_covariance``): the poses are nearly linear in the
+force's components, while (F, Omega, Beta) are its polar coordinates, whose joint ellipse the
+curvature of that map bends (each of their intervals covers at its rate; their joint ellipse
+does not, at a tracker's noise; ``tests/calibration/test_sensing3d.py`` counts the intervals and the force vector's region).
 
 **Identifiability** (:func:`identifiability3d`): the rule of
 :func:`esba.calibration.fit.identifiability_rule` on the Fisher matrix, and the singular values
@@ -309,7 +313,7 @@ class LoadEstimate3D(Report):
             params[lab] = {"estimate": num(self.estimate[j]), "std_error": num(self.std_error[j]), "unit": u,
                            "interval": [num(self.interval[j, 0]), num(self.interval[j, 1])]}
         return {
-            "model": "3d", "status": self.status, "message": self.message, "level": self.level, "parameters": params,
+            "model": "3d", "status": self.status, "message": self.message, "level": self.level, "unknowns": params,
             "covariance": [[num(c) for c in row] for row in self.covariance],
             "correlation": [[num(c) for c in row] for row in self.correlation],
             "force_vector_n": [num(v) for v in self.force], "force_covariance": [[num(c) for c in row] for row in self.force_covariance],
@@ -324,7 +328,7 @@ class LoadEstimate3D(Report):
 def estimate3d_table(d: dict) -> str:
     lines = [f"3-D load estimate: {d['status']}" + (f" ({d['message']})" if d["message"] else "")]
     lines.append(f"{'unknown':<8} {'estimate':>11} {'std error':>10} {int(round(100 * d['level'])):>3} % interval")
-    for lab, p in d["parameters"].items():
+    for lab, p in d["unknowns"].items():
         def f(v, fmt=".5g"):
             return "-" if v is None else format(v, fmt)
 
