@@ -427,6 +427,8 @@ def estimate_load3d(poses: Sequence[Pose3D] | Pose3D, free: Sequence[str] = ("fo
         runs.append((float(r @ r), z, qs, r, J, conv, why))
     if not runs:
         raise Sensing3DError("no start load reaches a stable equilibrium along the load history: check the pressure and the scene")
+    for run in runs:  # directions in (-180, 180]
+        run[1][:] = _wrap_angles(run[1], free)
     runs.sort(key=lambda t: round(t[0], 9))  # ties keep the order of the starts
     chi2, z, qs, r, J, conv, _ = runs[0]
     scale = prob.scale
@@ -476,10 +478,14 @@ def estimate_load3d(poses: Sequence[Pose3D] | Pose3D, free: Sequence[str] = ("fo
         del c["z"]
     states = []
     stable = True
+    near = []
     for i, q in enumerate(qs):
         vals_i = prob.values(i, z)
-        w0 = float(np.linalg.eigvalsh(model.hessian(q, vals_i))[0])
+        w = np.linalg.eigvalsh(model.hessian(q, vals_i))
+        w0 = float(w[0])
         stable = stable and w0 > 0
+        if 0 < w0 < 1e-6 * float(w[-1]):
+            near.append(rows[i].label)
         states.append({"label": rows[i].label, "q": q, "tip": model.tip(q, vals_i["L"]), "stable": w0 > 0})
     warnings = []
     status, message = "ok", ""
@@ -490,12 +496,23 @@ def estimate_load3d(poses: Sequence[Pose3D] | Pose3D, free: Sequence[str] = ("fo
     elif dof > 0 and p_value < MISFIT_P:
         status, message = "misfit", (f"no load reproduces the data within the stated deviations (chi2 = {chi2:.4g} with {dof} degrees "
                                      f"of freedom, p = {p_value:.2g} < {MISFIT_P:g})")
+    if near:
+        warnings.append(f"{', '.join(near)}: the state is near a fold or branch point (smallest Hessian eigenvalue below 1e-6 of the largest): "
+                        "the shape hardly determines the load there, and the intervals are not to be trusted")
     if ident.words:
         warnings += list(ident.words)
     if len(candidates) > 1:
         warnings.append(f"not unique: {len(candidates)} loads explain the data equally well within the noise")
     return LoadEstimate3D(free, units, z, se, interval, cov, corr, float(level), force, fcov, chi2, dof, p_value, ident, candidates, states,
                           status, message, iterations, len(tries), poses, warnings)
+
+
+def _wrap_angles(z: np.ndarray, free) -> np.ndarray:
+    out = np.array(z, dtype=float)
+    for j, f in enumerate(free):
+        if _kind(f) == "Omega":
+            out[j] = 180.0 - (180.0 - out[j]) % 360.0
+    return out
 
 
 def _wrap(dz: np.ndarray, free) -> np.ndarray:
