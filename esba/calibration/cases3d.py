@@ -191,3 +191,48 @@ def experiments3d_cases() -> Experiments3DCases:
 
 def relative(a: float, b: float) -> float:
     return abs(a / b - 1.0) if b else math.inf
+
+
+#: The synthetic 3-D measurement file of ``examples/measurements/trakstar_3d.csv``: (label, target angle deg, Omega, Beta).
+EXAMPLE_ROWS = (("straight sideways", 0.0, 90.0, 90.0), ("bent 45 sideways", 45.0, 90.0, 90.0),
+                ("bent 90 sideways", 90.0, 90.0, 90.0), ("bent 90 45 deg out", 90.0, 90.0, 45.0))
+EXAMPLE_SEED = 2026
+
+
+def example_fit_file() -> str:
+    """The text of ``examples/measurements/trakstar_3d.csv``: tip poses (a trakSTAR's position and
+    rotation matrix) of the Table 1 actuator with :data:`SECTION` under known sideways loads, with
+    Gaussian noise of the stated deviations (seed :data:`EXAMPLE_SEED`), to 4 decimals as a tracker prints them."""
+    from esba.calibration.sensing3d import predict3d
+    from esba.model.closed_form import pressure_for_angle
+
+    rng = np.random.default_rng(EXAMPLE_SEED)
+    rot_names = ",".join(f"tip_R{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3))
+    lines = ["# Synthetic 3-D poses (not measured): the Table 1 actuator with EI_side = 4e5 and GJ = 1e5 N mm^2 under known",
+             "# sideways tip loads, tip position and rotation matrix as a trakSTAR sensor gives them, with Gaussian noise of the",
+             "# stated deviations. Made by `python -m esba.calibration.cases3d FILE` (esba/calibration/cases3d.py).",
+             "# Fit EI_side and GJ with:  esba fit examples/measurements/trakstar_3d.csv",
+             f"label,pressure_mpa,payload_n,payload_angle_deg,payload_out_of_plane_deg,tip_x_mm,tip_y_mm,tip_z_mm,tip_sd_mm,{rot_names},rotation_sd_deg"]
+    for label, target, om, be in EXAMPLE_ROWS:
+        P = 0.0 if target == 0.0 else round(float(pressure_for_angle(Scene(target_angle_deg=target, payloads=()))), 4)
+        sc = Scene(pressure=P, payloads=(Payload(SPATIAL_LOAD_N, om, 1.0, be),))
+        _, (tip, rot) = predict3d(sc, SECTION, P, [("tip", None), ("rotation", None)])
+        tip = tip + rng.normal(0.0, 0.1, 3)
+        w = rng.normal(0.0, math.radians(0.2), 3)
+        W = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+        th = float(np.linalg.norm(w))
+        E = np.eye(3) + math.sin(th) / th * W + (1 - math.cos(th)) / th**2 * W @ W
+        rot = rot.reshape(3, 3) @ E
+        lines.append(f"{label},{P:g},{SPATIAL_LOAD_N:g},{om:g},{be:g}," + ",".join(f"{v:.4f}" for v in tip) + ",0.1,"
+                     + ",".join(f"{v:.4f}" for v in rot.ravel()) + ",0.2")
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":  # pragma: no cover - writes the example file
+    import sys
+
+    from esba.infra import outputs
+
+    outputs.check_file(sys.argv[1], "FILE", (".csv",)) if len(sys.argv) == 2 else sys.exit("usage: python -m esba.calibration.cases3d FILE.csv")
+    with open(sys.argv[1], "w", encoding="utf-8") as fh:
+        fh.write(example_fit_file())

@@ -14,7 +14,8 @@ row per pose; a measured column may be left empty where it was not measured:
 ``tip_x_mm``, ``tip_y_mm``, ``tip_z_mm``,    the tip position (x down the base's axis, y horizontal,
 ``tip_sd_mm``                                z out of the bending plane) and its deviation
 ``tip_R11`` ... ``tip_R33``,                 the tip's rotation matrix row by row (its columns are the
-``rotation_sd_deg``                          tip frame's axes in the base frame; orthonormal to 1e-6)
+``rotation_sd_deg``                          tip frame's axes in the base frame; orthonormal to 1e-3,
+                                             then the nearest rotation)
 ``marker_at``, ``marker_x_mm``,              a marker at a fraction of L
 ``marker_y_mm``, ``marker_z_mm``,
 ``marker_sd_mm``

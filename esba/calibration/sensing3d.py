@@ -465,13 +465,27 @@ def estimate_load3d(poses: Sequence[Pose3D] | Pose3D, free: Sequence[str] = ("fo
                 lo[f] -= e
                 G[:, j] = (force_vector(hi["F1"], hi["Omega1"], hi["Beta1"]) - force_vector(lo["F1"], lo["Omega1"], lo["Beta1"])) / (2 * e)
         fcov = G @ cov @ G.T
-    # every distinct load within the chi-square quantile of the best
+    # every distinct load within the chi-square quantile of the best; loads are compared as force
+    # vectors (Omega means nothing at beta = +-90 deg, the poles of the polar coordinates) and by their other unknowns
     limit = chi2 + float(stats.chi2.ppf(level, k))
+    polar = [j for j, f in enumerate(free) if f in ("F1", "Omega1", "Beta1")]
+    rest = [j for j in range(k) if j not in polar]
+    f_tol = np.maximum(3 * np.sqrt(np.abs(np.nan_to_num(np.diag(fcov), nan=0.0))), 1e-6)
+    z_tol = np.maximum(3 * np.nan_to_num(se, nan=0.0), 1e-6 * scale)
+
+    def vector(zc: np.ndarray) -> np.ndarray:
+        v = dict(vals)
+        v.update({free[j]: float(zc[j]) for j in polar})
+        return force_vector(v["F1"], v["Omega1"], v["Beta1"]) if p1 is not None else np.zeros(3)
+
+    def same(a: np.ndarray, b: np.ndarray) -> bool:
+        if polar and np.any(np.abs(vector(a) - vector(b)) > f_tol):
+            return False
+        return bool(np.all(np.abs(_wrap(a - b, free))[rest] <= z_tol[rest]))
+
     candidates = []
     for c2, zc, *_rest in runs:
-        if c2 > limit:
-            continue
-        if any(np.all(np.abs(_wrap(zc - o, free)) <= np.maximum(3 * np.nan_to_num(se, nan=0.0), 1e-6 * scale)) for o in [c["z"] for c in candidates]):
+        if c2 > limit or any(same(zc, c["z"]) for c in candidates):
             continue
         candidates.append({"z": zc, "values": {f: float(v) for f, v in zip(free, zc)}, "chi2": float(c2)})
     for c in candidates:

@@ -57,8 +57,9 @@ class SpatialLSError(InputError):
 #: Each kind: (number of values or None for 3n, unit).
 KINDS3D = {"tip": (3, "mm"), "rotation": (9, "deg"), "marker": (3, "mm"), "angles": (None, "deg")}
 
-#: How far a measured rotation matrix may be from orthonormal (largest entry of R^T R - I), and its determinant from 1.
-ORTHONORMAL_TOL = 1e-6
+#: How far a measured rotation matrix may be from orthonormal (largest entry of R^T R - I): a tracker's
+#: matrix printed to 4 decimals passes; it is then replaced by the nearest rotation (polar decomposition).
+ORTHONORMAL_TOL = 1e-3
 
 
 def _quote(value, limit: int = 60) -> str:
@@ -77,7 +78,7 @@ class Measured3D:
     >>> Measured3D("rotation", (1, 0, 0, 0, 1, 0, 0, 0, 2), 0.5)
     Traceback (most recent call last):
     ...
-    esba.calibration.spatial_ls.SpatialLSError: rotation: not a rotation matrix (largest entry of R^T R - I is 3, above 1e-06)
+    esba.calibration.spatial_ls.SpatialLSError: rotation: not a rotation matrix (largest entry of R^T R - I is 3, above 0.001)
     """
 
     kind: str
@@ -111,6 +112,8 @@ class Measured3D:
                 raise SpatialLSError(f"rotation: not a rotation matrix (largest entry of R^T R - I is {err:.3g}, above {ORTHONORMAL_TOL:g})")
             if np.linalg.det(R) < 0:
                 raise SpatialLSError("rotation: a reflection (determinant -1), not a rotation matrix")
+            U, _, Vt = np.linalg.svd(R)
+            object.__setattr__(self, "values", tuple(float(v) for v in (U @ Vt).ravel()))
         if self.kind == "marker":
             at = checks.finite("marker at", self.at, SpatialLSError) if self.at is not None else math.nan
             if not 0.0 < at <= 1.0:

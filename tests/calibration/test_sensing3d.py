@@ -180,6 +180,8 @@ def test_noisy_in_plane_segment_angles_give_the_planar_estimate():
 def test_bad_measurements_are_refused_in_one_line():
     with pytest.raises(Sensing3DError, match="not a rotation matrix"):
         Measured3D("rotation", (1, 0, 0, 0, 1, 0, 0, 0, 1.01), 0.2)
+    near = Measured3D("rotation", (1, 0, 0, 0, 1, 0, 0, 0, 1.0002), 0.2)  # a tracker's 4 decimals: the nearest rotation
+    assert np.allclose(np.reshape(near.values, (3, 3)), np.eye(3), atol=1e-15)
     with pytest.raises(Sensing3DError, match="reflection"):
         Measured3D("rotation", (1, 0, 0, 0, 1, 0, 0, 0, -1), 0.2)
     with pytest.raises(Sensing3DError, match="finite"):
