@@ -26,15 +26,6 @@ def _numbers(flag: str, count: int | None = None):
     return parse
 
 
-def _marker(text: str) -> tuple[float, float, float]:
-    at, sep, xy = text.partition(":")
-    if not sep:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected AT:X,Y (a fraction of L, then the marker's x,y in mm), e.g. 0.5:60.2,10.3")
-    a = float_arg(at.strip())
-    x, y = _numbers("--marker", 2)(xy)
-    return a, x, y
-
-
 def _sd(text: str) -> float:
     v = float_arg(text)
     if not 1e-9 <= v <= 1e4:
@@ -164,9 +155,6 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
         args.free = ["force", "angle"]
     if args.tip is not None and len(args.tip) != 2:
         raise UsageError("--tip with three numbers (x, y, z) is for the 3-D estimate: give --3d")
-    if any(len(xy) != 2 for _, xy in (args.marker or [])):
-        raise UsageError("--marker AT:X,Y,Z is for the 3-D estimate: give --3d")
-    args.marker = [(at, *xy) for at, xy in args.marker] if args.marker else args.marker
     if args.poses is not None:
         refuse(args, ["theta", "total_angle", "tip", "marker", "sigma_theta", "sigma_total_angle", "sigma_tip", "sigma_marker"],
                "with --poses (the file holds the measurements)")

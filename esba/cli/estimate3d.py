@@ -25,18 +25,19 @@ def numbers(flag: str, counts: tuple[int, ...] | None = None, what: str = ""):
     return parse
 
 
-def marker(text: str) -> tuple[float, tuple[float, ...]]:
+def marker(text: str) -> tuple[float, ...]:
+    """(at, x, y) or, in 3-D, (at, x, y, z)."""
     at, sep, xy = text.partition(":")
     if not sep:
         raise argparse.ArgumentTypeError(f"{text!r}: expected AT:X,Y or AT:X,Y,Z (a fraction of L, then the marker's position in mm), e.g. 0.5:60.2,10.3")
-    return float_arg(at.strip()), numbers("--marker", (2, 3), "x,y or x,y,z in mm")(xy)
+    return (float_arg(at.strip()), *numbers("--marker", (2, 3), "x,y or x,y,z in mm")(xy))
 
 
 def wants_3d(args: argparse.Namespace) -> bool:
     """Does the command line ask for the 3-D estimate (--3d, a 3-D flag, a tip or marker with z, a 3-D pose file)?"""
     if getattr(args, "three_d", False) or any(getattr(args, d, None) for d in FLAGS_3D):
         return True
-    if args.tip is not None and len(args.tip) == 3 or any(len(m[1]) == 3 for m in (args.marker or [])):
+    if args.tip is not None and len(args.tip) == 3 or any(len(m) == 4 for m in (args.marker or [])):
         return True
     if args.poses is not None:
         from esba.calibration.poses3d import is_3d
@@ -103,10 +104,10 @@ def _flag_poses(args: argparse.Namespace, scene):
     if args.marker:
         if args.sigma_marker is None:
             raise UsageError("--marker needs its standard deviation: --sigma-marker SD")
-        for at, xyz in args.marker:
+        for at, *xyz in args.marker:
             if len(xyz) != 3:
                 raise UsageError(f"--marker {at:g}:{','.join(f'{v:g}' for v in xyz)}: the 3-D estimate takes a marker as AT:X,Y,Z")
-            measured.append(Measured3D("marker", xyz, args.sigma_marker, at))
+            measured.append(Measured3D("marker", tuple(xyz), args.sigma_marker, at))
     elif args.sigma_marker is not None:
         raise UsageError("--sigma-marker is not used without --marker")
     if not measured:
