@@ -335,8 +335,9 @@ def estimate3d_table(d: dict) -> str:
         lines.append(f"{lab:<8} {f(p['estimate']):>11} {f(p['std_error'], '.3g'):>10} [{f(p['interval'][0])}, {f(p['interval'][1])}] {p['unit']}")
     fv = d["force_vector_n"]
     if all(v is not None for v in fv):
-        sd = [math.sqrt(max(d["force_covariance"][i][i] or 0.0, 0.0)) if d["force_covariance"][i][i] is not None else math.nan for i in range(3)]
-        lines.append("force vector (base frame, N): " + ", ".join(f"{c} = {v:.4g} +- {s:.2g}" for c, v, s in zip("xyz", fv, sd)))
+        var = [d["force_covariance"][i][i] for i in range(3)]
+        lines.append("force vector (base frame, N): " + ", ".join(f"{c} = {v:.4g}" + (f" +- {math.sqrt(max(w, 0.0)):.2g}" if w is not None else " (not determined)")
+                                                                 for c, v, w in zip("xyz", fv, var)))
     lines.append(f"chi2 = {d['chi2']:.4g} with {d['dof']} degrees of freedom" + (f", p = {d['p_value']:.3g}" if d["p_value"] is not None else ""))
     ident = d["identifiability"]
     cond = "inf" if ident["condition"] is None else f"{ident['condition']:.3g}"
@@ -426,7 +427,11 @@ def estimate_load3d(poses: Sequence[Pose3D] | Pose3D, free: Sequence[str] = ("fo
         iterations += it
         runs.append((float(r @ r), z, qs, r, J, conv, why))
     if not runs:
-        raise Sensing3DError("no start load reaches a stable equilibrium along the load history: check the pressure and the scene")
+        p0 = base.payloads[0] if base.payloads else None
+        start = f"{p0.force:g} N at Omega = {p0.angle_deg:g} deg" if p0 is not None else "no payload"
+        raise Sensing3DError(f"no start load reaches a stable equilibrium along the load history with EI_side = {section['EI_side']:.4g} and "
+                             f"GJ = {section['GJ']:.4g} N*mm^2 (the scene's payload, {start}, and {len(tries) - 1} more directions): "
+                             "start from a smaller payload (--payload) or give the section (--section EI_side=... --section GJ=...)")
     for run in runs:  # directions in (-180, 180]
         run[1][:] = _wrap_angles(run[1], free)
     runs.sort(key=lambda t: round(t[0], 9))  # ties keep the order of the starts
