@@ -119,7 +119,8 @@ def _row(where: str, row: dict[str, Any], segments: int, default_label: str) -> 
         R = [_number(where, k, row.get(k)) for k in _R]
         if any(v is not None for v in R):
             if not all(v is not None for v in R):
-                raise MeasurementError(f"{where}: the tip rotation needs all nine of tip_R11 ... tip_R33; {', '.join(k for k, v in zip(_R, R) if v is None)} empty")
+                empty = ", ".join(k for k, v in zip(_R, R) if v is None)
+                raise MeasurementError(f"{where}: the tip rotation needs all nine of tip_R11 ... tip_R33; {empty} empty")
             measured.append(Measured3D("rotation", tuple(R), _sd(where, row, "rotation_sd_deg", "tip_R11...")))
         marker = _triple(where, row, "marker")
         at = _number(where, "marker_at", row.get("marker_at"))

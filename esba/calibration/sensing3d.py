@@ -48,7 +48,7 @@ import numpy as np
 from scipy import stats
 
 from esba.calibration.fit import fisher_correlation, identifiability_rule
-from esba.calibration.spatial_ls import KINDS3D, Measured3D, Problem, Row, SpatialLSError
+from esba.calibration.spatial_ls import Measured3D, Problem, Row, SpatialLSError
 from esba.infra import checks
 from esba.infra.report import Report
 from esba.infra.threads import single_threaded
@@ -117,13 +117,15 @@ def free_names3d(base: Scene, free: Sequence[str]) -> tuple[str, ...]:
         for nm in names:
             kind, num = _kind(nm), nm[len(_kind(nm)):]
             if kind not in _KINDS or not num.isdigit() or int(num) < 1:
-                raise Sensing3DError(f"free {name!r}: allowed are force, angle, out, at, moment or F1, Omega1, Beta1, s1, mx1, my1, mz1 (F2, ... for a second payload)")
+                raise Sensing3DError(f"free {name!r}: allowed are force, angle, out, at, moment or F1, Omega1, Beta1, s1, mx1, my1, mz1 "
+                                     "(F2, ... for a second payload)")
             k = int(num)
             if kind in ("mx", "my", "mz"):
                 if k != 1:
                     raise Sensing3DError(f"free {nm!r}: one tip moment (mx1, my1, mz1) is estimated")
             elif k > len(base.payloads):
-                raise Sensing3DError(f"free {nm!r}: the scene has {len(base.payloads)} payload(s); give the scene a payload {k} to estimate (its values start the search)")
+                raise Sensing3DError(f"free {nm!r}: the scene has {len(base.payloads)} payload(s); give the scene a payload {k} to estimate "
+                                     "(its values start the search)")
             if nm in out:
                 raise Sensing3DError(f"free {nm!r}: named twice")
             out.append(nm)
@@ -336,8 +338,8 @@ def estimate3d_table(d: dict) -> str:
     fv = d["force_vector_n"]
     if all(v is not None for v in fv):
         var = [d["force_covariance"][i][i] for i in range(3)]
-        lines.append("force vector (base frame, N): " + ", ".join(f"{c} = {v:.4g}" + (f" +- {math.sqrt(max(w, 0.0)):.2g}" if w is not None else " (not determined)")
-                                                                 for c, v, w in zip("xyz", fv, var)))
+        parts = [f"{c} = {v:.4g}" + (f" +- {math.sqrt(max(w, 0.0)):.2g}" if w is not None else " (not determined)") for c, v, w in zip("xyz", fv, var)]
+        lines.append("force vector (base frame, N): " + ", ".join(parts))
     lines.append(f"chi2 = {d['chi2']:.4g} with {d['dof']} degrees of freedom" + (f", p = {d['p_value']:.3g}" if d["p_value"] is not None else ""))
     ident = d["identifiability"]
     cond = "inf" if ident["condition"] is None else f"{ident['condition']:.3g}"
@@ -546,8 +548,8 @@ def predict3d(base: Scene, section: dict | None, pressure: float, kinds: Sequenc
     """(q, predicted values per kind) of ``base`` at ``pressure`` for the kinds (``(kind, at)``): the tip
     position, the rotation (9, row-major), markers, joint angles (deg). Solved along its history unless ``q``."""
     from esba.calibration.spatial_ls import measure_function
-    from esba.statics.spatial import solve_scene3d, scene_values3d, check_section
     from esba.model.spatial import load_model3d
+    from esba.statics.spatial import check_section, scene_values3d, solve_scene3d
 
     scene = base.replace(pressure=pressure)
     section = check_section(section, scene)

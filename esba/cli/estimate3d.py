@@ -111,7 +111,8 @@ def _flag_poses(args: argparse.Namespace, scene):
     elif args.sigma_marker is not None:
         raise UsageError("--sigma-marker is not used without --marker")
     if not measured:
-        raise UsageError("nothing measured in 3-D: give --tip X,Y,Z, --tip-rotation, --marker AT:X,Y,Z or --angles (each with its --sigma-...), or --poses FILE.csv")
+        raise UsageError("nothing measured in 3-D: give --tip X,Y,Z, --tip-rotation, --marker AT:X,Y,Z or --angles (each with its --sigma-...), "
+                         "or --poses FILE.csv")
     return [Pose3D(scene.pressure, tuple(measured), label="flags", target_angle_deg=scene.target_angle_deg if scene.pressure is None else None)]
 
 

@@ -10,7 +10,6 @@ from esba.calibration.cases3d import (
     FREE_SETS,
     LOAD,
     MEASUREMENTS,
-    SPATIAL_LOAD_N,
     TARGET_DEG,
     Experiments3DCases,
     Sensing3DCases,

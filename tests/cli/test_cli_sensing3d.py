@@ -83,7 +83,8 @@ def test_estimate_bad_3d_input_exits_2_with_one_line(argv, match, capsys):
 
 
 @pytest.mark.parametrize("text, match", [
-    (f"pressure_mpa,tip_x_mm,tip_y_mm,tip_z_mm,tip_sd_mm,{_R},rotation_sd_deg\n0.15,100,50,3,0.1,1,0,0,0,1,0,0,0,1.5,0.2\n", "line 2: rotation: not a rotation matrix"),
+    (f"pressure_mpa,tip_x_mm,tip_y_mm,tip_z_mm,tip_sd_mm,{_R},rotation_sd_deg\n0.15,100,50,3,0.1,1,0,0,0,1,0,0,0,1.5,0.2\n",
+     "line 2: rotation: not a rotation matrix"),
     ("pressure_mpa,tip_x_mm,tip_y_mm,tip_z_mm,tip_sd_mm\n0.15,100,nan,3,0.1\n", "tip_y_mm"),
     ("pressure_mpa,tip_x_mm,tip_y_mm,tip_z_mm,tip_sd_mm\n0.15,100,50,0.1\n", "line 2: 4 cells for 5 columns"),
     ("pressure_mpa,tip_x_mm,tip_y_mm,tip_z_mm\n0.15,100,50,3\n", "without tip_sd_mm"),
