@@ -77,3 +77,21 @@ def test_a_3d_sweep_on_two_dask_workers_is_the_local_one(local):
 def test_bad_axes_are_refused_in_one_line(axes, match):
     with pytest.raises(Sweep3DError, match=match):
         plan_sweep3d(BASE, SECTION, **axes)
+
+
+def test_cli_3d_sweep_writes_one_csv_and_refuses_bad_flags(tmp_path, capsys):
+    from esba.cli import main
+
+    out = tmp_path / "s.csv"
+    assert main(["sweep", "--pressure", "0.12", "--payload", "0.6", "--payload-out-of-plane", "0,40", "--section", "EI_side=4e5",
+                 "--section", "GJ=1e5", "--out", str(out), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["counts"] == {"ok": 2} and d["out"] == str(out) and sidecar(out).exists()
+    for argv, match in ((["--3d", "--pressure", "0.1", "--payload-out-of-plane", "100"], "-90 to 90"),
+                        (["--3d", "--pressure", "0.1", "--GJ", "-1"], "stiffness > 0"),
+                        (["--3d", "--target-angle", "90"], "--target-angle is not used"),
+                        (["--3d", "--pressure", "0.1", "--section", "GJ=x"], "--section"),
+                        (["--3d", "--pressure", "0.1", "--out", str(tmp_path / "s.json")], "--out")):
+        assert main(["sweep", *argv]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and match in err, err
