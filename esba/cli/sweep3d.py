@@ -64,7 +64,8 @@ def run_sweep3d(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     except StudyStopped as exc:
         return study_stopped(exc, str(out) if out is not None else None)
-    data = {"model": "3d", "points": plan.size, "counts": study.counts, "runner": study.runner, "axes": [c for c in row_fields3d(plan.base.segments, plan)[: len(plan.axes)]],
+    axes = row_fields3d(plan.base.segments, plan)[: len(plan.axes)]  # the axes' columns
+    data = {"model": "3d", "points": plan.size, "counts": study.counts, "runner": study.runner, "axes": axes,
             "section": plan.section, "out": str(study.out) if study.out is not None else None, "hash": study.hash}
     if out is None:
         data["rows"] = study.rows
