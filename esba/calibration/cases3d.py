@@ -189,10 +189,6 @@ def experiments3d_cases() -> Experiments3DCases:
     return Experiments3DCases(section, SPATIAL_LOAD_N, tuple(cells), section, tuple(map(float, r.estimate)), tuple(map(float, r.std_error)), len(rows))
 
 
-def relative(a: float, b: float) -> float:
-    return abs(a / b - 1.0) if b else math.inf
-
-
 #: The synthetic 3-D measurement file of ``examples/measurements/trakstar_3d.csv``: (label, target angle deg, Omega, Beta).
 EXAMPLE_ROWS = (("straight sideways", 0.0, 90.0, 90.0), ("bent 45 sideways", 45.0, 90.0, 90.0),
                 ("bent 90 sideways", 90.0, 90.0, 90.0), ("bent 90 45 deg out", 90.0, 90.0, 45.0))

@@ -384,7 +384,3 @@ class Problem:
             if small:
                 return z, qs, r, J, it, True
         return z, qs, r, J, max_iter, False
-
-
-def fisher(J: np.ndarray) -> np.ndarray:
-    return J.T @ J
