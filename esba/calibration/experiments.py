@@ -200,6 +200,7 @@ class PaperComparison:
     level: float
     identifiability_all: dict
     tradeoff: float
+    spatial: Any = None  # the 3-D section's cases (esba.calibration.cases3d.Experiments3DCases), when computed
 
 
 def _fold(data: MeasurementSet, train: tuple[str, ...], level: float) -> Fold:

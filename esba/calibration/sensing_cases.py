@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -214,6 +215,7 @@ class SensingCases:
     blind: BlindMap
     ellipses: list[Ellipse]
     table3: list[Table3Case]
+    spatial: Any = None  # the 3-D section's cases (esba.calibration.cases3d.Sensing3DCases), when computed
 
 
 def sensing_cases() -> SensingCases:

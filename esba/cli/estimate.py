@@ -8,6 +8,8 @@ import math
 import sys
 
 from .arguments import UsageError, add_scene_flags, count_arg, float_arg, refuse, scene_from_args
+from .estimate3d import marker as marker3
+from .estimate3d import numbers as numbers3
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 
@@ -22,15 +24,6 @@ def _numbers(flag: str, count: int | None = None):
         return values
 
     return parse
-
-
-def _marker(text: str) -> tuple[float, float, float]:
-    at, sep, xy = text.partition(":")
-    if not sep:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected AT:X,Y (a fraction of L, then the marker's x,y in mm), e.g. 0.5:60.2,10.3")
-    a = float_arg(at.strip())
-    x, y = _numbers("--marker", 2)(xy)
-    return a, x, y
 
 
 def _sd(text: str) -> float:
@@ -146,6 +139,22 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
     from esba.model.scene import SceneError
 
     scene = scene_from_args(args)
+    args.free_given = args.free is not None
+    from .estimate3d import run_estimate3d, wants_3d
+
+    if wants_3d(args):  # a 3-D tracker's measurements: the 3-D model (docs/sensing.md)
+        if args.poses is not None:
+            refuse(args, ["tip", "marker", "tip_rotation", "angles", "sigma_tip", "sigma_marker", "sigma_rotation", "sigma_angles"],
+                   "with --poses (the file holds the measurements)")
+            if args.pressure is not None or args.target_angle is not None:
+                raise UsageError("--pressure and --target-angle are not used with --poses (each row has its own pressure)")
+        elif args.pressure is None and args.target_angle is None and not _scene_sets_drive(args.scene):
+            raise UsageError("give the pressure the shape was measured at: --pressure P (MPa) or --target-angle DEG")
+        return run_estimate3d(args, scene)
+    if args.free is None:
+        args.free = ["force", "angle"]
+    if args.tip is not None and len(args.tip) != 2:
+        raise UsageError("--tip with three numbers (x, y, z) is for the 3-D estimate: give --3d")
     if args.poses is not None:
         refuse(args, ["theta", "total_angle", "tip", "marker", "sigma_theta", "sigma_total_angle", "sigma_tip", "sigma_marker"],
                "with --poses (the file holds the measurements)")
@@ -199,13 +208,22 @@ def add_estimate(sub) -> None:
     m.add_argument("--sigma-theta", type=_sd, metavar="SD", help="standard deviation of each segment angle, deg")
     m.add_argument("--total-angle", type=_numbers("--total-angle", 1), metavar="DEG", help="the total bending angle, deg")
     m.add_argument("--sigma-total-angle", type=_sd, metavar="SD", help="its standard deviation, deg")
-    m.add_argument("--tip", type=_numbers("--tip", 2), metavar="X,Y", help="the tip position, mm (x down the base's axis, y horizontal)")
+    m.add_argument("--tip", type=numbers3("--tip", (2, 3), "x,y or x,y,z in mm"), metavar="X,Y[,Z]",
+                   help="the tip position, mm (x down the base's axis, y horizontal; z out of the bending plane: the 3-D estimate)")
     m.add_argument("--sigma-tip", type=_sd, metavar="SD", help="standard deviation of each tip coordinate, mm")
-    m.add_argument("--marker", type=_marker, action="append", metavar="AT:X,Y", help="a marker at fraction AT of L seen at x,y mm (repeatable)")
+    m.add_argument("--marker", type=marker3, action="append", metavar="AT:X,Y[,Z]", help="a marker at fraction AT of L seen at x,y (or x,y,z: 3-D) mm (repeatable)")
     m.add_argument("--sigma-marker", type=_sd, metavar="SD", help="standard deviation of each marker coordinate, mm")
+    m.add_argument("--tip-rotation", type=numbers3("--tip-rotation", (9,), "the tip's 3 x 3 rotation matrix, row by row"), metavar="R11,...,R33",
+                   help="3-D: the tip's orientation as a rotation matrix, row by row (a trakSTAR's matrix output)")
+    m.add_argument("--sigma-rotation", type=_sd, metavar="DEG", help="3-D: standard deviation of the tip's orientation about each axis, deg")
+    m.add_argument("--angles", type=numbers3("--angles"), metavar="DEG,...", help="3-D: the 3n joint angles theta_1..n, psi_1..n, tau_1..n, deg")
+    m.add_argument("--sigma-angles", type=_sd, metavar="SD", help="3-D: standard deviation of each joint angle, deg")
     m.add_argument("--poses", metavar="FILE.csv", help="a CSV of poses, one a row (see esba.calibration.poses): several loads, or one load at several pressures")
-    p.add_argument("--free", type=_free, default=["force", "angle"], metavar="NAMES",
-                   help="the unknowns: force, angle, at (of the payload), or F1, Omega1, s1, F2, ... (default force,angle)")
+    p.add_argument("--free", type=_free, default=None, metavar="NAMES",
+                   help="the unknowns: force, angle, at (of the payload), or F1, Omega1, s1, F2, ... (default force,angle); "
+                        "3-D also out (Beta1) and moment (mx1, my1, mz1 at the tip) (default force,angle,out)")
+    p.add_argument("--3d", dest="three_d", action="store_true", help="estimate with the 3-D model (chosen by itself by a 3-D flag or pose file; docs/sensing.md)")
+    p.add_argument("--section", action="append", metavar="NAME=VALUE", help="3-D: section stiffness EI_side=..., GJ=... (N*mm^2; default the eccentric section's)")
     p.add_argument("--sigma", action="append", metavar="NAME=SIGMA", help="an actuator parameter's uncertainty carried into the load's (E=5%%, rho=±1; repeatable)")
     p.add_argument("--fit", metavar="FIT.json", help="actuator values and covariance from `esba fit --json` (carried into the load's uncertainty)")
     p.add_argument("--frozen", action="store_true", help="with --fit: the actuator frozen at the fit's values, its covariance not carried")

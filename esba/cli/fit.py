@@ -54,6 +54,26 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from esba.calibration.measurements import MeasurementError, load_measurements
     from esba.model.scene import SceneError, load_scene
 
+    args.free_given = args.free is not None
+    from esba.calibration.poses3d import is_3d
+
+    if args.measurements.lower().endswith(".csv") and is_3d(args.measurements):  # a 3-D tracker's poses: EI_side, GJ (fit3d)
+        from .estimate3d import run_fit3d
+
+        try:
+            from esba.model.scene import Scene
+
+            base3 = load_scene(args.scene) if args.scene else Scene()
+            changes = {k: v for k, v in (("segments", args.segments), ("variant", args.variant)) if v is not None}
+            changes.update(actuator_changes(args))
+            base3 = base3.replace(**changes) if changes else base3
+        except SceneError as exc:
+            raise UsageError(str(exc)) from None
+        return run_fit3d(args, base3)
+    if args.section:
+        raise UsageError("--section is for a 3-D file (tip_z_mm, tip_R11..., psi1_deg, ...): this file is planar")
+    if args.free is None:
+        args.free = ["E", "rho"]
     try:
         base = load_scene(args.scene) if args.scene else None
         if base is not None and _has_scene_table(args.measurements):
@@ -100,7 +120,9 @@ def add_fit(sub) -> None:
                    "(total_angle_deg, tip_x_mm, tip_y_mm, stiffness_n_per_m, each with an optional <name>_sd_<unit>, e.g. "
                    "total_angle_sd_deg); TOML: one [[measurement]] table a row, and an optional [scene]")
     p.add_argument("--scene", metavar="SCENE.toml", help="the actuator and model of the rows (default: the file's [scene], else Table 1, n = 3)")
-    p.add_argument("--free", type=_free_arg, default=["E", "rho"], metavar="NAMES", help="parameters to fit, comma-separated (default E,rho; any of L,r1,r2,d,rho,E,M)")
+    p.add_argument("--free", type=_free_arg, default=None, metavar="NAMES",
+                   help="parameters to fit, comma-separated (default E,rho; any of L,r1,r2,d,rho,E,M); a 3-D file: EI_side, GJ (default both)")
+    p.add_argument("--section", action="append", metavar="NAME=VALUE", help="3-D file: the start values EI_side=..., GJ=... (N*mm^2; default the eccentric section's)")
     p.add_argument("--segments", "-n", type=segments_arg, help="segment count n >= 1 (overrides the scene's)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help="model variant (overrides the scene's)")
     add_actuator_flags(p, note="; a row's own L_mm, E_mpa, ... still win for that row")

@@ -45,6 +45,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     from esba.statics.batch import BatchOptions
     from esba.studies.sweep import sweep
 
+    from .sweep3d import run_sweep3d, wants_3d
+
+    if wants_3d(args):  # the 3-D model: esba.studies.sweep3d
+        return run_sweep3d(args)
     if args.fig12 is not None:
         refuse(args, ["pressure", "payload", "payload_angle", *ACTUATOR_FLAGS, "target_angle", "out", "plot"],
                "with --fig12 (it draws its own grid: r2 and d at P = 0.2 MPa, no payload)")
@@ -194,6 +198,11 @@ def add_sweep(sub) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print JSON (every row)")
     add_actuator_flags(p, values=_values_arg, note="; each a sweep axis")
+    p.add_argument("--3d", dest="three_d", action="store_true", help="sweep the 3-D model (chosen by itself by the flags below; esba/studies/sweep3d.py)")
+    p.add_argument("--payload-out-of-plane", type=_values_arg, metavar="VALUES", help="3-D: the payload's angle out of the bending plane, degrees (-90..90)")
+    p.add_argument("--EI-side", dest="EI_side", type=_values_arg, metavar="VALUES", help="3-D: the section's sideways bending stiffness, N*mm^2 (a sweep axis)")
+    p.add_argument("--GJ", dest="GJ", type=_values_arg, metavar="VALUES", help="3-D: the section's torsional stiffness, N*mm^2 (a sweep axis)")
+    p.add_argument("--section", action="append", metavar="NAME=VALUE", help="3-D: a fixed section stiffness EI_side=..., GJ=... (N*mm^2; default the eccentric section's)")
     add_cluster_flags(p, "the grid")
     p.add_argument("--chunk", type=chunk_arg, default=None, metavar="K", help="points per chunk with --workers, --scheduler or --resume (default 1000)")
     p.add_argument("--resume", action="store_true", help="stream the rows chunk by chunk to --out FILE.csv and continue the study that file holds (a new one if there is none)")

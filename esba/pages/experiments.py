@@ -290,6 +290,10 @@ def render(comparison: PaperComparison, figure_path: str = f"figures/{FIGURE_NAM
         "[derivations.md](derivations.md#the-papers-tables).",
         "",
     ]
+    if comparison.spatial is not None:
+        from .spatial_sections import render_experiments3d
+
+        L += render_experiments3d(comparison.spatial)
     return "\n".join(L)
 
 
@@ -328,7 +332,11 @@ class ExperimentsPage(Page):
     name = "experiments"
 
     def compute(self, settings: None = None, progress: Progress | None = None) -> PaperComparison:
-        return compare_with_paper()
+        from dataclasses import replace
+
+        from esba.calibration.cases3d import experiments3d_cases
+
+        return replace(compare_with_paper(), spatial=experiments3d_cases())
 
     def render(self, data: PaperComparison, settings: None, path: Path, times: Times = TIMES) -> Rendered:
         return Rendered(render(data), {path.parent / "figures" / FIGURE_NAME: lambda: figure(data)})

@@ -174,6 +174,10 @@ def render(data: SensingCases) -> str:
         "cannot tell them apart, and another pose (another pressure, `--poses`) can.",
         "",
     ]
+    if data.spatial is not None:
+        from .spatial_sections import render_sensing3d
+
+        lines += render_sensing3d(data.spatial)
     return "\n".join(lines)
 
 
@@ -183,7 +187,11 @@ class SensingPage(Page):
     name = "sensing"
 
     def compute(self, settings: None = None, progress: Progress | None = None) -> SensingCases:
-        return sensing_cases()
+        from dataclasses import replace
+
+        from esba.calibration.cases3d import sensing3d_cases
+
+        return replace(sensing_cases(), spatial=sensing3d_cases())
 
     def render(self, data: SensingCases, settings: None, path: Path, times: Times = TIMES) -> Rendered:
         return Rendered(render(data), {path.parent / "figures" / BLIND_FIGURE: lambda: blind_figure(data.blind),

@@ -19,7 +19,7 @@ DOC_PATH = Path(__file__).resolve().parents[2] / "docs" / "experiments.md"
 
 @pytest.fixture(scope="module")
 def comparison():
-    return compare_with_paper()
+    return PAGE.compute()  # the paper's comparison and the page's 3-D section (esba.calibration.cases3d)
 
 
 def test_the_data_are_the_papers_tables():

@@ -175,7 +175,7 @@ def test_cli_json_and_table(capsys):
     (["--theta", "1,2,3", "--sigma-theta", "0.1"], "give the pressure"),
     (["--pressure", "0.1", "--theta", "1,2,3"], "--sigma-theta"),
     (["--pressure", "0.1", "--theta", "1,,3", "--sigma-theta", "0.1"], "none empty"),
-    (["--pressure", "0.1", "--tip", "1", "--sigma-tip", "0.1"], "expected 2 numbers"),
+    (["--pressure", "0.1", "--tip", "1", "--sigma-tip", "0.1"], "expected 2 or 3 numbers"),
     (["--pressure", "0.1", "--marker", "0.5", "--sigma-marker", "0.1"], "AT:X,Y"),
     (["--pressure", "0.1", "--total-angle", "60", "--sigma-total-angle", "0"], "standard deviation"),
     (["--pressure", "0.1", "--total-angle", "60", "--sigma-total-angle", "1", "--free", "E"], "free 'E'"),
