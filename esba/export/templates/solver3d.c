@@ -34,6 +34,9 @@
 #define MAX_MINIMISE 300   /* iterations of the minimiser that finds where a jump lands */
 #define MAX_HALVINGS 60    /* halvings of a line search or a shift */
 #define MAX_INVERSE 8      /* inverse iterations for the critical mode */
+#define MAX_SADDLES 6      /* saddles the minimiser leaves along their softest mode */
+/* How far the minimiser moves off a saddle it fell onto (rad, along the unit mode). */
+#define SADDLE_KICK RC(1e-3)
 /* Load steps: the largest (4 steps per ramp) and the smallest before the stable branch is
  * declared ended (a fold or a branch point: the Hessian turns singular there). */
 #define H_MAX RC(0.25)
@@ -312,7 +315,7 @@ static int newton(WORK *w, REAL *q, const REAL *p, int max_iter, REAL *contracti
 /* A stable state near q at p (in place): Newton with the Hessian shifted (H + mu I) until it is
  * positive definite, a backtracking line search on U kept inside the domain. 1 on a stable equilibrium. */
 static int minimise(WORK *w, REAL *q, const REAL *p) {
-    int it;
+    int it, saddles = 0;
     for (it = 0; it < MAX_MINIMISE; ++it) {
         REAL mu = RC(0.0), scale = RC(0.0), size, slope = RC(0.0), u0, alpha;
         int k, j;
@@ -329,11 +332,45 @@ static int minimise(WORK *w, REAL *q, const REAL *p) {
         size = max_abs(w->x, NQ);
         if (!isfinite(size)) return 0;
         if (mu == 0 && size < RC(1e-2)) {
-            REAL contraction, low;
-            if (!newton(w, q, p, MAX_NEWTON, &contraction, &low)) return 0;
+            REAL contraction, low, norm, big = RC(0.0);
+            int r;
+            copy(w->hold, q, NQ);
+            if (!newton(w, q, p, MAX_NEWTON, &contraction, &low)) {
+                /* Newton's steps did not settle (a flat valley, as just past a symmetric branch
+                 * point where the energy is quartic): back to the damped step from here */
+                copy(q, w->hold, NQ);
+                if (!eval_newton(w, q, p)) return 0;
+                mu = RC(1e-4) * (scale > 0 ? scale : RC(1.0));
+                for (j = 0; j <= MAX_HALVINGS; ++j) {
+                    if (factor(w, mu) && w->rel > CRITICAL_TOL) break;
+                    if (j == MAX_HALVINGS) return 0;
+                    mu *= RC(4.0);
+                }
+                solve(w, w->g, w->x);
+                size = max_abs(w->x, NQ);
+                if (!isfinite(size)) return 0;
+                goto damped;
+            }
             if (!eval_newton(w, q, p) || !factor(w, RC(0.0))) return 0;
-            return w->rel > CRITICAL_TOL;
+            if (w->rel > CRITICAL_TOL) return 1;
+            /* Newton ended on a saddle (past a symmetric branch point the state it started from may
+             * fall back to it): leave it along its softest mode (inverse iteration, the largest
+             * entry positive) by SADDLE_KICK and go on minimising, at most MAX_SADDLES times */
+            if (++saddles > MAX_SADDLES) return 0;
+            for (k = 0; k < NQ; ++k) w->gl[k] = RC(1.0) + RC(k) / RC(NQ);
+            for (r = 0; r < MAX_INVERSE; ++r) {
+                solve(w, w->gl, w->gl);
+                norm = norm2(w->gl);
+                if (!(norm > 0) || !isfinite(norm)) return 0;
+                for (k = 0; k < NQ; ++k) w->gl[k] /= norm;
+            }
+            for (k = 0; k < NQ; ++k) {
+                if (FABS(w->gl[k]) > FABS(big)) big = w->gl[k];
+            }
+            for (k = 0; k < NQ; ++k) q[k] += (big < 0 ? -SADDLE_KICK : SADDLE_KICK) * w->gl[k];
+            continue;
         }
+    damped:
         if (size > MAX_DQ) {
             for (k = 0; k < NQ; ++k) w->x[k] *= MAX_DQ / size;
         }
