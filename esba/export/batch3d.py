@@ -27,7 +27,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
 
-import casadi as ca
 import numpy as np
 
 from esba.infra import cache

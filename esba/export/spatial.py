@@ -44,7 +44,6 @@ from esba.derive.effects3d import DEFAULT_EFFECTS_3D, Effects3D
 from esba.infra import cache, checks, outputs
 from esba.model import validity
 from esba.model.spatial import Model3D, load_model3d
-from esba.model.stability import CRITICAL_TOL  # noqa: F401  (the tolerances below are ccode's)
 
 from .ccode import FLAGS, PRECISIONS, TEMPLATES, TOLERANCES, ExportError, _c_number, _mark_parameters_used, _single_precision, fill, flag_meanings
 from .writer import MANIFEST, _WRITER, _manifest, _sha256, foreign_files
