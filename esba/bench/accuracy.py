@@ -425,3 +425,36 @@ def batch_benchmark(size: int = 10_000, segments: int = 3, naive_repeat: int = 5
     out["speedup_vs_naive"] = out["naive_us"] / best_us
     out["speedup_vs_ipopt"] = out["ipopt_us"] / best_us
     return out
+
+
+def batch3d_benchmark(size: int = 2000, segments: int = 3, samples: int = 20) -> dict:
+    """µs per 3-D equilibrium of the 3-D batch (:mod:`esba.export.batch3d`: the compiled 3-D export,
+    every element checked from the model), warm (the library built and loaded by a first call), on
+    Table 1 with its section: pressures 0-0.2 MPa x tip payloads 0-2 N horizontal in the plane and
+    30 deg out of it; and the largest difference from solve3d on ``samples`` elements."""
+    from esba.export.batch3d import solve_batch3d
+    from esba.model.spatial import load_model3d
+    from esba.statics.spatial import solve3d
+
+    k = int(round(math.sqrt(size)))
+    P, F = np.meshgrid(np.linspace(0.0, 0.2, k), np.linspace(0.0, 2.0, size // k))
+    vals = {"P": P.ravel(), "F1": F.ravel(), "Omega1": math.pi / 2, "Beta1": math.radians(30.0), "s1": 1.0}
+    solve_batch3d(segments, {key: (v[:2] if np.ndim(v) else v) for key, v in vals.items()})  # builds or loads the library
+    runs = [solve_batch3d(segments, vals) for _ in range(3)]
+    best = sorted(runs, key=lambda r: r.timings["total"])[1]
+    count = len(best.status)
+    model = load_model3d(segments)
+    rng = np.random.default_rng(0)
+    gaps = []
+    for i in rng.choice(count, min(samples, count), replace=False):
+        values = {"L": 135.0, "r1": 8.0, "r2": 3.0, "d": 4.0, "rho": math.radians(10.0), "E": 0.54, "M": 0.035, "EI_side": 0.0, "GJ": 0.0}
+        from esba.export.spatial import SECTION_DEFAULTS
+
+        values.update({"EI_side": SECTION_DEFAULTS["EI_side"], "GJ": SECTION_DEFAULTS["GJ"], "P": float(vals["P"][i]), "F1": float(vals["F1"][i]),
+                       "Omega1": math.pi / 2, "Beta1": math.radians(30.0), "s1": 1.0})
+        py = solve3d(model, {p: values[p] for p in model.parameters})
+        if py.converged and py.stable and best.ok[i]:
+            gaps.append(float(np.abs(py.q - best.q[i]).max()))
+    return {"size": count, "segments": segments, "us": best.per_equilibrium_us(), "solve_us": 1e6 * best.timings["solve"] / count,
+            "check_us": 1e6 * best.timings["check"] / count, "counts": best.counts(), "ok": int(best.ok.sum()),
+            "max_q_difference_vs_solve3d": max(gaps) if gaps else None, "samples": len(gaps), "target_us": 60.0}

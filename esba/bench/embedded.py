@@ -283,6 +283,10 @@ def embedded_benchmark(ns: Sequence[int] = EMBEDDED_NS, repeat: int = 11, progre
                 "cortex_m4": m4,
                 "accuracy": accuracy,
             })
+    say("the 3-D export")
+    from .embedded3d import embedded3d_benchmark
+
+    spatial = embedded3d_benchmark(repeat=repeat, progress=say)
     for r in rows:
         for kind in ("equilibrium", "inverse"):
             c, p = statistics.median(r[f"c_{kind}_us"]), statistics.median(r[f"py_{kind}_us"])
@@ -300,6 +304,7 @@ def embedded_benchmark(ns: Sequence[int] = EMBEDDED_NS, repeat: int = 11, progre
         "machine": f"{platform.machine()}, Python {platform.python_version()}, CasADi {ca.__version__}",
         "time_s": time.perf_counter() - t_start,
         "accuracy_scenes": ACCURACY_SCENES,
+        "spatial": spatial,
     }
 
 
@@ -321,5 +326,8 @@ def embedded_table(data: dict) -> str:
                      f"max |d theta| {a['theta_rad']:.2g} rad, tip {a['tip_mm']:.2g} mm, inverse pressure {a['inverse_pressure_mpa']:.2g} MPa")
     if data["arm_compiler"] is None:
         lines.append(f"arm-none-eabi-gcc is not installed: no Cortex-M4 sizes ({data['arm_install']})")
+    for r in data.get("spatial", {}).get("rows", []):
+        lines.append(f"3-D n = {r['n']}: {r['c_us']:.1f} us per equilibrium in C, {r['python_us']:.0f} us in Python ({r['speedup']:.0f}x), "
+                     f"text {r['text']} B, work {r['work_bytes']} B, max |d q| {r['max_q_difference']:.2g} rad")
     lines.append(f"demo: {data['demo']['output']}")
     return "\n".join(lines)

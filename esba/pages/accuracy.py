@@ -92,6 +92,23 @@ def _fmt_s(s: float, t: Times = TIMES) -> str:
     return t.word(text)
 
 
+def _batch3d_lines(b3: dict | None, t: Times) -> list[str]:
+    """The 3-D batch beside the planar one (:func:`esba.bench.accuracy.batch3d_benchmark`)."""
+    if not b3:
+        return []
+    gap = b3["max_q_difference_vs_solve3d"]
+    met = b3["us"] <= b3["target_us"]
+    return [
+        f"- **3-D scenes** (`esba.export.batch3d`: the compiled 3-D export, `esba export c --3d`, every element checked from the",
+        f"  model: gradient and the 3n x 3n Hessian's eigenvalues): {b3['size']} equilibria at n = {b3['segments']}, Table 1 with its section,",
+        "  pressures 0-0.2 MPa x tip payloads 0-2 N horizontal and 30 deg out of the plane, warm (median of 3 runs):",
+        f"  {t(b3['us'], '.0f')} µs per equilibrium, every element included ({t(b3['solve_us'], '.0f')} µs the C solve,",
+        f"  {t(b3['check_us'], '.0f')} µs the check); target 60 µs or less at n = 3: {t.word('met' if met else 'NOT met')}."
+        f" Answered: {', '.join(f'{k} {v}' for k, v in sorted(b3['counts'].items()))}; {b3['ok']} verified.",
+        f"  Largest difference from solve3d on {b3['samples']} sampled elements: {'< 1e-12' if gap is not None and gap < 1e-12 else (f'{gap:.1g}' if gap is not None else 'none compared')} rad.",
+    ]
+
+
 def _batch_cost(b: dict, t: Times) -> list[str]:
     """Where the compiled batch's time per equilibrium goes: natural continuation, its finer retry,
     and the elements it hands to pseudo-arclength continuation of their load history."""
@@ -317,6 +334,7 @@ def render_page(runs: "AccuracyRuns", command: str, figure_rel: str, t: Times = 
         f"- Speed-up: {t(b['speedup_vs_naive'], '.0f')}x the naive script, {t(b['speedup_vs_ipopt'], '.0f')}x IPOPT one by one.",
         f"- How the elements were answered: {answered(b['counts'])}; backend: {b['backend'].split(', cached')[0]}.",
         f"- Largest difference from IPOPT on {50} sampled elements: {b['max_theta_difference_vs_ipopt']:.2g} rad.",
+        *_batch3d_lines(runs.batch3d, t),
         "",
         "## Sweeps on the batch path",
         "",
@@ -353,6 +371,7 @@ class AccuracyRuns:
     effects: list[dict]
     naive: list[dict]
     batch: dict
+    batch3d: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -405,7 +424,9 @@ class AccuracyPage(Page):
         naive = acc.naive_benchmark(naive_ns, repeat=settings.repeat)
         say(f"batch of {size}")
         batch = acc.batch_benchmark(size)
-        return AccuracyRuns(accuracy, tolerance, effects, naive, batch)
+        say("3-D batch")
+        batch3d = acc.batch3d_benchmark(200 if settings.quick else 2000)
+        return AccuracyRuns(accuracy, tolerance, effects, naive, batch, batch3d)
 
     def figure_path(self, settings: AccuracySettings, path: Path) -> Path:
         return path.parent / "figures" / FIGURE_NAME if settings.figure is None else Path(settings.figure)

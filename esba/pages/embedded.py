@@ -77,6 +77,41 @@ def _status_list(codes) -> str:
     return ", ".join(STATUS[c] for c in codes)
 
 
+def _spatial_section(sp: dict | None) -> list[str]:
+    """The 3-D export's rows (:func:`esba.bench.embedded3d.embedded3d_benchmark`)."""
+    if not sp:
+        return []
+    rows = sp["rows"]
+    scenes = "; ".join(f"{p:g} MPa, {f:g} N at {a:g} deg in the plane and {b:g} deg out of it, at = {s:g}" for p, f, a, b, s in sp["scenes"])
+    sec = rows[0]["section"]
+    lines = [
+        "## The 3-D model in C (`esba export c --3d`)",
+        "",
+        "The spatial model (docs/3d.md) exported with the same contract: the section's EI_side and GJ and",
+        "every load (a payload's direction in space and its point, moments, gravity's direction) at run time,",
+        "`ESBA_SNAPPED` at a fold in the plane and `ESBA_BUCKLED` where the stable branch ends with a sideways",
+        "critical mode. Its Hessian is dense (3n x 3n, an LDL^T solve of O(n^3)): it costs more than the",
+        f"planar export. Scenes: Table 1 with its section (EI_side = {sec['EI_side']:.4g}, GJ = {sec['GJ']:.4g} N mm^2); {scenes}.",
+        f"C: each scene {sp['repeat']} times in one `..._equilibrium_batch` call (host `-O2`), median over the scenes;",
+        "Python: `esba.statics.spatial.solve3d` (its load history and IPOPT's certificate), median.",
+        "",
+        "| n | C, µs per equilibrium | Python, µs | speed-up | largest difference of q, rad | statuses | text, bytes (host -O2) | work, bytes |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        gap = r["max_q_difference"]
+        lines.append(f"| {r['n']} | {r['c_us']:.0f} | {r['python_us']:.0f} | {r['speedup']:.0f}x | {'< 1e-12' if gap < 1e-12 else f'{gap:.1g}'} | "
+                     f"{', '.join(sorted(set(r['statuses'])))} | {r['text']:,} | {r['work_bytes']:,} |")
+    lines.append("")
+    if sp["arm"]:
+        lines.append("Cortex-M4 (`-Os`), text bytes: " + "; ".join(
+            f"n = {r['n']}: double {r['cortex_m4']['double']['text']:,}, float {r['cortex_m4']['float']['text']:,}" for r in rows) + ".")
+    else:
+        lines.append("Cortex-M4: `arm-none-eabi-gcc` is not installed on the machine that wrote this page (`apt-get install gcc-arm-none-eabi`): no sizes.")
+    lines.append("")
+    return lines
+
+
 def embedded_page(data: dict[str, Any], command: str) -> str:
     """The Markdown of ``docs/embedded.md`` from :func:`esba.bench.embedded.embedded_benchmark`."""
     rows = data["rows"]
@@ -245,6 +280,7 @@ def embedded_page(data: dict[str, Any], command: str) -> str:
         "state that holds) when the load history at its pressure (what `..._equilibrium` does from the",
         "straight state) reaches another state: the actuator holds it only when it gets there another way.",
         "",
+        *_spatial_section(data.get("spatial")),
         "## A minimal control loop",
         "",
         "Each cycle reads the pressure and a payload estimate, updates where the actuator is from where it",
