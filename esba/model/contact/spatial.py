@@ -9,21 +9,27 @@ in the point is the unit normal out of the obstacle: the direction in which it p
 **Where the body touches.** The spatial model bends the inextensible layer: segment i is the piece
 of helix exp(sigma hat(Xi_i)), Xi_i = [L/n, 0, 0, tau_i, psi_i, theta_i], sigma in [0, 1]
 (:func:`esba.model.spatial.segment_pose`). The cross-section is a disc of radius r1 standing on the
-layer (its axis r1 off the layer along the section's -y). As in the plane (:mod:`.obstacles`), an
-obstacle touches one *line* of the surface, a line of material points at a fixed angle around the
-section, offset from the layer in the section's frame by
+layer (its axis r1 off the layer along the section's -y). An obstacle touches
 
 ==========  =================================  ==========================================
-side        offset (section frame, y, z)       at rest
+side        the curve, offset from the layer   at rest
+            in the section's frame (y, z)
 ==========  =================================  ==========================================
+``tube``    (-r1, 0), the gap less r1          the whole body: every point of the tube
 ``inner``   (0, 0)                             the layer itself, y = 0 (the bending side)
 ``outer``   (-2 r1, 0)                         the dorsal line, y = -2 r1
 ``+z``      (-r1, +r1)                         the side line at z = +r1
 ``-z``      (-r1, -r1)                         the side line at z = -r1
 ==========  =================================  ==========================================
 
-``auto`` (default) takes the line nearest the obstacle at rest (ties in that order). The line turns
-with the section (a twist turns it about the tangent). The end faces are not surfaces of contact.
+``tube`` is the body: the tube of radius r1 about its axis is the union of the balls of radius r1
+about the axis's points (while the bend's radius exceeds r1), so its gap to a plane, a sphere or a
+cylinder is the axis's gap less r1, wherever around the section it touches; its ends are rounded (a
+half ball beyond each end face). The lines are material lines of the surface (a twist turns them
+about the tangent), as in the plane (:mod:`.obstacles`): ``inner`` and ``outer`` are the planar
+model's surfaces. ``auto`` (default): ``tube`` for a 3-D obstacle; a planar obstacle in a 3-D solve
+keeps its planar side, so that it means what it means in the plane. The end faces of a line are not
+surfaces of contact.
 
 A planar obstacle in a 3-D solve is its extrusion across the bending plane (:func:`lift`): a
 half-plane is a plane whose normal lies in the bending plane, a planar cylinder one whose axis is z.
@@ -34,7 +40,7 @@ Scene files (``[[obstacles]]``)::
     kind = "plane";    at = [x, y, z];     normal = [nx, ny, nz]            # the half-space behind it
     kind = "sphere";   centre = [x, y, z]; radius = R
     kind = "cylinder"; centre = [x, y, z]; axis = [ax, ay, az]; radius = R  # infinitely long
-    side = "auto"      # or inner, outer, +z, -z
+    side = "auto"      # or tube, inner, outer, +z, -z
 
 (a ``cylinder`` with a two-number centre and no axis is the planar one, as before).
 
@@ -56,21 +62,27 @@ from typing import Any, Mapping
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import minimize
+from scipy.optimize import minimize, minimize_scalar
 
 from esba.infra import checks
 
 from .obstacles import MAX_COORDINATE_MM, REST_TOLERANCE_MM, Cylinder, HalfPlane, Obstacle, ObstacleError, _coordinate
 
-__all__ = ["Plane", "Sphere", "Cylinder3D", "SIDES_3D", "SPATIAL_KINDS", "lift", "side_offset", "spatial_obstacle_from_dict", "segment_points", "symbolic_line"]
+__all__ = ["Plane", "Sphere", "Cylinder3D", "SIDES_3D", "SPATIAL_KINDS", "lift", "side_offset", "side_inflate", "spatial_obstacle_from_dict", "segment_points", "symbolic_line"]
 
 #: The lines of the surface a 3-D obstacle may touch (see the module's docstring).
-SIDES_3D = ("auto", "inner", "outer", "+z", "-z")
+SIDES_3D = ("auto", "tube", "inner", "outer", "+z", "-z")
 
 
 def side_offset(side: str, r1: float) -> np.ndarray:
-    """The offset of a touching line from the layer in the section's frame (y, z), mm."""
-    return {"inner": np.array([0.0, 0.0]), "outer": np.array([-2.0 * r1, 0.0]), "+z": np.array([-r1, r1]), "-z": np.array([-r1, -r1])}[side]
+    """The offset of a touching curve from the layer in the section's frame (y, z), mm."""
+    return {"tube": np.array([-r1, 0.0]), "inner": np.array([0.0, 0.0]), "outer": np.array([-2.0 * r1, 0.0]),
+            "+z": np.array([-r1, r1]), "-z": np.array([-r1, -r1])}[side]
+
+
+def side_inflate(side: str, r1: float) -> float:
+    """What the gap of the touching curve loses: r1 for the tube (the axis's gap less r1), else 0."""
+    return float(r1) if side == "tube" else 0.0
 
 
 def _vector(where: str, value: Any) -> np.ndarray:
@@ -126,36 +138,32 @@ class SpatialObstacle(Obstacle):
     def _body_distance(self, L: float, r1: float) -> float:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def rest_line_distance(self, side: str, L: float, r1: float) -> float:
-        """The least distance of the line ``side`` at rest (x from 0 to L at the offset) to the obstacle."""
-        o = side_offset(side, r1)
-        xs = np.linspace(0.0, L, 401)
-        pts = np.column_stack([xs, np.full_like(xs, o[0]), np.full_like(xs, o[1])])
-        d = self._distance(pts)
-        i = int(np.argmin(d))
-        lo, hi = xs[max(i - 1, 0)], xs[min(i + 1, xs.size - 1)]
-        res = minimize(lambda x: float(self._distance(np.array([x[0], o[0], o[1]]))), [xs[i]], bounds=[(lo, hi)], method="L-BFGS-B", options={"ftol": 1e-15, "gtol": 1e-12})
-        return float(min(d[i], res.fun))
-
-    def resolved_side(self, L: float, r1: float) -> str:  # type: ignore[override]
-        """The line it touches: :attr:`side`, or the one nearest it at rest for ``auto``."""
-        if self.side != "auto":
-            return self.side
-        d = [self.rest_line_distance(s, L, r1) for s in SIDES_3D[1:]]
-        return SIDES_3D[1 + int(np.argmin(np.round(d, 9)))]
+    def resolved_side(self, L: float = 0.0, r1: float = 0.0) -> str:
+        """The curve it touches: :attr:`side`, or ``tube`` for ``auto``."""
+        return "tube" if self.side == "auto" else self.side
 
     def rest_distance(self, L: float, r1: float) -> float:
         """The signed distance of the actuator's body at rest: the solid cylinder 0 <= x <= L,
-        (y + r1)^2 + z^2 <= r1^2 (the disc of radius r1 standing on the layer)."""
+        (y + r1)^2 + z^2 <= r1^2 (the disc of radius r1 standing on the layer); for the ``tube`` side,
+        with its rounded ends (the axis's segment from (0, -r1, 0) to (L, -r1, 0), less r1)."""
+        if self.resolved_side() == "tube":
+            return self._axis_distance(L, r1) - r1
         return self._body_distance(L, r1)
+
+    def _axis_distance(self, L: float, r1: float) -> float:
+        """The least signed distance of the rest axis's segment (a convex function of x along it)."""
+        f = lambda x: float(self._distance(np.array([x, -r1, 0.0])))  # noqa: E731
+        xs = np.linspace(0.0, L, 65)
+        i = int(np.argmin([f(x) for x in xs]))
+        res = minimize_scalar(f, bounds=(xs[max(i - 1, 0)], xs[min(i + 1, xs.size - 1)]), method="bounded", options={"xatol": 1e-12})
+        return float(min(f(xs[i]), res.fun))
 
     def check_at_rest(self, L: float, r1: float, where: str) -> None:
         d = self.rest_distance(L, r1)
         if d < -REST_TOLERANCE_MM:
-            raise ObstacleError(
-                f"{where}: {self.describe()} reaches {-d:.4g} mm into the actuator at rest "
-                f"(the cylinder 0 <= x <= L = {L:g}, (y + r1)^2 + z^2 <= r1^2 = {r1:g}^2 mm): move it out; touching is allowed"
-            )
+            body = ("the tube of radius r1 = {r1:g} mm about (x, -r1, 0), 0 <= x <= L = {L:g}, with rounded ends" if self.resolved_side() == "tube"
+                    else "the cylinder 0 <= x <= L = {L:g}, (y + r1)^2 + z^2 <= r1^2 = {r1:g}^2 mm").format(r1=r1, L=L)
+            raise ObstacleError(f"{where}: {self.describe()} reaches {-d:.4g} mm into the actuator at rest ({body}): move it out; touching is allowed")
 
 
 def _closest_in_body(f, grad, L: float, r1: float, start: np.ndarray) -> tuple[float, np.ndarray]:

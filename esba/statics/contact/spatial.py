@@ -2,8 +2,8 @@
 
 The planar contact (:mod:`.equilibrium`) in three dimensions. The unknowns are the 3n joint rotations
 q = (theta, psi, tau) of :mod:`esba.model.spatial`; each obstacle (:mod:`esba.model.contact.spatial`:
-a plane, a sphere, a cylinder of any axis, or a planar obstacle extruded across the plane) touches one
-line of the actuator's surface, whose points along each helical segment are CasADi expressions of q
+a plane, a sphere, a cylinder of any axis, or a planar obstacle extruded across the plane) touches the
+tube of the actuator's body (its axis, the gap less r1) or one line of its surface, whose points along each helical segment are CasADi expressions of q
 built here from the SE(3) product of exponentials (:func:`esba.model.contact.spatial.symbolic_line`).
 
 For each obstacle and segment two constraints, as in the plane: the gap at the segment's end, and the
@@ -15,7 +15,8 @@ among the unknowns (d gap / d sigma = 0 their equations), polishes the result to
 
 The load history is the free 3-D solve's (:func:`esba.statics.spatial.solve3d`): the pressure raised
 from 0, then every load, ``options.ramp_steps`` steps each (1 unless given), each step halved when it
-fails or when the shapes between its ends pass through a sphere or a cylinder.
+fails or when the shapes between its ends pass through a sphere or a cylinder (after 20 halvings the
+solve says ``Passed_Through_Obstacle``: a contact that slides off the tip with a force left is a jump).
 
 The result lists each contact (where along the length, the point, the force vector and its size), the
 least gap of each obstacle elsewhere, and the KKT conditions with their numbers
@@ -27,9 +28,9 @@ Examples
 --------
 >>> from esba.model.scene import Scene
 >>> from esba.model.contact.spatial import Sphere
->>> r = solve_contact3d(Scene(pressure=0.1, obstacles=(Sphere(centre=(70.0, 40.0, 10.0), radius=10.0),)))
->>> r.ok, [c.where for c in r.contacts], r.kkt.complementarity < 1e-9
-(True, ['inside segment 3'], True)
+>>> r = solve_contact3d(Scene(pressure=0.14, obstacles=(Sphere(centre=(66.0, 52.0, 3.0), radius=10.0),)))
+>>> r.ok, [c.where for c in r.contacts], round(r.contacts[0].force, 4), r.kkt.complementarity < 1e-9
+(True, ['inside segment 3'], 0.2446, True)
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ from scipy.optimize import nnls
 
 from esba.infra import checks
 from esba.infra.threads import single_threaded
-from esba.model.contact.spatial import SpatialObstacle, lift, side_offset, symbolic_line
+from esba.model.contact.spatial import SpatialObstacle, lift, side_inflate, side_offset, symbolic_line
 from esba.model.scene import Scene, SceneError
 from esba.model.spatial import Model3D, centreline3d, load_model3d
 from esba.model.stability import stability_verdict
@@ -63,7 +64,7 @@ DEFAULT_CONTACT_3D = ContactOptions()
 GRID = 17
 
 #: The most times a solve halves a step of its load history.
-MAX_HALVINGS = 30
+MAX_HALVINGS = 20
 
 
 def _size(kind: str) -> int:
@@ -97,7 +98,7 @@ def _nlp(model: Model3D, kinds: tuple, tol: float, max_iter: int, linear_solver:
     args = ca.vertsplit(pm) if len(names) else []
     length = pm[names.index("L")]
     K = len(kinds)
-    po = ca.SX.sym("po", sum(_size(k) + 2 for k in kinds))
+    po = ca.SX.sym("po", sum(_size(k) + 3 for k in kinds))  # per obstacle: its numbers, the curve's offset (y, z), what the gap loses
     sig = ca.SX.sym("sigma", K * n)
     ends, inner, points = [], [], []
     at = 0
@@ -105,10 +106,11 @@ def _nlp(model: Model3D, kinds: tuple, tol: float, max_iter: int, linear_solver:
         cls = SPATIAL_KINDS[kind][0]
         par = po[at:at + _size(kind)]
         off = po[at + _size(kind):at + _size(kind) + 2]
-        at += _size(kind) + 2
+        infl = po[at + _size(kind) + 2]
+        at += _size(kind) + 3
         e, i = symbolic_line(x, length, off, sig[k * n:(k + 1) * n])
-        ends.append([cls.symbolic_distance(v, par) for v in e])
-        inner.append([cls.symbolic_distance(v, par) for v in i])
+        ends.append([cls.symbolic_distance(v, par) - infl for v in e])
+        inner.append([cls.symbolic_distance(v, par) - infl for v in i])
         points += i
     g = ca.vertcat(*[ca.vertcat(*ends[k], *inner[k]) for k in range(K)])
     gi = ca.vertcat(*[v for k in range(K) for v in inner[k]])
@@ -259,7 +261,8 @@ class ContactProblem3D:
         self.n, self.K = scene.segments, len(self.obstacles)
         self.m = 2 * self.n * self.K
         self.nlp = _nlp(self.model, self.kinds, options.tol, options.max_iter, options.linear_solver)
-        self.po = np.concatenate([np.concatenate([o.parameters(), off]) for o, off in zip(self.obstacles, self.offsets)])
+        self.inflate = [side_inflate(s, r1) for s in self.sides]
+        self.po = np.concatenate([np.concatenate([o.parameters(), off, [infl]]) for o, off, infl in zip(self.obstacles, self.offsets, self.inflate)])
 
     def P(self, pv: np.ndarray, sigma: np.ndarray) -> np.ndarray:
         return np.concatenate([pv, self.po, sigma.ravel()])
@@ -299,7 +302,8 @@ class ContactProblem3D:
         L = float(self.values["L"])
         ok = cand & (sg > 1e-9) & (sg < 1.0 - 1e-9) & (np.abs(ds) <= 1e-9 * max(L / n, 1.0))
         sigma = np.where(ok, sg, 0.5)
-        return sigma, ok, np.where(ok, gap, np.minimum(d[:, 0], d[:, -1]))
+        least = np.where(ok, gap, np.minimum(d[:, 0], d[:, -1]))
+        return sigma, ok, np.minimum(least, d.min(axis=1))  # a line through a thin cylinder's axis (a kink): the grid's least
 
 
 def _lb(prob: ContactProblem3D, values: Mapping[str, float]) -> np.ndarray:
@@ -405,12 +409,12 @@ def _stage(prob: ContactProblem3D, pv: np.ndarray, q0: np.ndarray, force0: np.nd
 
 
 def _crosses(prob: ContactProblem3D, pv: np.ndarray, before: np.ndarray, after: np.ndarray) -> bool:
-    """Whether the shapes between two states (linear in q) reach deep into a sphere or a cylinder (deeper
-    than min(1 mm, R/4)): the step passed through it rather than meeting it."""
+    """Whether the shapes between two states (linear in q), or the last, reach deep into a sphere or a
+    cylinder (deeper than min(1 mm, R/4)): the step passed through it rather than meeting it."""
     deep = [min(1.0, 0.25 * o.radius) if o.kind in ("sphere", "cylinder") else INF for o in prob.obstacles]
     if all(math.isinf(v) for v in deep):
         return False
-    for t in (0.25, 0.5, 0.75):
+    for t in (0.25, 0.5, 0.75, 1.0):
         qt = (1 - t) * before + t * after
         gaps = np.asarray(prob.nlp.grid(qt, pv, prob.po, np.broadcast_to(np.linspace(0.0, 1.0, GRID), (prob.K * prob.n, GRID))))
         for k in range(prob.K):
@@ -538,6 +542,7 @@ def _result(prob: ContactProblem3D, pv, pressure, q, force, sigma, interior, sta
                 i, frac, pt = local - n, float(sigma[k * n + local - n]), pts_in[k * n + local - n]
                 where = f"inside segment {i + 1}"
             normal = o.normal_at(pt[None, :])[0]
+            pt = pt - prob.inflate[k] * normal  # the tube: the point of its surface that touches
             contacts.append(Contact3D(k, o.kind, prob.sides[k], (i + frac) / n, where, tuple(float(v) for v in pt), float(force[j]),
                                       tuple(float(v) for v in normal), float(g[j])))
         gaps.append(float(min(rest)) if rest else None)
