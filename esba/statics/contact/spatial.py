@@ -30,7 +30,7 @@ Examples
 >>> from esba.model.contact.spatial import Sphere
 >>> r = solve_contact3d(Scene(pressure=0.14, obstacles=(Sphere(centre=(66.0, 52.0, 3.0), radius=10.0),)))
 >>> r.ok, [c.where for c in r.contacts], round(r.contacts[0].force, 4), r.kkt.complementarity < 1e-9
-(True, ['inside segment 3'], 0.2446, True)
+(True, ['inside segment 3'], 0.3607, True)
 """
 
 from __future__ import annotations
@@ -203,6 +203,7 @@ class ContactEquilibrium3D:
     obstacles: tuple = field(repr=False, default=())
     sides: tuple = ()
     message: str = ""
+    model: str = ""
 
     @property
     def theta(self) -> np.ndarray:
@@ -233,7 +234,7 @@ class ContactEquilibrium3D:
             "gaps_elsewhere_mm": list(self.gaps), "kkt": self.kkt.to_dict(),
             "obstacles": [{**o.to_dict(), "touches": s} for o, s in zip(self.obstacles, self.sides)],
             "status": self.status, "message": self.message, "iterations": self.iterations, "outer_passes": self.outer,
-            "halvings": self.halvings, "segments": self.n, "solve_time_s": self.solve_time_s,
+            "halvings": self.halvings, "segments": self.n, "solve_time_s": self.solve_time_s, "model": self.model,
         }
 
 
@@ -562,7 +563,7 @@ def _result(prob: ContactProblem3D, pv, pressure, q, force, sigma, interior, sta
         scene=prob.scene, pressure=pressure, q=q, n=n, tip=tip, tip_rotation=rot, energy=prob.model.energy(q, pv), contacts=tuple(contacts),
         gaps=tuple(gaps), kkt=kkt, status=status, success=success, iterations=iterations, outer=outer, halvings=halvings,
         solve_time_s=elapsed, values=dict(prob.values), forces=force, sigma=sigma, obstacles=tuple(prob.obstacles), sides=tuple(prob.sides),
-        message=message,
+        message=message, model=prob.model.path.name,
     )
 
 
