@@ -6,16 +6,20 @@ a plane, a sphere, a cylinder of any axis, or a planar obstacle extruded across 
 tube of the actuator's body (its axis, the gap less r1) or one line of its surface, whose points along each helical segment are CasADi expressions of q
 built here from the SE(3) product of exponentials (:func:`esba.model.contact.spatial.symbolic_line`).
 
-For each obstacle and segment two constraints, as in the plane: the gap at the segment's end, and the
-gap at the fraction sigma of the segment where the gap has its interior least value (found on a grid
-and by Newton on d gap / d sigma = 0; the midpoint when the least gap is at an end). IPOPT solves
+For each obstacle and segment, as in the plane, the gap at the segment's end and the gap at the
+fraction sigma of the segment where the gap has its interior least value (found on a grid and by
+Newton on d gap / d sigma = 0; the midpoint when the least gap is at an end); and, unlike the plane,
+the gaps at four fixed points of the segment (:data:`SAMPLES`), which keep a step from letting a
+segment through an obstacle between its points. IPOPT solves
 min U(q) subject to every gap >= 0 at fixed sigma, the sigmas are moved to the exact minima, and again
 (outer passes); then Newton on the KKT system of the active set, with the interior contacts' sigmas
 among the unknowns (d gap / d sigma = 0 their equations), polishes the result to round-off.
 
 The load history is the free 3-D solve's (:func:`esba.statics.spatial.solve3d`): the pressure raised
-from 0, then every load, ``options.ramp_steps`` steps each (1 unless given), each step halved when it
-fails or when the shapes between its ends pass through a sphere or a cylinder (after 20 halvings the
+from 0, then every load, ``options.ramp_steps`` steps each (1 unless given). While nothing touches, a
+step is the free damped Newton step, kept when the new shape stays clear of every obstacle (else it is
+halved, up to 6 times, to meet the obstacle closer); from there each step is the contact solve, halved when it
+fails or when the shapes between its ends pass through a sphere or a cylinder (after 10 halvings the
 solve says ``Passed_Through_Obstacle``: a contact that slides off the tip with a force left is a jump).
 
 The result lists each contact (where along the length, the point, the force vector and its size), the
@@ -57,14 +61,26 @@ __all__ = ["Contact3D", "ContactEquilibrium3D", "ContactProblem3D", "solve_conta
 
 INF = float("inf")
 
-#: The 3-D solve's default settings: the planar ones (the load history in one step of each kind, halved where needed).
-DEFAULT_CONTACT_3D = ContactOptions()
+#: The 3-D solve's default settings: the planar ones (the load history in one step of each kind, halved where
+#: needed), with at most 12 closest-point passes a step.
+DEFAULT_CONTACT_3D = ContactOptions(max_outer=12)
 
 #: Grid points per segment on which the least gap is first bracketed.
 GRID = 17
 
+#: Fixed points of each segment (fractions) that are constraints too: they keep a step of the load history
+#: from letting a segment through an obstacle between its end and its closest point (0.5 is where a
+#: segment without an interior least gap puts its moving point).
+SAMPLES = (0.2, 0.4, 0.6, 0.8)
+
+#: How close (a fraction of the segment) to its end a least gap counts as its joint's.
+END = 1e-6
+
+#: The most times a solve halves a free step that would reach into an obstacle (to meet it closer).
+MAX_TOUCH = 6
+
 #: The most times a solve halves a step of its load history.
-MAX_HALVINGS = 20
+MAX_HALVINGS = 10
 
 
 def _size(kind: str) -> int:
@@ -85,7 +101,7 @@ class _NLP:
 
 
 def _nlp(model: Model3D, kinds: tuple, tol: float, max_iter: int, linear_solver: str) -> _NLP:
-    key = ("contact3d", kinds, tol, max_iter, linear_solver)
+    key = ("contact3d", kinds, tol, max_iter, linear_solver, SAMPLES)
     found = model.registry.get(key)
     if found is not None:
         return found
@@ -100,7 +116,7 @@ def _nlp(model: Model3D, kinds: tuple, tol: float, max_iter: int, linear_solver:
     K = len(kinds)
     po = ca.SX.sym("po", sum(_size(k) + 3 for k in kinds))  # per obstacle: its numbers, the curve's offset (y, z), what the gap loses
     sig = ca.SX.sym("sigma", K * n)
-    ends, inner, points = [], [], []
+    ends, inner, fixed, points = [], [], [], []
     at = 0
     for k, kind in enumerate(kinds):
         cls = SPATIAL_KINDS[kind][0]
@@ -111,8 +127,10 @@ def _nlp(model: Model3D, kinds: tuple, tol: float, max_iter: int, linear_solver:
         e, i = symbolic_line(x, length, off, sig[k * n:(k + 1) * n])
         ends.append([cls.symbolic_distance(v, par) - infl for v in e])
         inner.append([cls.symbolic_distance(v, par) - infl for v in i])
+        at_samples = [symbolic_line(x, length, off, [h] * n)[1] for h in SAMPLES]
+        fixed.append([cls.symbolic_distance(at_samples[h][i], par) - infl for i in range(n) for h in range(len(SAMPLES))])
         points += i
-    g = ca.vertcat(*[ca.vertcat(*ends[k], *inner[k]) for k in range(K)])
+    g = ca.vertcat(*[ca.vertcat(*ends[k], *inner[k], *fixed[k]) for k in range(K)])
     gi = ca.vertcat(*[v for k in range(K) for v in inner[k]])
     u = model["energy"](x, *args)[0]
     grad = model["gradient"](x, *args)
@@ -179,7 +197,8 @@ class Contact3D:
 @dataclass(frozen=True, eq=False)
 class ContactEquilibrium3D:
     """One solved 3-D scene with obstacles (see the module's docstring). ``forces`` are the multipliers
-    of every constraint (per obstacle: the n segment ends, then the n points at ``sigma``)."""
+    of every constraint (per obstacle: the n segment ends, the n points at ``sigma``, the points at
+    :data:`SAMPLES` of each segment in turn)."""
 
     scene: Scene
     pressure: float
@@ -260,10 +279,24 @@ class ContactProblem3D:
         self.offsets = [side_offset(s, r1) for s in self.sides]
         self.kinds = tuple(o.kind for o in self.obstacles)
         self.n, self.K = scene.segments, len(self.obstacles)
-        self.m = 2 * self.n * self.K
+        self.stride = (2 + len(SAMPLES)) * self.n  # constraints per obstacle
+        self.m = self.stride * self.K
         self.nlp = _nlp(self.model, self.kinds, options.tol, options.max_iter, options.linear_solver)
         self.inflate = [side_inflate(s, r1) for s in self.sides]
         self.po = np.concatenate([np.concatenate([o.parameters(), off, [infl]]) for o, off, infl in zip(self.obstacles, self.offsets, self.inflate)])
+
+    def lower(self, sigma: np.ndarray, interior: np.ndarray) -> np.ndarray:
+        """The constraints' lower bounds: 0, but -inf for a fixed point within 0.1 of its segment's
+        moving point (two constraints so near each other make the problem degenerate for IPOPT)."""
+        lbg = np.zeros(self.m)
+        n, S = self.n, len(SAMPLES)
+        for k in range(self.K):
+            for i in range(n):
+                if interior[k * n + i]:
+                    for h, frac in enumerate(SAMPLES):
+                        if abs(frac - sigma[k * n + i]) < 0.1:
+                            lbg[k * self.stride + 2 * n + i * S + h] = -INF
+        return lbg
 
     def P(self, pv: np.ndarray, sigma: np.ndarray) -> np.ndarray:
         return np.concatenate([pv, self.po, sigma.ravel()])
@@ -294,14 +327,16 @@ class ContactProblem3D:
             ds, dss = ds.ravel(), dss.ravel()
             step = np.where(dss > 0, ds / np.where(dss > 0, dss, 1.0), 0.0)
             new = np.clip(sg - step, lo, hi)
-            done = float(np.max(np.abs(new - sg)[cand], initial=0.0)) <= 1e-15
+            done = float(np.max(np.abs(new - sg)[cand], initial=0.0)) <= 1e-13  # quadratic: the next step is round-off
             sg = new
             if done:
                 break
         gap, ds, _ = (np.asarray(v) for v in self.nlp.along(q, pv, self.po, sg))
         gap, ds = gap.ravel(), ds.ravel()
         L = float(self.values["L"])
-        ok = cand & (sg > 1e-9) & (sg < 1.0 - 1e-9) & (np.abs(ds) <= 1e-9 * max(L / n, 1.0))
+        # a least gap within 1e-6 of a segment's end is its joint's (one constraint for one point: the
+        # gap between them is below (1e-6 L/n)^2 times the curvature, far below gap_tol)
+        ok = cand & (sg > END) & (sg < 1.0 - END) & (np.abs(ds) <= 1e-9 * max(L / n, 1.0))
         sigma = np.where(ok, sg, 0.5)
         least = np.where(ok, gap, np.minimum(d[:, 0], d[:, -1]))
         return sigma, ok, np.minimum(least, d.min(axis=1))  # a line through a thin cylinder's axis (a kink): the grid's least
@@ -336,7 +371,9 @@ def _newton(prob: ContactProblem3D, pv: np.ndarray, q: np.ndarray, force: np.nda
     active = force > opts.force_tol
     act_int = np.zeros(K * n, dtype=bool)
     for j in np.flatnonzero(active):
-        k, local = divmod(j, 2 * n)
+        k, local = divmod(j, prob.stride)
+        if local >= 2 * n:  # a fixed sample point
+            continue
         if local >= n:
             if not interior[k * n + local - n]:
                 return q, force, sigma, False
@@ -382,7 +419,7 @@ def _stage(prob: ContactProblem3D, pv: np.ndarray, q0: np.ndarray, force0: np.nd
     for outer in range(1, opts.max_outer + 1):
         solver = prob.nlp.warm if lam is not None else prob.nlp.solver
         x0 = np.where(np.isfinite(lb), np.maximum(q, np.where(np.isfinite(lb), lb, 0.0) + 1e-9 * np.maximum(1.0, np.abs(np.where(np.isfinite(lb), lb, 0.0)))), q)
-        kw = {"x0": x0, "p": prob.P(pv, sigma), "lbx": lbx, "lbg": np.zeros(prob.m), "ubg": np.full(prob.m, INF)}
+        kw = {"x0": x0, "p": prob.P(pv, sigma), "lbx": lbx, "lbg": prob.lower(sigma, interior), "ubg": np.full(prob.m, INF)}
         if lam is not None:
             kw["lam_g0"] = lam
         sol = solver(**kw)
@@ -403,8 +440,10 @@ def _stage(prob: ContactProblem3D, pv: np.ndarray, q0: np.ndarray, force0: np.nd
             q, force, sigma = polished[:3]
             _, interior, _ = prob.closest(q, pv)
             return q, force, sigma, interior, status, True, iterations, outer
-        if moved <= 1e-10 and not changed and float(np.min(gaps, initial=INF)) >= -opts.gap_tol:
-            return q, force, new, inside, status, True, iterations, outer
+        if moved <= 1e-7 and float(np.min(gaps, initial=INF)) >= -opts.gap_tol:  # no penetration at the exact closest points
+            sigma = np.where(inside, new, 0.5)
+            force = _forces(prob, q, prob.P(pv, sigma), lam)
+            return q, force, sigma, inside, status, True, iterations, outer
         sigma, interior = new, inside
     return q, -lam, sigma, interior, "Closest_Points_Not_Converged", False, iterations, opts.max_outer
 
@@ -445,7 +484,7 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
     """
     options = DEFAULT_CONTACT_3D if options is None else options
     prob = problem if problem is not None else ContactProblem3D(scene, section, gravity_direction, options)
-    from esba.statics.spatial import load_names
+    from esba.statics.spatial import load_names, newton3d
 
     t0 = time.perf_counter()
     model, values = prob.model, prob.values
@@ -470,10 +509,23 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
     status, success = "", True
     here = (0.0, 0.0)
     todo = list(reversed(list(history)))
+    newton_steps = touch = 0
     while todo:
         target = todo.pop()
         v = at(target)
         pv, lb = model.param_vector(v), _lb(prob, v)
+        if force is None or not np.any(force > options.force_tol):  # nothing touches yet: the free step, if it stays clear
+            qf, fine, _ = newton3d(model, v, q, lb=lb)
+            if fine:
+                sf, inf_, gf = prob.closest(qf, pv)
+                if float(np.min(gf)) >= -options.gap_tol and not _crosses(prob, pv, q, qf):
+                    q, force, sigma, interior, here = qf, np.zeros(prob.m), sf, inf_, target
+                    newton_steps += 1
+                    continue
+                if touch < MAX_TOUCH:  # it would reach into an obstacle: a smaller step, to meet it closer
+                    touch += 1
+                    todo += [target, (0.5 * (here[0] + target[0]), 0.5 * (here[1] + target[1]))]
+                    continue
         qn, fn, sn, inn, status, success, it, out = _stage(prob, pv, q, force, lb)
         iterations += it
         outer += out
@@ -487,6 +539,8 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
         q, force, sigma, interior, here = qn, fn, sn, inn, target
         if not success:
             break
+    if success and not iterations:
+        status = "Newton (free, clear of every obstacle)"
     pv = model.param_vector(values)
     return _result(prob, pv, pressure, q, force if force is not None else np.zeros(prob.m), sigma, interior, status, success,
                    iterations, outer, halvings, time.perf_counter() - t0, _lb(prob, values))
@@ -505,7 +559,7 @@ def _result(prob: ContactProblem3D, pv, pressure, q, force, sigma, interior, sta
     dss, dxs = dss.ravel(), dxs.reshape(K * n, N)
     for k in range(K):
         for i in range(n):
-            j = k * 2 * n + n + i
+            j = k * prob.stride + n + i
             if active[j] and interior[k * n + i] and dss[k * n + i] > 0:  # the least gap's curvature
                 lagrangian = lagrangian + force[j] * np.outer(dxs[k * n + i], dxs[k * n + i]) / dss[k * n + i]
     rows = jac[active]
@@ -527,11 +581,12 @@ def _result(prob: ContactProblem3D, pv, pressure, q, force, sigma, interior, sta
     ends = np.ones(K * n)
     pts_end = np.asarray(prob.nlp.line(q, pv, prob.po, ends)).T
     pts_in = np.asarray(prob.nlp.line(q, pv, prob.po, sigma)).T
+    pts_at = [np.asarray(prob.nlp.line(q, pv, prob.po, np.full(K * n, h))).T for h in SAMPLES]
     contacts, gaps = [], []
     for k, o in enumerate(prob.obstacles):
         rest = []
-        for local in range(2 * n):
-            j = k * 2 * n + local
+        for local in range(prob.stride):
+            j = k * prob.stride + local
             if not active[j]:
                 if movable[j]:
                     rest.append(g[j])
@@ -539,8 +594,12 @@ def _result(prob: ContactProblem3D, pv, pressure, q, force, sigma, interior, sta
             if local < n:
                 i, frac, pt = local, 1.0, pts_end[k * n + local]
                 where = "tip" if i == n - 1 else f"joint {i + 1}"
-            else:
+            elif local < 2 * n:
                 i, frac, pt = local - n, float(sigma[k * n + local - n]), pts_in[k * n + local - n]
+                where = f"inside segment {i + 1}"
+            else:
+                i, h = divmod(local - 2 * n, len(SAMPLES))
+                frac, pt = SAMPLES[h], pts_at[h][k * n + i]
                 where = f"inside segment {i + 1}"
             normal = o.normal_at(pt[None, :])[0]
             pt = pt - prob.inflate[k] * normal  # the tube: the point of its surface that touches
