@@ -77,7 +77,8 @@ from esba.derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
 from esba.infra import checks, inputs
 from esba.infra.errors import InputError
 
-from .contact.obstacles import MAX_OBSTACLES, Obstacle, ObstacleError, obstacle_from_dict
+from .contact.kinds import obstacle_from_dict
+from .contact.obstacles import MAX_OBSTACLES, Obstacle, ObstacleError
 from .generated import Model, load_model
 
 __all__ = ["Actuator", "ACTUATOR_RULES", "check_actuator_field", "actuator_rule", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "MAX_PRESSURE", "MAX_PAYLOAD"]

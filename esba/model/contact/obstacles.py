@@ -293,22 +293,19 @@ def obstacle_from_dict(where: str, item: Any) -> Obstacle:
 
     >>> obstacle_from_dict("[[obstacles]] #1", {"kind": "cylinder", "centre": [90, 30], "radius": 12})
     Cylinder(centre=(90.0, 30.0), radius=12.0, side='auto')
-    >>> obstacle_from_dict("[[obstacles]] #1", {"kind": "cone"})
+    >>> obstacle_from_dict("[[obstacles]] #1", {"kind": "sphere"})
     Traceback (most recent call last):
     ...
-    esba.model.contact.obstacles.ObstacleError: [[obstacles]] #1: kind='cone': allowed are half-plane, cylinder, plane, sphere (3-D)
-    >>> obstacle_from_dict("[[obstacles]] #1", {"kind": "sphere", "centre": [100, 0, 30], "radius": 12})
-    Sphere(centre=(100.0, 0.0, 30.0), radius=12.0, side='auto')
+    esba.model.contact.obstacles.ObstacleError: [[obstacles]] #1: kind='sphere': allowed are half-plane, cylinder (a sphere, a plane and a cylinder of any axis come with the 3-D model)
     """
     if not isinstance(item, Mapping):
         raise ObstacleError(f"{where}: expected a table, got {checks.quote(item)}")
     kind = item.get("kind")
-    from .spatial import is_spatial, spatial_obstacle_from_dict  # the 3-D obstacles (plane, sphere, cylinder of any axis)
-
-    if is_spatial(item):
-        return spatial_obstacle_from_dict(where, item)
     if kind not in OBSTACLE_KINDS:
-        raise ObstacleError(f"{where}: kind={checks.quote(kind)}: allowed are {', '.join(OBSTACLE_KINDS)}, plane, sphere (3-D)")
+        raise ObstacleError(
+            f"{where}: kind={checks.quote(kind)}: allowed are {', '.join(OBSTACLE_KINDS)} "
+            "(a sphere, a plane and a cylinder of any axis come with the 3-D model)"
+        )
     cls, keys = OBSTACLE_KINDS[kind]
     unknown = sorted(set(item) - keys)
     if unknown:

@@ -66,7 +66,7 @@ from scipy.optimize import minimize, minimize_scalar
 
 from esba.infra import checks
 
-from .obstacles import MAX_COORDINATE_MM, REST_TOLERANCE_MM, Cylinder, HalfPlane, Obstacle, ObstacleError, _coordinate
+from .obstacles import REST_TOLERANCE_MM, Cylinder, HalfPlane, Obstacle, ObstacleError, _coordinate
 
 __all__ = ["Plane", "Sphere", "Cylinder3D", "SIDES_3D", "SPATIAL_KINDS", "lift", "side_offset", "side_inflate", "spatial_obstacle_from_dict", "segment_points", "symbolic_line"]
 
