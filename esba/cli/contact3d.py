@@ -21,7 +21,8 @@ def _table(d: dict) -> str:
         ("psi deg", "  ".join(f"{v:.4f}" for v in d["psi_deg"])),
         ("tau deg", "  ".join(f"{v:.4f}" for v in d["tau_deg"])),
         ("tip mm", "  ".join(f"{v:.4f}" for v in d["tip_mm"])),
-        ("obstacles", "; ".join(f"#{i + 1} {o['kind']} touching the {o['touches']}" for i, o in enumerate(d["obstacles"]))),
+        ("obstacles", "; ".join(f"#{i + 1} {o['kind']}, touching " + ("the body (tube)" if o["touches"] == "tube" else f"the {o['touches']} line")
+                                for i, o in enumerate(d["obstacles"]))),
         ("contacts", "; ".join(
             f"{c['where']} (s = {c['s']:.4f}) {c['force_n']:.4f} N = ({c['force_vector_n'][0]:.4f}, {c['force_vector_n'][1]:.4f}, {c['force_vector_n'][2]:.4f}) N "
             f"at ({c['point_mm'][0]:.2f}, {c['point_mm'][1]:.2f}, {c['point_mm'][2]:.2f}) mm, {c['kind']} #{c['obstacle'] + 1}" for c in d["contacts"]) or "none"),

@@ -233,7 +233,8 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         "the load history from rest, with contact); `esba path SCENE.toml --to P` follows the pressure with contact and",
         "locates the events; `esba equilibria SCENE.toml` solves the contact problem from the load history's state and",
         "from every equilibrium of the free actuator (a multistart, `esba/statics/contact/multistart.py`). In Python,",
-        "`esba.statics.contact.sweeps.contact_path` follows the pressure or a prescribed tip coordinate.",
+        "`esba.statics.contact.sweeps.contact_path` follows the pressure or a prescribed tip coordinate. In 3-D, `esba solve",
+        "--3d SCENE.toml` (`examples/finger_sphere3d.toml`) solves a scene with planar or 3-D obstacles (the section above).",
         "",
     ]
     return "\n".join(lines)

@@ -509,6 +509,7 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
     status, success = "", True
     here = (0.0, 0.0)
     todo = list(reversed(list(history)))
+    planned = set(todo)
     newton_steps = touch = 0
     while todo:
         target = todo.pop()
@@ -539,6 +540,8 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
         q, force, sigma, interior, here = qn, fn, sn, inn, target
         if not success:
             break
+        while todo and todo[-1] not in planned and not bad:  # touched: on to the history's next step (halved if it fails)
+            todo.pop()
     if success and not iterations:
         status = "Newton (free, clear of every obstacle)"
     pv = model.param_vector(values)
