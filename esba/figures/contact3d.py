@@ -60,7 +60,7 @@ def contact3d_figure(result, title: str = "") -> Figure:
         payloads.append((p.force * np.array([np.cos(be) * np.cos(om), -np.cos(be) * np.sin(om), np.sin(be)]), p.at))
     if not title:
         forces = ", ".join(f"{c.force:.3f} N" for c in result.contacts) or "no contact"
-        title = f"P = {result.pressure:.3g} MPa, n = {result.n}; " + "; ".join(o.describe() for o in result.obstacles) + f"; contact forces {forces}"
+        title = f"P = {result.pressure:.3g} MPa, n = {result.n}; contact forces {forces}\n" + "\n".join(o.describe() for o in result.obstacles)
     fig = tube_figure(result.n, result.q, result.values, payloads, title)
     ax = fig.axes[0]
     L = float(result.values["L"])

@@ -144,3 +144,23 @@ def test_scene_files_keep_their_planar_meaning_and_3d_obstacles_need_the_3d_mode
     assert isinstance(spatial.obstacles[0], Cylinder3D) and spatial.needs_3d
     with pytest.raises(SceneError, match="is a 3-D obstacle"):
         solve_contact(spatial)
+
+
+@pytest.mark.slow
+def test_a_3d_path_locates_the_touch_where_the_free_shape_first_meets_the_sphere():
+    from esba.analysis.contact3d_cases import SPHERE_SCENE
+    from esba.statics.contact.spatial import ContactProblem3D
+    from esba.statics.contact.spatial_path import contact_path3d
+
+    path = contact_path3d(SPHERE_SCENE, np.linspace(0.0, 0.2, 11))
+    assert path.ok and [e.kind for e in path.events] == ["touch"]
+    e = path.events[0]
+    assert e.bracket[1] - e.bracket[0] <= 1e-6
+    from_rest = solve_contact3d(SPHERE_SCENE)  # the path's point at 0.14 MPa is the solve from rest
+    assert np.max(np.abs(path.points[7].q - from_rest.q)) <= 1e-9
+    problem = ContactProblem3D(SPHERE_SCENE)
+    for p, touching in ((e.bracket[0], False), (e.bracket[1], True)):  # the free shape just clear, the contact just made
+        r = solve_contact3d(SPHERE_SCENE, problem=problem, pressure=p)
+        assert bool(r.contacts) == touching
+    below = solve_contact3d(SPHERE_SCENE, problem=problem, pressure=e.bracket[0])
+    assert 0.0 <= below.gaps[0] <= 1e-4  # the least gap at the touch, mm

@@ -39,6 +39,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -466,7 +467,8 @@ def _crosses(prob: ContactProblem3D, pv: np.ndarray, before: np.ndarray, after: 
 @single_threaded
 def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, options: ContactOptions | None = None, *,
                     gravity_direction=(1.0, 0.0, 0.0), problem: ContactProblem3D | None = None,
-                    history: Sequence[tuple[float, float]] | None = None) -> ContactEquilibrium3D:
+                    history: Sequence[tuple[float, float]] | None = None, pressure: float | None = None,
+                    warm: ContactEquilibrium3D | None = None) -> ContactEquilibrium3D:
     """The 3-D equilibrium of a scene with obstacles (frictionless contact), its contacts and KKT check.
 
     Parameters
@@ -481,33 +483,48 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
         The direction of the weight in the base frame (with gravity).
     history : sequence of (float, float), optional
         (pressure, load) fractions of the load history from rest, ending at (1, 1).
+    pressure : float, optional
+        Instead of the scene's (MPa).
+    warm : ContactEquilibrium3D, optional
+        A neighbouring equilibrium of the same scene at another pressure (a path's previous point): the
+        pressure is moved from there in one step (halved as needed), the loads held.
     """
     options = DEFAULT_CONTACT_3D if options is None else options
     prob = problem if problem is not None else ContactProblem3D(scene, section, gravity_direction, options)
     from esba.statics.spatial import load_names, newton3d
 
     t0 = time.perf_counter()
-    model, values = prob.model, prob.values
+    model, values = prob.model, dict(prob.values)
     loads = load_names(model)
+    if pressure is not None:
+        from esba.model.scene import check_pressure
+
+        values["P"] = check_pressure(pressure)
     pressure = float(values.get("P", 0.0))
+    p_from = 0.0 if warm is None else float(warm.pressure)
     steps = options.ramp_steps
-    if history is None:
+    if warm is not None:
+        history = [(1.0, 1.0)]
+    elif history is None:
         history = [(k / steps, 0.0) for k in range(1, steps + 1)]
         if loads and any(values[k] != 0.0 for k in loads):
             history += [(1.0, k / steps) for k in range(1, steps + 1)]
 
     def at(frac: tuple[float, float]) -> dict[str, float]:
         v = dict(values)
-        v["P"] = frac[0] * pressure
+        v["P"] = p_from + frac[0] * (pressure - p_from)
         v.update({k: frac[1] * float(values[k]) for k in loads})
         return v
 
     q = np.zeros(model.size)
     force: np.ndarray | None = None
     sigma, interior = np.full(prob.K * prob.n, 0.5), np.zeros(prob.K * prob.n, dtype=bool)
+    if warm is not None:
+        q, force, sigma = warm.q.copy(), warm.forces.copy(), warm.sigma.copy()
+        interior = prob.closest(q, model.param_vector(at((0.0, 1.0))))[1]
     iterations = outer = halvings = 0
     status, success = "", True
-    here = (0.0, 0.0)
+    here = (0.0, 0.0) if warm is None else (0.0, 1.0)
     todo = list(reversed(list(history)))
     planned = set(todo)
     newton_steps = touch = 0
@@ -545,8 +562,9 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
     if success and not iterations:
         status = "Newton (free, clear of every obstacle)"
     pv = model.param_vector(values)
-    return _result(prob, pv, pressure, q, force if force is not None else np.zeros(prob.m), sigma, interior, status, success,
-                   iterations, outer, halvings, time.perf_counter() - t0, _lb(prob, values))
+    out = _result(prob, pv, pressure, q, force if force is not None else np.zeros(prob.m), sigma, interior, status, success,
+                  iterations, outer, halvings, time.perf_counter() - t0, _lb(prob, values))
+    return dataclasses.replace(out, values=values)
 
 
 def _result(prob: ContactProblem3D, pv, pressure, q, force, sigma, interior, status, success, iterations, outer, halvings, elapsed, lb) -> ContactEquilibrium3D:
