@@ -31,6 +31,8 @@ SPHERE_SCENE = Scene(pressure=0.14, obstacles=(Sphere(centre=(66.0, 52.0, 3.0), 
 TILTED_SCENE = Scene(segments=8, pressure=0.2, obstacles=(Cylinder3D(centre=(70.0, 45.0, 0.0), axis=(0.0, 0.5, 1.0), radius=15.0),))
 #: The off-plane tip load of the wall case: 0.3 N straight out of the plane (Beta = 90 deg), at 90 deg target angle.
 WALL_PAYLOAD = Payload(0.3, 90.0, 1.0, 90.0)
+#: The pressures of the 3-D path (the sphere scene), MPa.
+PATH_PRESSURES = tuple(float(p) for p in np.linspace(0.0, 0.2, 11))
 #: The seeds of the random scenes (tests/statics/test_contact3d.py draws them the same way).
 RANDOM_SEEDS = tuple(range(11, 19))
 
@@ -47,6 +49,7 @@ class Contact3DCases:
     random: list[tuple[int, str, bool, int, float, float, float, str]]  # seed, kind, ok, contacts, stationarity, complementarity, least gap, status
     costs: list[tuple[str, float]]
     ratio: float
+    path: object = None  # esba.statics.contact.spatial_path.ContactPath3D of the sphere scene, 0 to 0.2 MPa
 
 
 def random_scene(rng: np.random.Generator) -> Scene:
@@ -119,6 +122,10 @@ def contact3d_cases(progress: Callable[[str], None] | None = None) -> Contact3DC
         k = r.kkt
         rows.append((seed, scene.obstacles[0].kind, r.ok, len(r.contacts), k.stationarity, k.complementarity, k.min_gap, r.status))
     say("random scenes")
+    from esba.statics.contact.spatial_path import contact_path3d
+
+    path = contact_path3d(SPHERE_SCENE, PATH_PRESSURES)
+    say("path")
     problem = ContactProblem3D(SPHERE_SCENE)
     solve_contact3d(SPHERE_SCENE, problem=problem)  # built and warmed once: the medians are solves
     free_scene = SPHERE_SCENE.replace(obstacles=())
@@ -131,4 +138,4 @@ def contact3d_cases(progress: Callable[[str], None] | None = None) -> Contact3DC
          _median(lambda: solve_contact(Scene(pressure=0.1, obstacles=(HalfPlane(at=(135.0, 0.0)),))))),
     ]
     say("costs")
-    return Contact3DCases(restriction, out_of_reach, wall_case, sphere, tilted, rows, costs, costs[1][1] / free_s)
+    return Contact3DCases(restriction, out_of_reach, wall_case, sphere, tilted, rows, costs, costs[1][1] / free_s, path)

@@ -105,6 +105,21 @@ def spatial_section(d: Contact3DCases, fig: Path, t: Times = TIMES) -> list[str]
     ]
     lines += _contact_rows(d.tilted)
     lines += ["", f"![the finger against a tilted cylinder]({fig / FIGURE_3D})", ""]
+    if d.path is not None:
+        forces = d.path.forces()
+        lines += [
+            "### A path through contact events",
+            "",
+            "`esba.statics.contact.spatial_path.contact_path3d`: the sphere scene at 0 to 0.2 MPa, each point warm-started",
+            "from the previous one, a change of contact located by bisection on the pressure (to 1e-6 MPa):",
+            "",
+            "| P (MPa) | " + " | ".join(f"{p.pressure:.2f}" for p in d.path.points) + " |",
+            "|---|" + "---|" * len(d.path.points),
+            "| contact force (N) | " + " | ".join(f"{f:.4f}" for f in forces) + " |",
+            "",
+        ]
+        lines += [f"- {e.describe()}" for e in d.path.events] or ["- no event"]
+        lines += [""]
     ok = sum(1 for r in d.random if r[2])
     lines += [
         "### Random scenes",
@@ -140,9 +155,10 @@ def spatial_section(d: Contact3DCases, fig: Path, t: Times = TIMES) -> list[str]
         "",
         "### Not done in 3-D",
         "",
-        "- A path through contact events (touch, lift-off, a contact sliding to the tip) in 3-D: the planar `contact_path`",
-        "  is written on the planar problem; a contact that slides off the tip of a tilted cylinder with force left is a",
-        "  jump, which the 3-D solve reports as `Passed_Through_Obstacle` rather than locating it.",
+        "- Slides in the 3-D path (a contact moving from one segment to the next is not an event there, as it is in the",
+        "  planar `contact_path`), a path in a load or a prescribed displacement, and `esba path --3d`; a contact that",
+        "  slides off the rounded tip with force left is a jump, which the 3-D solve reports as `Passed_Through_Obstacle`",
+        "  rather than locating it.",
         "- Friction, in 3-D as in the plane: Coulomb's cone is a second-order cone constraint per contact (IPOPT takes it",
         "  smoothed), and a sliding contact's work depends on its path, so the statics are no longer a minimum of energy:",
         "  an incremental (load-stepped) problem with the friction force's direction as unknowns. Not clean enough yet.",
