@@ -4,11 +4,15 @@ Generation of the 3-D model (n = 3, 10, 30), a full 3-D solve at n = 3 (load his
 certificate) against the planar ``solve`` of the same scene and a naive SciPy BFGS on the 3-D
 energy, a warm 3-D solve at n = 30 (90 unknowns; :func:`esba.statics.spatial.warm3d`), and the cost per point of following the
 3-D equilibria in the pressure at n = 3 (:func:`esba.statics.spatial.follow3d`: natural continuation,
-one call of a compiled four-step Newton Function a point, checked).
+one call of a compiled four-step Newton Function a point, checked) beside the arclength tracer's
+(:class:`esba.statics.spatial_paths.SpatialPathProblem` on the planar engine's
+:func:`esba.paths.continuation.trace`: pseudo-arclength steps, stability by the Hessian's pivots,
+folds and branch points watched) over the same pressures.
 """
 
 from __future__ import annotations
 
+import os
 import time
 from typing import Callable
 
@@ -22,6 +26,8 @@ GENERATION_NS_3D = (3, 10, 30)
 #: The sideways and torsional stiffnesses of the benchmark scene (N*mm^2): stiff enough that the
 #: Table 2 state is stable in 3-D.
 SECTION = {"EI_side": 4e5, "GJ": 1e6, "Beta1": 0.0}
+#: The arclength tracer's step (scaled arclength; the pressure span is its scale): about 60 points.
+ARC_DS = 0.025
 
 
 def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = None) -> dict:
@@ -32,7 +38,10 @@ def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = 
     from esba.model.scene import MAIN_JOB
     from esba.model.spatial import load_model3d
     from esba.statics.equilibrium import solve
+    from esba.paths.continuation import PathOptions
+    from esba.paths.continuation import trace as arclength_trace
     from esba.statics.spatial import follow3d, solve3d, warm3d
+    from esba.statics.spatial_paths import SpatialPathProblem
 
     say = progress or (lambda msg: None)
     gen = []
@@ -73,10 +82,31 @@ def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = 
         follow3d(m3, vals, "P", pressures, q)
 
     tt = median_time(trace, repeat)
+    problem = SpatialPathProblem.from_values(m3, vals, "pressure")
+    options = PathOptions(ds=ARC_DS, ds_max=ARC_DS)
+    arc = {}
+
+    def arclength():
+        arc["branch"] = arclength_trace(problem, q, float(vals["P"]), to=float(pressures[-1]), options=options)
+
+    problem.compile_kernels()  # as a long trace would (they are compiled after HOT_RUNS runs)
+    arclength()
+    ta = median_time(arclength, repeat)
+    branch = arc["branch"]
     say("continuation n = 3")
     return {
         "generation": gen,
         "solve3d_ms": t3 * 1e3, "planar_ms": tp * 1e3, "naive_ms": tn * 1e3, "naive_error": naive_err,
         "warm30_ms": tw * 1e3,
         "point_us": tt / len(pressures) * 1e6, "points": len(pressures),
+        "arc_point_us": ta / len(branch) * 1e6, "arc_points": len(branch), "arc_stopped": branch.stopped,
+        "load_average": _load_average(), "cpus": os.cpu_count() or 0,
     }
+
+
+def _load_average() -> float | None:
+    """The machine's 1-minute load average at the end of the run (None where the OS has none)."""
+    try:
+        return float(os.getloadavg()[0])
+    except (AttributeError, OSError):
+        return None

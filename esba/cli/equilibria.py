@@ -16,8 +16,19 @@ def _cmd_equilibria(args: argparse.Namespace) -> int:
     from esba.statics.equilibria import EquilibriaOptions, EquilibriaOptionsError, equilibria
     from esba.statics.text import equilibria_table
 
-    figure = scene_figure(args, DEFAULT_EQUILIBRIA_FIGURE)
     scene = scene_from_args(args)
+    if args.three_d or scene.needs_3d:
+        from .path3d import cmd_equilibria3d
+
+        if args.plot is not None or args.max_bend is not None:
+            raise UsageError("--plot and --max-bend are not used with --3d (the 3-D search has no figure yet; its domain: docs/3d.md)")
+        if scene.obstacles:
+            raise UsageError("--3d: a scene with obstacles has no 3-D search yet (contact is planar)")
+        return cmd_equilibria3d(args, scene)
+    from .path3d import planar_only_flags
+
+    planar_only_flags(args, scene, "esba equilibria")
+    figure = scene_figure(args, DEFAULT_EQUILIBRIA_FIGURE)
     if scene.obstacles:
         return _contact_equilibria(args, scene, figure)
     try:
@@ -91,4 +102,7 @@ def add_equilibria(sub) -> None:
     p.add_argument("--no-check", action="store_true", help="skip the completeness check (a second search from fresh starts)")
     p.add_argument("--plot", metavar="FILE", help=f"the figure of every equilibrium (default {DEFAULT_EQUILIBRIA_FIGURE} when no scene file is given)")
     p.add_argument("--no-plot", action="store_true", help="write no figure")
+    p.add_argument("--3d", dest="three_d", action="store_true", help="search the 3-D model's equilibria: sideways and twisted states too (chosen by itself when a payload points out of the plane; docs/3d.md)")
+    p.add_argument("--section", action="append", metavar="NAME=VALUE", help="with --3d: section stiffness EI_side=..., GJ=... (N*mm^2; repeatable; default the eccentric section's)")
+    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (default 1,0,0: down, the paper's)")
     p.set_defaults(func=_cmd_equilibria)

@@ -30,6 +30,8 @@ DEFAULT_PATH_FIGURE = "esba-path.png"
 #: The parameters of ``esba path --param`` (``esba.paths.problem.PARAMETERS``, written out so that
 #: building the parser does not import CasADi; a test checks they agree).
 _PATH_PARAMETERS = ("pressure", "payload", "omega", "at", "load", "r2", "d", "rho", "E", "L", "r1", "M")
+#: The parameters only a 3-D path has (``esba path --3d``: esba.statics.spatial_paths.PARAMETERS_3D).
+_PATH_PARAMETERS_3D_ONLY = ("beta",)
 
 
 def _path_write_doc(args: argparse.Namespace) -> int:
@@ -85,6 +87,16 @@ def _cmd_path(args: argparse.Namespace) -> int:
     from esba.statics.equilibrium import EquilibriumError
 
     scene = scene_from_args(args)
+    if args.three_d or scene.needs_3d:
+        from .path3d import cmd_path3d
+
+        _check_path_size(args.max_steps, 3 * scene.segments)  # 3n unknowns a point
+        return cmd_path3d(args, scene, out, plot)
+    from .path3d import planar_only_flags
+
+    planar_only_flags(args, scene, "esba path")
+    if args.param in _PATH_PARAMETERS_3D_ONLY:
+        raise UsageError(f"--param {args.param}: the direction out of the bending plane needs the 3-D model: give --3d")
     if scene.obstacles:
         return _contact_path(args, scene, out, plot)
     param = args.param
@@ -167,7 +179,8 @@ def add_path(sub) -> None:
         help="trace the equilibria as one parameter changes: folds, branch points, stability, hysteresis (CSV/JSON, figure)",
     )
     add_scene_flags(p)
-    p.add_argument("--param", choices=_PATH_PARAMETERS, default="pressure", help="the parameter to follow (default pressure; payload, omega and at are payload 1's: use --payload-index for another)")
+    p.add_argument("--param", choices=_PATH_PARAMETERS + _PATH_PARAMETERS_3D_ONLY, default="pressure",
+                   help="the parameter to follow (default pressure; payload, omega, beta and at are payload 1's: use --payload-index for another; beta, the direction out of the plane, needs --3d)")
     p.add_argument("--payload-index", type=count_arg("--payload-index", 1, 16, "a model carries at most 16 payloads"), default=1, metavar="K", help="which payload --param payload/omega/at means (default 1)")
     p.add_argument("--to", type=float_arg, metavar="VALUE", help="trace to this value (MPa, N, deg, mm, ... as the parameter; required)")
     p.add_argument("--from", dest="start", type=float_arg, metavar="VALUE", help="start here (default: the scene's own value)")
@@ -183,4 +196,7 @@ def add_path(sub) -> None:
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--points", action="store_true", help="with --json: print every point, not only the special ones")
     p.add_argument("--write-doc", metavar="FILE", help="run the path cases of docs/paths.md (Table 1: bistable ranges, buckling for n = 1..8) and write the page and its figures (several seconds)")
+    p.add_argument("--3d", dest="three_d", action="store_true", help="trace the 3-D model (chosen by itself when a payload points out of the plane; --param pressure, payload, omega, beta, at or load; docs/3d.md)")
+    p.add_argument("--section", action="append", metavar="NAME=VALUE", help="with --3d: section stiffness EI_side=..., GJ=... (N*mm^2; repeatable; default the eccentric section's)")
+    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (default 1,0,0: down, the paper's)")
     p.set_defaults(func=_cmd_path)

@@ -80,7 +80,7 @@ from esba.solvers.newton import ACCEPTANCE, FINAL, NEWTON, STEPS, Acceptance, ru
 from .branch import Branch, SpecialPoint, branches_csv, write_branches
 from .corrector import Corrector, Point
 from .locate import BRANCH_ORTHOGONALITY, locate_crossing, locate_value, special_from
-from .problem import PARAMETERS, PathError, PathProblem
+from .problem import PARAMETERS, PathError, PathProblem, is_path_problem
 
 _log = logging.getLogger("esba.paths.continuation")
 
@@ -396,7 +396,7 @@ def trace(
     opts = DEFAULT_PATH_OPTIONS if options is None else options
     if not isinstance(opts, PathOptions):
         raise PathError(f"options={options!r}: expected a PathOptions")
-    if not isinstance(problem, PathProblem):
+    if not is_path_problem(problem):
         raise PathError(f"problem={problem!r}: expected a PathProblem")
     lam0 = checks.finite("lam0", lam0, PathError)
     theta0 = _check_vector("theta0", theta0, problem.n)
@@ -803,8 +803,8 @@ def continuation(
         raise PathError(f"Natural continuation takes no {', '.join(sorted(kwargs))}: those are PALC's (trace's)")
     if to is None:
         raise PathError("Natural continuation needs to=: the value lambda is ramped to")
-    if not isinstance(problem, PathProblem):
-        raise PathError(f"problem={problem!r}: expected a PathProblem")
+    if not isinstance(problem, PathProblem):  # its compiled O(n) graph stands on the planar chain's structure
+        raise PathError(f"problem={problem!r}: Natural() continuation is the planar model's (a PathProblem); use PALC()")
     lam0 = checks.finite("lam0", lam0, PathError)
     theta0 = _check_vector("theta0", theta0, problem.n)
     _interval(problem, lam0, to, None)

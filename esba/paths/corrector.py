@@ -146,9 +146,13 @@ class Corrector:
         self.sigma = float(sigma)
         self._weights = np.concatenate([np.full(self.n, self.w), [1.0 / self.sigma**2]])
         self.evaluations = 0
-        self._kernel, self._k = corrector_kernel(problem.model, getattr(settings, "compile", "auto"))
+        own = getattr(problem, "corrector_kernels", None)
+        if own is not None:  # a problem whose Hessian has no chain structure brings its own kernels (the 3-D model's)
+            self._kernel, self._k, self._critical = own(getattr(settings, "compile", "auto"))
+        else:
+            self._kernel, self._k = corrector_kernel(problem.model, getattr(settings, "compile", "auto"))
+            self._critical = problem.model.derived("critical_kernel", lambda: Kernel(critical_function(problem.model), "auto", self.n), persist=False)
         self._layout = bordered_layout(self.n, self._k)
-        self._critical = problem.model.derived("critical_kernel", lambda: Kernel(critical_function(problem.model), "auto", self.n), persist=False)
 
     @classmethod
     def for_trace(cls, problem: PathProblem, lo: float, hi: float, settings=None) -> Corrector:

@@ -46,6 +46,7 @@ from esba.solvers.minimise import minimise
 
 from .continuation import DEFAULT_PATH_OPTIONS, Branch, Natural, PathError, PathOptions, PathProblem, SpecialPoint, crossing_start, natural_branch, trace
 from .corrector import Corrector
+from .problem import is_path_problem
 
 __all__ = ["Jump", "Ramp", "follow", "history"]
 
@@ -175,6 +176,9 @@ class Ramp:
 
 def _minimum(problem: PathProblem, theta0: np.ndarray, lam: float, tol: float) -> tuple[np.ndarray | None, int]:
     """IPOPT from theta0 at lambda: the stable state it lands in (None if it fails), and its iterations."""
+    own = getattr(problem, "minimum", None)
+    if own is not None:  # a problem of another model (the 3-D one) minimises its own energy
+        return own(theta0, lam, tol)
     p = problem.params(lam)
     lbx = np.full(problem.n, problem.lower_bound(lam) * (1.0 - 1e-6))
     m = minimise(problem.model, theta0, p, lbx, tol=tol)
@@ -280,6 +284,8 @@ def follow(
     if natural is not None:
         if not isinstance(natural, Natural):
             raise PathError(f"natural={natural!r}: expected a Natural() or None")
+        if not isinstance(problem, PathProblem):
+            raise PathError("natural: Natural() continuation is the planar model's (a PathProblem); leave natural=None")
         fast = natural_branch(problem, theta, lam, to, natural, "stable")
         if fast.stopped == "bound":
             return Ramp(problem, float(lam0), to, to, fast.theta[-1].copy(), True, (), (), (fast,), "", 0, "Natural")
@@ -377,7 +383,7 @@ MAX_RAMPS = 1000
 
 def _start(problem: Any, theta0: Any) -> np.ndarray:
     """The start angles as an array of the problem's n finite angles, else a :class:`PathError`."""
-    if not isinstance(problem, PathProblem):
+    if not is_path_problem(problem):
         raise PathError(f"problem={checks.quote(problem)}: expected a PathProblem")
     try:
         theta = np.asarray(theta0, dtype=float).ravel()

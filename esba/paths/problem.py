@@ -35,7 +35,7 @@ from esba.model.generated import Model, domain_lower_bound
 from esba.model.scene import Scene, SceneError
 from esba.solvers.native import Kernel, packed
 
-__all__ = ["PathError", "PathProblem", "PARAMETERS", "ghl_function", "fold_function"]
+__all__ = ["PathError", "PathProblem", "PARAMETERS", "ghl_function", "fold_function", "is_path_problem"]
 
 
 class PathError(InputError):
@@ -176,6 +176,18 @@ def _hessian_map(model: Model) -> ca.Function:
 
 # ---------------------------------------------------------------------------------------------
 # the problem
+
+
+#: What the engine asks of a problem besides a :class:`PathProblem`: a problem of another model
+#: (:class:`esba.statics.spatial_paths.SpatialPathProblem`) answers these and brings its own
+#: corrector kernels (``corrector_kernels``), since the planar ones use the chain's Hessian structure.
+PROBLEM_INTERFACE = ("n", "p0", "dp", "name", "unit", "domain", "scale", "period", "ghl", "extended_terms", "fold_terms", "hessians",
+                     "tips", "tip", "lower_bound", "in_range", "defined", "describe", "unit_short", "corrector_kernels", "minimum")
+
+
+def is_path_problem(problem) -> bool:
+    """A :class:`PathProblem`, or an object that answers all of :data:`PROBLEM_INTERFACE`."""
+    return isinstance(problem, PathProblem) or all(hasattr(problem, k) for k in PROBLEM_INTERFACE)
 
 
 @dataclass(frozen=True, eq=False)
