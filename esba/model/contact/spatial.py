@@ -62,7 +62,6 @@ from typing import Any, Mapping
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import minimize, minimize_scalar
 
 from esba.infra import checks
 
@@ -152,6 +151,8 @@ class SpatialObstacle(Obstacle):
 
     def _axis_distance(self, L: float, r1: float) -> float:
         """The least signed distance of the rest axis's segment (a convex function of x along it)."""
+        from scipy.optimize import minimize_scalar  # imported when used: a scene loads without scipy.optimize
+
         f = lambda x: float(self._distance(np.array([x, -r1, 0.0])))  # noqa: E731
         xs = np.linspace(0.0, L, 65)
         i = int(np.argmin([f(x) for x in xs]))
@@ -168,6 +169,8 @@ class SpatialObstacle(Obstacle):
 
 def _closest_in_body(f, grad, L: float, r1: float, start: np.ndarray) -> tuple[float, np.ndarray]:
     """The least of a convex function over the rest body (the solid cylinder): SLSQP from ``start``."""
+    from scipy.optimize import minimize  # imported when used: a scene loads without scipy.optimize
+
     cons = [{"type": "ineq", "fun": lambda x: r1 * r1 - (x[1] + r1) ** 2 - x[2] ** 2, "jac": lambda x: np.array([0.0, -2 * (x[1] + r1), -2 * x[2]])}]
     res = minimize(f, start, jac=grad, bounds=[(0.0, L), (-2 * r1, 0.0), (-r1, r1)], constraints=cons, method="SLSQP", options={"ftol": 1e-14, "maxiter": 200})
     return float(res.fun), res.x
