@@ -1,5 +1,6 @@
 """The cases of ``docs/contact.md``: the blocked-force curve, the probe against a dead load, the tester
-through the snap, the finger closing on a cylinder, and the cost of contact against a free solve.
+through the snap, the finger closing on a cylinder, the cost of contact against a free solve, and the
+3-D cases (:mod:`.contact3d_cases`).
 
 Computation only (:mod:`esba.pages.contact` renders it).
 """
@@ -9,7 +10,7 @@ from __future__ import annotations
 import statistics
 import time
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -43,6 +44,7 @@ class ContactCases:
     grasp: ContactPath
     costs: list[tuple[str, float]]
     ratio: float
+    spatial: Any = None  # esba.analysis.contact3d_cases.Contact3DCases: the page's 3-D section
 
 
 def _median(fn: Callable[[], object], repeat: int = 5) -> float:
@@ -85,4 +87,7 @@ def contact_cases(progress: Callable[[str], None] | None = None) -> ContactCases
         ("blocked-force curve, n = 8, 31 pressures", _median(lambda: blocked_force(Scene(segments=8), PRESSURES), 3)),
     ]
     say("costs")
-    return ContactCases(blocked, dead, tester, ramp_down, ramp_up, g, costs, costs[1][1] / free_s)
+    from .contact3d_cases import contact3d_cases
+
+    spatial = contact3d_cases(say)
+    return ContactCases(blocked, dead, tester, ramp_down, ramp_up, g, costs, costs[1][1] / free_s, spatial)

@@ -9,6 +9,8 @@ In one run, medians over ``repeat`` runs:
   on the generated energy and gradient with the gaps at the joints and 8 points per segment), and
   the compiled limit: one Newton solve of the KKT system on the known active set from a
   neighbouring state;
+* n = 3 in 3-D: the contact solve of a sphere in the bend (:func:`esba.statics.contact.spatial.solve_contact3d`)
+  against the free 3-D solve of the same actuator (:func:`esba.statics.spatial.solve_scene3d`);
 * n = 8: the blocked-force curve at 31 pressures 0 to 0.3 MPa (:func:`esba.statics.contact.sweeps.blocked_force`,
   each pressure warm-started from the previous one), and the same with IPOPT at every pressure.
 """
@@ -104,8 +106,19 @@ def contact_benchmark(repeat: int = 5, progress: Callable[[str], None] | None = 
     row("blocked-force curve, 31 pressures", 8, lambda: blocked_force(base, PRESSURES), lambda r: None,
         f"warm-started; {newton} of 31 by the active set, {31 - newton} by IPOPT")
     row("blocked-force curve, IPOPT at every pressure", 8, lambda: blocked_force(base, PRESSURES, ipopt_only), lambda r: None, "warm-started IPOPT")
+    # 3-D (esba.statics.contact.spatial): the sphere in the bend against the free 3-D solve of the same actuator
+    from esba.analysis.contact3d_cases import SPHERE_SCENE
+    from esba.statics.contact.spatial import ContactProblem3D, solve_contact3d
+    from esba.statics.spatial import solve_scene3d
+
+    free3d = SPHERE_SCENE.replace(obstacles=())
+    problem3d = ContactProblem3D(SPHERE_SCENE)
+    row("3-D free solve", 3, lambda: solve_scene3d(free3d), lambda r: None, "esba.statics.spatial.solve_scene3d, P = 0.14 MPa")
+    row("3-D contact solve", 3, lambda: solve_contact3d(SPHERE_SCENE, problem=problem3d), lambda r: None,
+        "solve_contact3d from rest, a sphere in the bend (docs/contact.md)")
     free_s = rows[0].seconds
     return {
+        "ratio3d": rows[-1].seconds / rows[-2].seconds,
         "rows": rows,
         "ratio": rows[1].seconds / free_s,
         "ratio_target": SOLVE_RATIO_TARGET,

@@ -46,7 +46,7 @@ def cmd_path3d(args: argparse.Namespace, scene, out, plot) -> int:
     from .scenes import _section_arg
 
     if scene.obstacles:
-        raise UsageError("--3d: a scene with obstacles has no 3-D path yet (contact is planar)")
+        raise UsageError("--3d: a scene with obstacles has no 3-D path command yet; esba solve --3d solves it, esba.statics.contact.spatial_path.contact_path3d follows the pressure")
     if args.locate != "extended":
         raise UsageError(f"--locate {args.locate}: with --3d folds and branch points are located by their extended systems only (--locate extended)")
     section = _section_arg(args.section)

@@ -76,6 +76,12 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
         raise UsageError("--plot and --no-plot: give one of the two")
     figure = outputs.figure_file(args.plot, "--plot", "esba-solve3d.png") if args.plot is not None else None  # checked first
     page = outputs.check_file(args.html, "--html", (".html",)) if args.html is not None else None
+    if scene.obstacles:  # contact in 3-D (esba/cli/contact3d.py)
+        if page is not None:
+            raise UsageError("--html: not for a scene with obstacles yet; --plot FILE draws it")
+        from .contact3d import cmd_solve_contact3d
+
+        return cmd_solve_contact3d(args, scene, section, down, figure)
     result = solve_scene3d(scene, section, gravity_direction=down)
     effects, values = scene_values3d(scene, section, down)
     model = load_model3d(scene.segments, effects, scene.variant)

@@ -46,6 +46,8 @@ A scene file is TOML; every key is optional::
     # centre = [90.0, 30.0]   # mm
     # radius = 12.0           # mm
     # side = "auto"           # the surface it touches: auto, inner (the layer), outer (2 r1 off it)
+    # 3-D (esba solve --3d; esba.model.contact.spatial): kind = "plane" (at = [x, y, z], normal = [nx, ny, nz]),
+    # "sphere" (centre = [x, y, z], radius), "cylinder" with axis = [ax, ay, az] and a 3-number centre
 
     [uncertainty]             # optional: standard deviations (see esba.calibration.uncertainty)
     E = "10%"                 # relative; 0.05 (MPa) absolute; "±0.1" a tolerance
@@ -75,7 +77,8 @@ from esba.derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
 from esba.infra import checks, inputs
 from esba.infra.errors import InputError
 
-from .contact.obstacles import MAX_OBSTACLES, Obstacle, ObstacleError, obstacle_from_dict
+from .contact.kinds import obstacle_from_dict
+from .contact.obstacles import MAX_OBSTACLES, Obstacle, ObstacleError
 from .generated import Model, load_model
 
 __all__ = ["Actuator", "ACTUATOR_RULES", "check_actuator_field", "actuator_rule", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "MAX_PRESSURE", "MAX_PAYLOAD"]
@@ -381,7 +384,7 @@ class Scene:
         if isinstance(obstacles, Obstacle):
             obstacles = (obstacles,)
         if not isinstance(obstacles, (tuple, list)) or not all(isinstance(o, Obstacle) for o in obstacles):
-            raise SceneError(f"obstacles={checks.quote(self.obstacles)}: expected a list of obstacles (HalfPlane, Cylinder)")
+            raise SceneError(f"obstacles={checks.quote(self.obstacles)}: expected a list of obstacles (HalfPlane, Cylinder; Plane, Sphere, Cylinder3D in 3-D)")
         if len(obstacles) > MAX_OBSTACLES:
             raise SceneError(f"obstacles: {len(obstacles)} given; at most {MAX_OBSTACLES} (each adds 2 n constraints to every solve)")
         for k, o in enumerate(obstacles, start=1):
@@ -401,8 +404,8 @@ class Scene:
 
     @property
     def needs_3d(self) -> bool:
-        """True when a payload points out of the bending plane (only the 3-D model carries it)."""
-        return any(p.out_of_plane_deg != 0.0 for p in self.payloads)
+        """True when a payload points out of the bending plane or an obstacle is a 3-D one (only the 3-D model carries them)."""
+        return any(p.out_of_plane_deg != 0.0 for p in self.payloads) or any(o.dimension == 3 for o in self.obstacles)
 
     def model(self) -> Model:
         """The generated model for this scene's segments, effects and variant (generated if missing).
@@ -415,6 +418,9 @@ class Scene:
                     f"payload {k}: out_of_plane_deg={p.out_of_plane_deg:g} points out of the bending plane, which the planar model "
                     "cannot carry: solve it in 3-D (esba solve --3d; esba.statics.spatial.solve_scene3d)"
                 )
+        for k, o in enumerate(self.obstacles, start=1):
+            if o.dimension == 3:
+                raise SceneError(f"obstacle #{k}: {o.describe()} is a 3-D obstacle, which the planar model cannot carry: solve it in 3-D (esba solve --3d; esba.statics.contact.spatial.solve_contact3d)")
         return load_model(self.segments, self.effects, self.variant)
 
     def parameters(self, pressure: float, load_factor: float = 1.0) -> dict[str, float]:

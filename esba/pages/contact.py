@@ -15,6 +15,9 @@ from esba.analysis.contact_cases import CYLINDER, TESTER_PRESSURE, ContactCases,
 from esba.figures.contact import blocked_figure, grasp_figure, tester_figure
 from esba.infra.roundoff import floored
 
+from esba.figures.contact3d import contact3d_figure
+
+from .contact3d import FIGURE_3D, spatial_section
 from .page import TIMES, Page, Progress, Rendered, Times
 
 __all__ = ["PAGE", "ContactPage", "ContactSettings", "render_page", "FIGURES"]
@@ -216,12 +219,13 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         "",
         f"A contact solve at n = 3 takes {t(data.ratio, '.2f')} times the free solve of the same equilibrium.",
         "",
+    ]
+    if data.spatial is not None:  # the 3-D section (esba/pages/contact3d.py)
+        lines += spatial_section(data.spatial, fig, t)
+    lines += [
         "## Not done yet",
         "",
-        "- 3-D obstacles (a plane, a sphere, a cylinder of any axis) wait for the 3-D model; the obstacle protocol",
-        "  (`dimension`, a signed distance with its gradient and Hessian in the point, its parameters for CasADi) is",
-        "  written for them.",
-        "- Friction (above).",
+        "- Friction (above; in 3-D, its section).",
         "",
         "## Where else obstacles go",
         "",
@@ -229,7 +233,8 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         "the load history from rest, with contact); `esba path SCENE.toml --to P` follows the pressure with contact and",
         "locates the events; `esba equilibria SCENE.toml` solves the contact problem from the load history's state and",
         "from every equilibrium of the free actuator (a multistart, `esba/statics/contact/multistart.py`). In Python,",
-        "`esba.statics.contact.sweeps.contact_path` follows the pressure or a prescribed tip coordinate.",
+        "`esba.statics.contact.sweeps.contact_path` follows the pressure or a prescribed tip coordinate. In 3-D, `esba solve",
+        "--3d SCENE.toml` (`examples/finger_sphere3d.toml`) solves a scene with planar or 3-D obstacles (the section above).",
         "",
     ]
     return "\n".join(lines)
@@ -259,6 +264,8 @@ class ContactPage(Page):
             path.parent / "figures" / FIGURES["tester"]: lambda: tester_figure(data.tester, (data.ramp_down, data.ramp_up), force=2.0),
             path.parent / "figures" / FIGURES["grasp"]: lambda: grasp_figure(data.grasp),
         }
+        if data.spatial is not None:
+            figures[path.parent / "figures" / FIGURE_3D] = lambda: contact3d_figure(data.spatial.tilted)
         return Rendered(render_page(data, settings.command, times), figures)
 
 

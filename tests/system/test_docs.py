@@ -85,6 +85,7 @@ WRITERS = {
     "contact-blocked": "esba docs --write contact",
     "contact-tester": "esba docs --write contact",
     "contact-grasp": "esba docs --write contact",
+    "contact3d-tilted-cylinder": "esba docs --write contact",
 }
 
 

@@ -1,0 +1,59 @@
+"""``esba solve --3d`` on a scene with obstacles: the 3-D contact solve (esba.statics.contact.spatial),
+its contacts and KKT numbers, and optionally its figure (``--plot``)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .results import EXIT_FAILED, EXIT_OK, print_result
+
+__all__ = ["cmd_solve_contact3d"]
+
+
+def _table(d: dict) -> str:
+    k = d["kkt"]
+    rows = [
+        ("scene", d["scene"]),
+        ("model", d["model"]),
+        ("section", f"EI_side {d['section_nmm2']['EI_side']:.6g} N mm^2, GJ {d['section_nmm2']['GJ']:.6g} N mm^2"),
+        ("theta deg", "  ".join(f"{v:.4f}" for v in d["theta_deg"])),
+        ("psi deg", "  ".join(f"{v:.4f}" for v in d["psi_deg"])),
+        ("tau deg", "  ".join(f"{v:.4f}" for v in d["tau_deg"])),
+        ("tip mm", "  ".join(f"{v:.4f}" for v in d["tip_mm"])),
+        ("obstacles", "; ".join(f"#{i + 1} {o['kind']}, touching " + ("the body (tube)" if o["touches"] == "tube" else f"the {o['touches']} line")
+                                for i, o in enumerate(d["obstacles"]))),
+        ("contacts", "; ".join(
+            f"{c['where']} (s = {c['s']:.4f}) {c['force_n']:.4f} N = ({c['force_vector_n'][0]:.4f}, {c['force_vector_n'][1]:.4f}, {c['force_vector_n'][2]:.4f}) N "
+            f"at ({c['point_mm'][0]:.2f}, {c['point_mm'][1]:.2f}, {c['point_mm'][2]:.2f}) mm, {c['kind']} #{c['obstacle'] + 1}" for c in d["contacts"]) or "none"),
+        ("gaps", "; ".join(f"#{i + 1} {'-' if g is None else format(g, '.4f') + ' mm'}" for i, g in enumerate(d["gaps_elsewhere_mm"])) + " (least elsewhere)"),
+        ("KKT", f"stationarity {k['stationarity_nmm']:.1e} N mm/rad, least gap {k['min_gap_mm']:.1e} mm, least force {k['min_force_n']:.1e} N, "
+                f"complementarity {k['complementarity_nmm']:.1e} N mm; reduced Hessian on {k['active']} active: {k['stability']} "
+                f"(least eigenvalue {min(k['reduced_eigenvalues'], default=float('nan')):.4g} N mm/rad^2)"),
+        ("solver", f"IPOPT {d['status']}; {d['iterations']} iterations, {d['outer_passes']} passes, {d['halvings']} halved steps, {d['solve_time_s']:.3f} s"),
+    ]
+    if d.get("message"):
+        rows.append(("NOT OK", d["message"]))
+    if d.get("figure"):
+        rows.append(("figure", f"wrote {d['figure']}"))
+    return "\n".join(f"{a:>12}: {b}" for a, b in rows)
+
+
+def cmd_solve_contact3d(args: argparse.Namespace, scene, section: dict, down, figure) -> int:
+    """The 3-D solve of a scene with obstacles; ``figure`` a checked path or None."""
+    from esba.statics.contact.spatial import solve_contact3d
+
+    result = solve_contact3d(scene, section, gravity_direction=down)
+    data = result.to_dict()
+    data["scene"] = scene.describe()
+    data["section_nmm2"] = {name: result.values[name] for name in ("EI_side", "GJ")}
+    if figure is not None:
+        from esba.figures.contact3d import contact3d_figure
+        from esba.figures.scenes import save_figure
+
+        data["figure"] = str(save_figure(contact3d_figure(result), figure))
+    print_result(args, data, _table)
+    if not result.ok:
+        print(f"esba: solve not ok: {result.message or result.status}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK

@@ -1,0 +1,167 @@
+"""The 3-D section of ``docs/contact.md``, rendered from :func:`esba.analysis.contact3d_cases.contact3d_cases`
+(presentation only; :mod:`esba.pages.contact` places it and writes its figure)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from esba.analysis.contact3d_cases import RANDOM_SEEDS, Contact3DCases
+from esba.infra.roundoff import floored
+
+from .page import TIMES, Times
+
+__all__ = ["spatial_section", "FIGURE_3D"]
+
+#: The section's figure, in ``figures/`` beside the page.
+FIGURE_3D = "contact3d-tilted-cylinder.png"
+
+#: KKT numbers below these are round-off: the gaps, forces and complementarity (mm, N, N mm) of a
+#: solve polished to 1e-13 L, and the stationarity (N mm/rad) of one polished to 1e-11 of the gradient.
+FLOOR = 1e-10
+STATIONARITY_FLOOR = 1e-8
+#: The issue's bounds: the planar result reproduced; the dead load that holds the same shape.
+PLANAR_BOUND = 1e-10
+DEAD_LOAD_BOUND = 1e-9
+
+
+def _contact_rows(r) -> list[str]:
+    lines = ["| where | s | force (N) | force vector (N) | point (mm) |", "|---|---|---|---|---|"]
+    for c in r.contacts:
+        v, p = c.force_vector, c.point
+        lines.append(f"| {c.where} | {c.s:.4f} | {c.force:.4f} | ({v[0]:.4f}, {v[1]:.4f}, {v[2]:.4f}) | ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) |")
+    k = r.kkt
+    gaps = ", ".join("-" if g is None else floored(g, '.3f', 5e-4) for g in r.gaps)
+    lines += [
+        "",
+        f"Least gap elsewhere {gaps} mm; KKT: stationarity {floored(k.stationarity, '.1e', STATIONARITY_FLOOR)} N mm/rad, least gap "
+        f"{floored(k.min_gap, ' .1e', FLOOR)} mm, least force {floored(k.min_force, ' .1e', FLOOR)} N, complementarity "
+        f"{floored(k.complementarity, '.1e', FLOOR)} N mm; the Lagrangian's Hessian on the tangent space of the {k.active} active "
+        f"constraint(s): least eigenvalue {k.reduced_eigenvalues[0]:.2f} N mm/rad^2 ({k.stability}). Sideways bend up to "
+        f"{abs(r.psi).max() * 57.29577951308232:.2f} deg, twist up to {abs(r.tau).max() * 57.29577951308232:.2f} deg a joint.",
+    ]
+    return lines
+
+
+def spatial_section(d: Contact3DCases, fig: Path, t: Times = TIMES) -> list[str]:
+    """The lines of the section ``Contact in 3-D``."""
+    lines = [
+        "## Contact in 3-D",
+        "",
+        "`esba solve --3d SCENE.toml` with 3-D obstacles, or `esba.statics.contact.spatial.solve_contact3d(scene)`:",
+        "the same constrained problem on the spatial model (`docs/3d.md`: three rotations a joint, theta, psi, tau).",
+        "",
+        "- **Obstacles** (`esba/model/contact/spatial.py`): `kind = \"plane\"` (`at = [x, y, z]`, `normal = [nx, ny, nz]`,",
+        "  the half-space behind it), `\"sphere\"` (`centre = [x, y, z]`, `radius`) and `\"cylinder\"` with an `axis = [ax, ay,",
+        "  az]` and a three-number centre (infinitely long). A planar obstacle in a 3-D solve is its extrusion across the",
+        "  bending plane, with its planar side, so a planar scene file means the same in 3-D; a 3-D obstacle in a planar",
+        "  solve is refused in one line. One line also refuses an obstacle in the actuator at rest, a radius <= 0, NaN, a",
+        "  zero normal or axis.",
+        "- **Where the body touches.** Segment i is the piece of helix exp(sigma hat(Xi_i)) of the SE(3) product of",
+        "  exponentials; the points along it are CasADi expressions of the 3n joint rotations, built at run time from the",
+        "  closed-form exponential (a series near the straight segment). An obstacle touches the `tube` (default for 3-D",
+        "  obstacles): the body of radius r1 about its axis, r1 off the layer, whose gap is the axis's gap less r1 wherever",
+        "  around the section it touches (its ends rounded); or a material line of the surface, `inner` (the layer),",
+        "  `outer` (the dorsal line, 2 r1 off it), `+z`, `-z` (the sides), which a twist turns with the section.",
+        "- **Constraints** per obstacle and segment: the gap at the segment's end, at its least interior gap (moved there",
+        "  between IPOPT solves, then among the unknowns of Newton on the KKT system, d gap/d sigma = 0 its equation), and at",
+        "  four fixed points of the segment (they keep a step from letting a segment through an obstacle between its points).",
+        "  While nothing touches, a step of the load history is the free Newton step; from first touch, the contact solve.",
+        "  The KKT check is the planar one, with the least gap's curvature in the Lagrangian's Hessian at interior contacts.",
+        "",
+        "### The planar contact is its restriction",
+        "",
+        f"The same scene with the planar obstacle (`esba.statics.contact.solve_contact`) and with the 3-D one (n = 3);",
+        f"differences below {PLANAR_BOUND:.0e} (the issue's bound) are printed as such:",
+        "",
+        "| case | contacts | max abs(theta_3D - theta_planar) (rad) | max abs(force difference) (N) | max abs(psi), abs(tau) (rad) |",
+        "|---|---|---|---|---|",
+    ]
+    for name, count, dth, dfo, side in d.restriction:
+        lines.append(f"| {name} | {count} | {floored(dth, '.1e', PLANAR_BOUND)} | {floored(dfo, '.1e', PLANAR_BOUND)} | {floored(side, '.1e', 1e-15)} |")
+    gap, dq = d.out_of_reach
+    ztip, zwall, force, ddead = d.wall
+    lines += [
+        "",
+        f"**Out of reach.** A sphere of radius 20 mm at (0, 0, 300) with the 0.3 N tip load straight out of the plane: no",
+        f"contact (least gap {gap:.2f} mm) and the free 3-D solution (max abs(q - q_free) {floored(dq, '.1e', PLANAR_BOUND)} rad).",
+        "",
+        f"**A sideways wall.** The same load pushes the free tip to z = {ztip:.3f} mm; a wall z = {zwall:.3f} mm (normal -z,",
+        f"touching the layer, `side = \"inner\"`, so that the contact point is the payload's point) stops it at the tip with",
+        f"{force:.6f} N. That force as a dead load at the tip (`Payload(force, 0, 1, -90)`, the model's own payload terms)",
+        f"holds the same shape: max abs(q_dead - q_contact) {floored(ddead, '.1e', DEAD_LOAD_BOUND)} rad.",
+        "",
+        "### A sphere, and a cylinder of tilted axis",
+        "",
+        "A sphere of radius 10 mm at (66, 52, 3) inside the bend at 0.14 MPa (n = 3, the section's stiffnesses of",
+        "`esba section`): it pushes the finger sideways and twists it.",
+        "",
+    ]
+    lines += _contact_rows(d.sphere)
+    lines += [
+        "",
+        "The finger at 0.2 MPa (n = 8) against a cylinder of radius 15 mm about (70, 45, 0) whose axis leans out of the",
+        "plane, (0, 0.5, 1): it wraps the cylinder and slides along its slope.",
+        "",
+    ]
+    lines += _contact_rows(d.tilted)
+    lines += ["", f"![the finger against a tilted cylinder]({fig / FIGURE_3D})", ""]
+    if d.path is not None:
+        forces = d.path.forces()
+        lines += [
+            "### A path through contact events",
+            "",
+            "`esba.statics.contact.spatial_path.contact_path3d`: the sphere scene at 0 to 0.2 MPa, each point warm-started",
+            "from the previous one, a change of contact located by bisection on the pressure (to 1e-6 MPa):",
+            "",
+            "| P (MPa) | " + " | ".join(f"{p.pressure:.2f}" for p in d.path.points) + " |",
+            "|---|" + "---|" * len(d.path.points),
+            "| contact force (N) | " + " | ".join(f"{f:.4f}" for f in forces) + " |",
+            "",
+        ]
+        lines += [f"- {e.describe()}" for e in d.path.events] or ["- no event"]
+        lines += [""]
+    ok = sum(1 for r in d.random if r[2])
+    lines += [
+        "### Random scenes",
+        "",
+        f"Seeds {RANDOM_SEEDS[0]} to {RANDOM_SEEDS[-1]} of `esba.analysis.contact3d_cases.random_scene` (a random pressure and",
+        "off-plane payload, and a sphere, plane or tilted cylinder placed 1 to 6 mm into the free shape):",
+        f"{ok} of {len(d.random)} solved and stable on the constrained set. The others are a sphere near the tip that a load",
+        "near the tip pushes the finger around: the contact slides to the rounded end and off it, with force left (a jump",
+        "the solve does not locate: after 10 halved steps it says so, `Passed_Through_Obstacle`, or its closest points",
+        "keep moving, `Closest_Points_Not_Converged`); their KKT numbers are those of the last state, not an equilibrium.",
+        "",
+        "| seed | obstacle | ok | contacts | stationarity (N mm/rad) | complementarity (N mm) | least gap (mm) | status |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for seed, kind, good, count, st, co, mg, status in d.random:
+        lines.append(f"| {seed} | {kind} | {'yes' if good else 'NO'} | {count} | {floored(st, '.1e', STATIONARITY_FLOOR)} | {floored(co, '.1e', FLOOR)} "
+                     f"| {floored(mg, ' .1e', FLOOR)} | {status} |")
+    lines += [
+        "",
+        "### What 3-D contact costs",
+        "",
+        "Medians of 5 on a shared 2-core machine (`esba bench contact` prints the same line):",
+        "",
+        "| what | median (ms) |",
+        "|---|---|",
+    ]
+    for name, s in d.costs:
+        lines.append(f"| {name} | {t(1e3 * s, '.1f')} |")
+    lines += [
+        "",
+        f"A 3-D contact solve at n = 3 takes {t(d.ratio, '.1f')} times the free 3-D solve: a few IPOPT solves with 6 n",
+        "constraints an obstacle, the closest points on CasADi's virtual machine, Newton on the KKT system.",
+        "",
+        "### Not done in 3-D",
+        "",
+        "- Slides in the 3-D path (a contact moving from one segment to the next is not an event there, as it is in the",
+        "  planar `contact_path`), a path in a load or a prescribed displacement, and `esba path --3d`; a contact that",
+        "  slides off the rounded tip with force left is a jump, which the 3-D solve reports as `Passed_Through_Obstacle`",
+        "  rather than locating it.",
+        "- Friction, in 3-D as in the plane: Coulomb's cone is a second-order cone constraint per contact (IPOPT takes it",
+        "  smoothed), and a sliding contact's work depends on its path, so the statics are no longer a minimum of energy:",
+        "  an incremental (load-stepped) problem with the friction force's direction as unknowns. Not clean enough yet.",
+        "",
+    ]
+    return lines

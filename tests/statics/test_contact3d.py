@@ -1,0 +1,166 @@
+"""Contact in 3-D: the planar contact as its restriction, the free 3-D solve out of reach, a wall's force
+as the dead load that holds the same shape, complementarity on random scenes, and bad input."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from esba.analysis.contact3d_cases import random_scene
+from esba.model.contact import Cylinder, HalfPlane, ObstacleError
+from esba.model.contact.spatial import Cylinder3D, Plane, Sphere, segment_points, symbolic_line
+from esba.model.scene import Payload, Scene, SceneError, scene_from_dict
+from esba.model.spatial import centreline3d
+from esba.statics.contact import solve_contact
+from esba.statics.contact.spatial import solve_contact3d
+from esba.statics.spatial import solve_scene3d
+
+#: the issue's bounds: the planar result reproduced, the dead load that holds the same shape
+PLANAR = 1e-10  # rad, N
+DEAD_LOAD = 1e-9  # rad
+#: KKT numbers of a converged 3-D contact solve (IPOPT tol 1e-10, then Newton on the KKT system)
+KKT_STATIONARITY = 1e-9  # N mm/rad
+KKT_COMPLEMENTARITY = 1e-10  # N mm
+KKT_GAP = -1e-10  # mm
+
+
+def _kkt_holds(r) -> None:
+    assert r.ok, r.message
+    k = r.kkt
+    assert k.stationarity <= KKT_STATIONARITY
+    assert k.complementarity <= KKT_COMPLEMENTARITY
+    assert k.min_gap >= KKT_GAP and k.min_force >= 0.0
+    assert k.stability == "stable" and np.all(k.reduced_eigenvalues > 0)
+
+
+def test_the_touching_line_is_the_se3_product_of_exponentials_numpy_and_casadi():
+    rng = np.random.default_rng(3)
+    q = rng.normal(size=9) * 0.6
+    q[0] = 1e-4  # a nearly straight segment: the series branch
+    pts, frames = centreline3d(3, q, 135.0, per_segment=4)
+    sigma = np.tile([0.25, 0.5, 1.0], (3, 1))
+    for offset in ([0.0, 0.0], [-16.0, 0.0], [-8.0, 8.0]):
+        line = segment_points(q, 135.0, np.array(offset), sigma)
+        want = pts + frames[:, :, 1] * offset[0] + frames[:, :, 2] * offset[1]
+        assert np.max(np.abs(line[:, 1] - want[[2, 6, 10]])) < 1e-12
+        x, s = ca.SX.sym("q", 9), ca.SX.sym("s", 3)
+        ends, inside = symbolic_line(x, 135.0, offset, s)
+        f = ca.Function("f", [x, s], [ca.horzcat(*ends), ca.horzcat(*inside)])
+        e, i = (np.asarray(v).T for v in f(q, [0.25, 0.5, 1.0]))
+        assert np.max(np.abs(e - want[[4, 8, 12]])) < 1e-12
+        assert np.max(np.abs(i - line[[0, 1, 2], [0, 1, 2]])) < 1e-12
+
+
+@pytest.mark.parametrize("planar, spatial", [
+    (HalfPlane(at=(135.0, 0.0)), Plane(at=(135.0, 0.0, 0.0), normal=(0.0, -1.0, 0.0), side="inner")),
+    (Cylinder(centre=(90.0, 40.0), radius=12.0), Cylinder3D(centre=(90.0, 40.0, -5.0), axis=(0.0, 0.0, 2.0), radius=12.0)),
+], ids=["probe at the tip", "cylinder across the plane"])
+def test_an_in_plane_obstacle_reproduces_the_planar_contact_with_no_sideways_bend_or_twist(planar, spatial):
+    pressure = 0.1 if isinstance(planar, HalfPlane) else 0.14
+    flat = solve_contact(Scene(pressure=pressure, obstacles=(planar,)))
+    assert flat.ok
+    for obstacle in (planar, spatial):  # the planar obstacle extruded, and the 3-D one stated as such
+        r = solve_contact3d(Scene(pressure=pressure, obstacles=(obstacle,)))
+        _kkt_holds(r)
+        assert np.max(np.abs(r.theta - flat.theta)) <= PLANAR
+        assert np.max(np.abs(r.q[3:])) <= 1e-14  # no sideways bend, no twist
+        assert [c.where for c in r.contacts] == [c.where for c in flat.contacts]
+        for c3, c2 in zip(r.contacts, flat.contacts):
+            assert abs(c3.force - c2.force) <= PLANAR and abs(c3.s - c2.s) <= PLANAR
+            assert np.max(np.abs(np.array(c3.direction) - [*c2.direction, 0.0])) <= PLANAR
+
+
+def test_an_obstacle_out_of_reach_gives_no_contact_and_the_free_3d_solution():
+    scene = Scene(payloads=(Payload(0.3, 90.0, 1.0, 90.0),))
+    free = solve_scene3d(scene)
+    r = solve_contact3d(scene.replace(obstacles=(Sphere(centre=(0.0, 0.0, 300.0), radius=20.0),)))
+    _kkt_holds(r)
+    assert r.contacts == () and r.gaps[0] > 200.0
+    assert np.max(np.abs(r.q - free.q)) <= 1e-10
+
+
+def test_a_sideways_wall_pushes_with_the_dead_load_that_holds_the_same_shape():
+    """An off-plane tip load pushes the tip against a wall at z = w: the wall's force, as a dead load at
+    the tip (the model's own payload, another code path), holds the same shape."""
+    scene = Scene(payloads=(Payload(0.3, 90.0, 1.0, 90.0),))
+    free = solve_scene3d(scene)
+    wall = Plane(at=(0.0, 0.0, 0.6 * free.tip[2]), normal=(0.0, 0.0, -1.0), side="inner")
+    r = solve_contact3d(scene.replace(obstacles=(wall,)))
+    _kkt_holds(r)
+    assert [c.where for c in r.contacts] == ["tip"]
+    c = r.contacts[0]
+    assert c.direction == (0.0, 0.0, -1.0) and 0 < c.force < 0.3
+    assert abs(r.tip[2] - 0.6 * free.tip[2]) <= 1e-12
+    dead = solve_scene3d(scene.replace(payloads=scene.payloads + (Payload(c.force, 0.0, 1.0, -90.0),)))
+    assert dead.ok
+    assert np.max(np.abs(dead.q - r.q)) <= DEAD_LOAD
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+def test_complementarity_to_solver_tolerance_on_random_3d_scenes(seed):
+    r = solve_contact3d(random_scene(np.random.default_rng(seed)))
+    _kkt_holds(r)
+    assert len(r.contacts) >= 1
+
+
+@pytest.mark.slow
+def test_complementarity_to_solver_tolerance_on_more_random_3d_scenes():
+    """Twelve more: every one that converges is a KKT point to round-off; one that does not says so
+    (a contact sliding off the rounded tip with force left, a jump the solve does not locate). Measured:
+    10 of 12 converge (seeds 27 and 30 do not); fewer than 9 would be a regression."""
+    solved = 0
+    for seed in range(20, 32):
+        r = solve_contact3d(random_scene(np.random.default_rng(seed)))
+        if r.success:
+            _kkt_holds(r)
+            solved += 1
+        else:
+            assert r.status in ("Passed_Through_Obstacle", "Closest_Points_Not_Converged") and r.message
+    assert solved >= 9
+
+
+@pytest.mark.parametrize("item, message", [
+    ({"kind": "sphere", "centre": [60, -8, 0], "radius": 3}, "reaches 11 mm into the actuator at rest"),
+    ({"kind": "sphere", "centre": [60, 40, 0], "radius": -3}, "sphere.radius=-3: expected a radius > 0 mm"),
+    ({"kind": "plane", "at": [0, 0, "nan"], "normal": [0, 0, -1]}, "plane.at[2]"),
+    ({"kind": "plane", "at": [0, 0, 20], "normal": [0, 0, 0]}, "plane.normal=[0, 0, 0]: a zero vector has no direction"),
+    ({"kind": "cylinder", "centre": [60, 40, 0], "axis": [0, 0, 0], "radius": 5}, "cylinder.axis=[0, 0, 0]: a zero vector"),
+    ({"kind": "cylinder", "centre": [60, -8, 30], "axis": [0, 0, 1], "radius": 5}, "into the actuator at rest"),
+    ({"kind": "plane", "at": [0, 0, 5], "normal": [0, 0, -1]}, "reaches 3 mm into the actuator at rest"),
+    ({"kind": "sphere", "centre": [60, 40, 0], "radius": 5, "axis": [1, 0, 0]}, "unknown key(s) axis for a 3-D sphere"),
+])
+def test_bad_3d_obstacles_get_one_line(item, message):
+    with pytest.raises((ObstacleError, SceneError)) as exc:
+        scene_from_dict({"obstacles": [item]})
+    text = str(exc.value)
+    assert message in text and "\n" not in text
+
+
+def test_scene_files_keep_their_planar_meaning_and_3d_obstacles_need_the_3d_model():
+    planar = scene_from_dict({"obstacles": [{"kind": "cylinder", "centre": [90, 40], "radius": 12}]})
+    assert isinstance(planar.obstacles[0], Cylinder) and not planar.needs_3d
+    spatial = scene_from_dict({"loads": {"pressure": 0.1}, "obstacles": [{"kind": "cylinder", "centre": [90, 40, 0], "axis": [1, 0, 1], "radius": 12}]})
+    assert isinstance(spatial.obstacles[0], Cylinder3D) and spatial.needs_3d
+    with pytest.raises(SceneError, match="is a 3-D obstacle"):
+        solve_contact(spatial)
+
+
+@pytest.mark.slow
+def test_a_3d_path_locates_the_touch_where_the_free_shape_first_meets_the_sphere():
+    from esba.analysis.contact3d_cases import SPHERE_SCENE
+    from esba.statics.contact.spatial import ContactProblem3D
+    from esba.statics.contact.spatial_path import contact_path3d
+
+    path = contact_path3d(SPHERE_SCENE, np.linspace(0.0, 0.2, 11))
+    assert path.ok and [e.kind for e in path.events] == ["touch"]
+    e = path.events[0]
+    assert e.bracket[1] - e.bracket[0] <= 1e-6
+    from_rest = solve_contact3d(SPHERE_SCENE)  # the path's point at 0.14 MPa is the solve from rest
+    assert np.max(np.abs(path.points[7].q - from_rest.q)) <= 1e-9
+    problem = ContactProblem3D(SPHERE_SCENE)
+    for p, touching in ((e.bracket[0], False), (e.bracket[1], True)):  # the free shape just clear, the contact just made
+        r = solve_contact3d(SPHERE_SCENE, problem=problem, pressure=p)
+        assert bool(r.contacts) == touching
+    below = solve_contact3d(SPHERE_SCENE, problem=problem, pressure=e.bracket[0])
+    assert 0.0 <= below.gaps[0] <= 1e-4  # the least gap at the touch, mm
