@@ -82,6 +82,7 @@ WRITERS = {
     "map-omega-payload": "esba map --write-doc",
     "map-pressure-omega": "esba map --write-doc",
     "map-design-plane": "esba map --write-doc",
+    "map-3d-gripper": "esba map --write-doc",
     "contact-blocked": "esba docs --write contact",
     "contact-tester": "esba docs --write contact",
     "contact-grasp": "esba docs --write contact",
