@@ -138,6 +138,11 @@ def _render_spatial() -> str:
         "the part of segment i before the point. Exact for a moment about the bending axis of an in-plane deformation; a dead "
         "moment fixed in space is not conservative in 3-D, and this is the conservative stand-in, valid while the rotations "
         "are about one axis.",
+        "- Couple k: two dead forces, -f_k at the section's centre P(s) and +f_k at P(s) + R(s) e_k, f_k = (m_k x e_k)/|e_k|^2 "
+        "fixed in space, on a rigid arm e_k = (ax, ay, az) fixed to the section at fraction sc_k (perpendicular to m_k): "
+        "potential -f_k . (R(s) e_k - e_k). Its moment is m_k = (cx, cy, cz) at the straight state and turns with the arm. A "
+        "physical load at any rotation (a lever with weights on pulleys), conservative in 3-D; its load stiffness gives the "
+        "twist buckling of a cantilever under an end torque (`docs/3d.md`, B6).",
         "- Gravity: the weight M g / n of each segment at its mid-point (as Eq. 15), g = (gx, gy, gz) in the base frame; "
         "(g, 0, 0) is the paper's.",
         "- Sign conventions: positive psi bends the tip toward -z, positive tau turns the section about +x (right-handed).",

@@ -22,9 +22,21 @@ rod        a plain elastic rod in the plane,                     EI, kappa0
            1/2 EI (n/L) (theta_i - kappa0 L/n)^2
 payload    a point force in any direction at fraction s of L      F_k, Omega_k, Beta_k, s_k
 moment     a point moment (body components) at fraction s         mx_k, my_k, mz_k, sm_k
+couple     a couple of dead forces on a rigid arm e fixed to the   cx_k, cy_k, cz_k,
+           section at fraction s: moment m at the straight state  ax_k, ay_k, az_k, sc_k
 gravity    the weight of each segment at its mid-point,          M, gx, gy, gz
            in any direction
 =========  ==================================================  ======================
+
+The two moments differ away from the plane. ``moment`` is a generalised force on the joint
+rotations, potential -m . sum_i sigma_i (tau_i, psi_i, theta_i): exact for a moment about the layer's
+normal z in the bending plane (it rolls a rod up into a full circle, B2), and the body moment only to
+first order in the sideways bend and twist. ``couple`` is a physical load at any rotation: the forces
++f at P(s) + R(s) e and -f at P(s), f = (m x e) / |e|^2 fixed in space, e (perpendicular to m) turning
+with the section, potential -f . (R(s) e - e); its moment is m at the straight state and turns with
+the arm (a couple about z bending the actuator by theta is m cos theta). It loads the stiffness as
+real couples do, so the twist buckling of a cantilever under an end torque (Greenhill's problem) is a
+branch point of its Hessian.
 
 Payload direction: ``f = F (cos(Beta) cos(Omega), -cos(Beta) sin(Omega), sin(Beta))``; Beta = 0 is
 the planar payload of Eq. (14) (Omega from the vertical x toward -y), Beta turns it out of the
@@ -58,7 +70,7 @@ FORMAT_3D = 1
 SOURCES_3D = ("effects3d.py", "emit3d.py", "program3d.py", "spatial.py")
 
 #: The terms of the spatial family, in canonical order.
-EFFECTS_3D: tuple[str, ...] = ("air", "axial", "radial", "fibres", "rod", "side", "twist", "payload", "moment", "gravity")
+EFFECTS_3D: tuple[str, ...] = ("air", "axial", "radial", "fibres", "rod", "side", "twist", "payload", "moment", "couple", "gravity")
 
 #: The default spatial effect set: the paper's Table 2 case with the sideways and twist terms.
 DEFAULT_EFFECTS_3D = "air,axial,radial,fibres,payload"
@@ -79,6 +91,13 @@ UNITS_3D: dict[str, str] = {
     "my": "N*mm",
     "mz": "N*mm",
     "sm": "1 (fraction of L from the base)",
+    "cx": "N*mm",
+    "cy": "N*mm",
+    "cz": "N*mm",
+    "ax": "1 (a direction in the section's axes)",
+    "ay": "1 (a direction in the section's axes)",
+    "az": "1 (a direction in the section's axes)",
+    "sc": "1 (fraction of L from the base)",
     "gx": "m/s^2",
     "gy": "m/s^2",
     "gz": "m/s^2",
@@ -97,9 +116,10 @@ class Effects3D:
     payloads: int = 1
     moments: int = 0
     gravity: bool = False
+    couples: int = 0
 
     def __post_init__(self) -> None:
-        for name, value in (("payloads", self.payloads), ("moments", self.moments)):
+        for name, value in (("payloads", self.payloads), ("moments", self.moments), ("couples", self.couples)):
             if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= MAX_PAYLOADS:
                 raise EffectError(f"{name}={value!r}: expected an integer from 0 to {MAX_PAYLOADS}")
 
@@ -108,12 +128,12 @@ class Effects3D:
         """Parse ``"air,axial,payload:2,moment"``; ``side`` and ``twist`` may be named (always present)."""
         tokens = text.split(",") if isinstance(text, str) else list(text)
         flags = {name: False for name in ("air", "axial", "radial", "fibres", "rod", "gravity")}
-        counts = {"payload": 0, "moment": 0}
+        counts = {"payload": 0, "moment": 0, "couple": 0}
         for raw in tokens:
             token = str(raw).strip().lower()
             if not token or token in ("side", "twist"):
                 continue
-            m = re.fullmatch(r"(payload|moment)s?(?::|\*)?(\d+)?", token)
+            m = re.fullmatch(r"(payload|moment|couple)s?(?::|\*)?(\d+)?", token)
             if m:
                 count = int(m.group(2)) if m.group(2) is not None else 1
                 if count < 1:
@@ -123,10 +143,10 @@ class Effects3D:
             token = "fibres" if token == "fibers" else token
             if token not in flags:
                 raise EffectError(
-                    f"unknown effect {raw!r}: allowed in 3-D are {', '.join(EFFECTS_3D)} (payload and moment may take a count, e.g. payload:2)"
+                    f"unknown effect {raw!r}: allowed in 3-D are {', '.join(EFFECTS_3D)} (payload, moment and couple may take a count, e.g. payload:2)"
                 )
             flags[token] = True
-        return cls(payloads=counts["payload"], moments=counts["moment"], **flags)
+        return cls(payloads=counts["payload"], moments=counts["moment"], couples=counts["couple"], **flags)
 
     @classmethod
     def from_planar(cls, planar: EffectSet) -> Effects3D:
@@ -135,7 +155,7 @@ class Effects3D:
 
     def planar(self) -> EffectSet | None:
         """The planar set this restricts to, or None when it has terms the planar family lacks."""
-        if self.rod or self.moments:
+        if self.rod or self.moments or self.couples:
             return None
         return EffectSet(self.air, self.axial, self.radial, self.fibres, self.payloads, self.gravity)
 
@@ -145,7 +165,8 @@ class Effects3D:
 
     def names(self) -> tuple[str, ...]:
         out = [*self.in_plane(), "side", "twist"]
-        out += ["payload"] * bool(self.payloads) + ["moment"] * bool(self.moments) + ["gravity"] * self.gravity
+        out += ["payload"] * bool(self.payloads) + ["moment"] * bool(self.moments) + ["couple"] * bool(self.couples)
+        out += ["gravity"] * self.gravity
         return tuple(out)
 
     @property
@@ -155,13 +176,15 @@ class Effects3D:
             parts.append(f"payload{self.payloads}")
         if self.moments:
             parts.append(f"moment{self.moments}")
+        if self.couples:
+            parts.append(f"couple{self.couples}")
         if self.gravity:
             parts.append("gravity")
         return "_".join(parts)
 
     def spec(self) -> str:
         parts = list(self.in_plane())
-        for name, count in (("payload", self.payloads), ("moment", self.moments)):
+        for name, count in (("payload", self.payloads), ("moment", self.moments), ("couple", self.couples)):
             if count:
                 parts.append(name if count == 1 else f"{name}:{count}")
         if self.gravity:
@@ -186,6 +209,8 @@ class Effects3D:
             names += [f"F{k}", f"Omega{k}", f"Beta{k}", f"s{k}"]
         for k in range(1, self.moments + 1):
             names += [f"mx{k}", f"my{k}", f"mz{k}", f"sm{k}"]
+        for k in range(1, self.couples + 1):
+            names += [f"cx{k}", f"cy{k}", f"cz{k}", f"ax{k}", f"ay{k}", f"az{k}", f"sc{k}"]
         if self.gravity:
             names += ["M", "gx", "gy", "gz"]
         return tuple(names)
@@ -194,6 +219,7 @@ class Effects3D:
         out = [*self.in_plane(), "side", "twist"]
         out += [f"payload{k}" for k in range(1, self.payloads + 1)]
         out += [f"moment{k}" for k in range(1, self.moments + 1)]
+        out += [f"couple{k}" for k in range(1, self.couples + 1)]
         if self.gravity:
             out.append("gravity")
         return tuple(out)

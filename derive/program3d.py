@@ -244,6 +244,37 @@ def build3d(n: int, effects: Effects3D, variant: str = "paper") -> Program3D:
                 grad[idx(a, j)] += -m[comp] * sig[j]
         terms_out[f"moment{k}"] = b.assign(f"U_moment{k}", pot)
 
+    # --- couples: dead forces +f at P(s) + R(s) e and -f at P(s), f = (m x e)/|e|^2, on a rigid arm e
+    #     fixed to the section at s: the potential w . R(s) e (w = -f) is conservative at any rotation,
+    #     and its moment at the straight state is e x f = m (m perpendicular to e). Only the arm's
+    #     offset R(s) e moves relative to P(s): it moves rigidly with the frame at s, so each joint
+    #     adds Omega_{j,a} x (R(s) e) alone (the d v terms of the two forces cancel).
+    for k in range(1, effects.couples + 1):
+        m = tuple(param_symbol(f"{c}{k}") for c in ("cx", "cy", "cz"))
+        e = tuple(param_symbol(f"{c}{k}") for c in ("ax", "ay", "az"))
+        e2 = _dot(e, e)
+        w = tuple(b.assign(f"cw{k}_{i}", -_cross(m, e)[i] / e2) for i in range(3))
+        sig = [b.assign(f"sc{k}_{j + 1}", fraction_in_segment(param_symbol(f"sc{k}"), j + 1, n)) for j in range(n)]
+        part = [segs.instance(f"cp{k}s{j + 1}", joint[j], sig[j], h) for j in range(n)]
+        Rs = [[one, zero, zero], [zero, one, zero], [zero, zero, one]]
+        for j in range(n):  # R(s): the product of the parts of every segment before s
+            A = part[j]["A"]
+            Rs = [[b.assign(f"cR{k}_{j + 1}_{i}{c}", sum(Rs[i][mm] * A[mm][c] for mm in range(3))) for c in range(3)] for i in range(3)]
+        off = tuple(b.assign(f"coff{k}_{i}", _matvec(Rs, e)[i]) for i in range(3))
+        for j in range(n):
+            t = part[j]
+            ol = tuple(b.assign(f"c{k}ol{j + 1}_{i}", _matTvec(R[j], off)[i]) for i in range(3))
+            wl = tuple(b.assign(f"c{k}wl{j + 1}_{i}", _matTvec(R[j], w)[i]) for i in range(3))
+            for a in range(3):
+                Dl = _cross(t["Om"][a], ol)
+                D = tuple(b.assign(f"c{k}D{j + 1}_{a}{i}", _matvec(R[j], Dl)[i]) for i in range(3))
+                grad[idx(a, j)] += _dot(wl, Dl)
+                Xacc[j][a] = _add(Xacc[j][a], _cross(D, w))
+            no_ddv = {pair: (zero, zero, zero) for pair in PAIRS}
+            for pair, val in _diag_block(wl, ol, t, no_ddv).items():
+                diag[j][pair] += val
+        terms_out[f"couple{k}"] = b.assign(f"U_couple{k}", _dot(w, off) - _dot(w, e))
+
     # --- gravity: the weight M g / n of every segment at its mid-point, g = (gx, gy, gz)
     if effects.gravity:
         w = tuple(b.assign(f"wg_{i}", -S.M * gi / n) for i, gi in enumerate((gx, gy, gz)))

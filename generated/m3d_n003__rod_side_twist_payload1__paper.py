@@ -3,7 +3,7 @@
 Segments n = 3 (3n = 9 unknowns q = [theta; psi; tau]); effects: rod,payload; variant: paper.
 Regenerate with:
     esba generate --3d --segments 3 --effects rod,payload --variant paper
-(or `esba generate --refresh` for every committed model). Derivation source sha256: 096d81a6a16c0d9f.
+(or `esba generate --refresh` for every committed model). Derivation source sha256: 5648ecc4f39c8d7f.
 
 Straight-line program: 1299 assignments.
 CasADi Functions (SX instructions):

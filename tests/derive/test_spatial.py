@@ -18,7 +18,9 @@ from esba.derive.provenance import GENERATED_DIR
 
 VALUES = dict(L=135.0, r1=8.0, r2=3.0, d=4.0, rho=0.17, E=0.54, P=0.05, EI_side=2000.0, GJ=1500.0, EI=3000.0, kappa0=0.002,
               F1=1.5, Omega1=0.7, Beta1=0.4, s1=0.73, F2=0.8, Omega2=-0.3, Beta2=-1.1, s2=0.21,
-              mx1=10.0, my1=-20.0, mz1=30.0, sm1=0.6, M=0.05, gx=3.0, gy=-5.0, gz=7.0)
+              mx1=10.0, my1=-20.0, mz1=30.0, sm1=0.6, M=0.05, gx=3.0, gy=-5.0, gz=7.0,
+              cx1=40.0, cy1=-15.0, cz1=25.0, ax1=0.3, ay1=1.1, az1=-0.4, sc1=0.45,
+              cx2=-12.0, cy2=33.0, cz2=8.0, ax2=-0.7, ay2=0.2, az2=0.9, sc2=1.0)
 
 
 def _hat(xi):
@@ -91,10 +93,10 @@ def test_smooth_functions_are_exact_at_zero_and_across_the_switch():
 
 @pytest.fixture(scope="module")
 def all_loads():
-    """A small model with every load: n = 2, two payloads, a moment and gravity (generated here)."""
+    """A small model with every load: n = 2, two payloads, a moment, two couples and gravity (generated here)."""
     from esba.derive.emit3d import generate_source3d
 
-    eff = Effects3D.parse("air,axial,radial,fibres,payload:2,moment,gravity")
+    eff = Effects3D.parse("air,axial,radial,fibres,payload:2,moment,couple:2,gravity")
     text, _ = generate_source3d(2, eff)
     return eff, _exec_source(text[text.index("import casadi"):])
 
@@ -116,6 +118,26 @@ def test_generated_gradient_and_hessian_match_finite_differences(all_loads):
         assert np.abs(g - gfd).max() < 1e-7 * np.abs(g).max()
         assert np.abs(H - Hfd).max() < 1e-7 * np.abs(H).max()
         assert np.array_equal(H, H.T)
+
+
+def test_a_couple_is_two_dead_forces_on_an_arm_that_turns_with_the_section(all_loads):
+    """The couple's energy is -f . (R(s) e - e), f = (m x e)/|e|^2, with R(s) the section's rotation:
+    checked at the tip (s = 1) against the model's own tip rotation, at random states."""
+    eff, f = all_loads
+    p = [VALUES[k] for k in eff.parameters()]
+    m, e = np.array([VALUES["cx2"], VALUES["cy2"], VALUES["cz2"]]), np.array([VALUES["ax2"], VALUES["ay2"], VALUES["az2"]])
+    force = np.cross(m, e) / (e @ e)
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        q = rng.normal(size=6) * 0.8
+        terms = np.asarray(f["energy"](q, *p)[1]).ravel()
+        R = np.asarray(f["kinematics"](q, VALUES["L"])[1])
+        expected = -force @ (R @ e - e)
+        assert abs(terms[list(eff.terms()).index("couple2")] - expected) < 1e-12 * (1 + abs(expected))
+    # at the straight state the moment of the two forces is m (e perpendicular to m)
+    e = np.array([0.0, 1.0, 0.0])
+    m = np.array([5.0, 0.0, -3.0])
+    assert np.allclose(np.cross(e, np.cross(m, e) / (e @ e)), m)
 
 
 def test_committed_3d_models_are_listed_with_this_derivation():
