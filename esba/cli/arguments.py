@@ -106,6 +106,14 @@ def float_arg(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{checks.quote(text)} is not a number (expected decimal digits such as 0.1 or 2e-3)") from None
 
 
+def vector_arg(text: str) -> tuple[float, float, float]:
+    """Three numbers written X,Y,Z."""
+    parts = text.split(",")
+    if len(parts) != 3:
+        raise argparse.ArgumentTypeError(f"{checks.quote(text)}: expected three numbers X,Y,Z")
+    return tuple(float_arg(v.strip()) for v in parts)  # type: ignore[return-value]
+
+
 #: The actuator's parameters as flags, named as in a scene file's ``[actuator]`` table:
 #: :data:`esba.model.scene.ACTUATOR_RULES` (field -> unit, meaning), written out here so that
 #: building the parser imports nothing of the model (a test checks they agree). One definition
@@ -171,6 +179,13 @@ def add_scene_flags(p: argparse.ArgumentParser, payloads: bool = True) -> None:
         p.add_argument("--payload-out-of-plane", type=float_arg, action="append", metavar="DEG",
                        help="angle Beta of the k-th payload out of the bending plane, -90..90 (needs the 3-D model: solve --3d; one value applies to all)")
         p.add_argument("--no-payload", action="store_true", help="no payloads (and no payload terms)")
+        p.add_argument("--moment", type=vector_arg, action="append", metavar="MX,MY,MZ",
+                       help="a point moment in N mm, axes of the straight actuator (x along it, y the bending direction, z the "
+                            "layer's normal); repeatable; replaces the scene's moments; needs the 3-D model (solve --3d)")
+        p.add_argument("--moment-at", type=float_arg, action="append", metavar="FRACTION", help="point of the k-th moment as a fraction of L (1 = tip; one value applies to all)")
+        p.add_argument("--moment-arm", type=vector_arg, action="append", metavar="AX,AY,AZ",
+                       help="make the k-th moment a couple of dead forces on a rigid arm along this direction of the section "
+                            "(perpendicular to the moment; docs/3d.md; one value applies to all)")
     p.add_argument("--gravity", action="store_true", default=None, help="include the actuator's weight (Eq. 15)")
     p.add_argument("--no-fibres", action="store_true", help="leave out the fibre restraint (Eq. 18)")
     p.add_argument("--variant", choices=VARIANTS, default=None, help=f"model variant (default: the scene's, else {DEFAULT_VARIANT})")
@@ -178,15 +193,15 @@ def add_scene_flags(p: argparse.ArgumentParser, payloads: bool = True) -> None:
     add_actuator_flags(p)
 
 
-def _per_payload(flag: str, values: list[float] | None, count: int) -> list[float] | None:
+def _per_payload(flag: str, values: list | None, count: int, what: str = "payload", add: str = "--payload N") -> list | None:
     if values is None:
         return None
     if count == 0:
-        raise UsageError(f"{flag} given but there is no payload: add --payload N")
+        raise UsageError(f"{flag} given but there is no {what}: add {add}")
     if len(values) == 1:
         return values * count
     if len(values) != count:
-        raise UsageError(f"{flag} given {len(values)} times for {count} payloads: give it once (for all) or once per payload")
+        raise UsageError(f"{flag} given {len(values)} times for {count} {what}s: give it once (for all) or once per {what}")
     return values
 
 
@@ -220,7 +235,7 @@ def load_scene_file(path: str | None, default):
 
 def scene_from_args(args: argparse.Namespace, payloads: bool = True):
     """The scene file (or the main job) with the flags applied; bad values are usage errors."""
-    from esba.model.scene import MAIN_JOB, Payload, SceneError
+    from esba.model.scene import MAIN_JOB, Moment, Payload, SceneError
 
     try:
         scene = load_scene_file(args.scene, MAIN_JOB)
@@ -242,6 +257,12 @@ def scene_from_args(args: argparse.Namespace, payloads: bool = True):
                     for k, p in enumerate(current)
                 ]
                 changes["payloads"] = tuple(current)
+            moments = list(scene.moments) if args.moment is None else [Moment(m) for m in args.moment]
+            ats = _per_payload("--moment-at", args.moment_at, len(moments), "moment", "--moment MX,MY,MZ")
+            arms = _per_payload("--moment-arm", args.moment_arm, len(moments), "moment", "--moment MX,MY,MZ")
+            if args.moment is not None or ats or arms:
+                changes["moments"] = tuple(Moment(m.moment, ats[k] if ats else m.at, arms[k] if arms else m.arm)
+                                           for k, m in enumerate(moments))
         return scene.replace(**changes) if changes else scene
     except SceneError as exc:
         raise UsageError(str(exc)) from None

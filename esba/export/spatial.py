@@ -115,6 +115,9 @@ class ExportSpec3D:
         if effects.rod:
             raise ExportError(f"--effects {self.effects if isinstance(self.effects, str) else effects.spec()!r}: the 3-D export is of the actuator; rod is not exported "
                               "(allowed: air, axial, radial, fibres, payload:K, moment:K, gravity)")
+        if effects.couples:
+            raise ExportError(f"--effects {effects.spec()!r}: a couple is not in the 3-D export's parameter structs yet "
+                              "(allowed: air, axial, radial, fibres, payload:K, moment:K, gravity)")
         if not effects.in_plane():
             raise ExportError(f"--effects {effects.spec()!r}: at least one of air, axial, radial, fibres is needed")
         object.__setattr__(self, "effects", effects)

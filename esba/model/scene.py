@@ -73,7 +73,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from esba.derive.effects import DEFAULT_VARIANT, VARIANTS, EffectSet
+from esba.derive.effects import DEFAULT_VARIANT, MAX_PAYLOADS, VARIANTS, EffectSet
 from esba.infra import checks, inputs
 from esba.infra.errors import InputError
 
@@ -81,7 +81,7 @@ from .contact.kinds import obstacle_from_dict
 from .contact.obstacles import MAX_OBSTACLES, Obstacle, ObstacleError
 from .generated import Model, load_model
 
-__all__ = ["Actuator", "ACTUATOR_RULES", "check_actuator_field", "actuator_rule", "Payload", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "MAX_PRESSURE", "MAX_PAYLOAD"]
+__all__ = ["Actuator", "ACTUATOR_RULES", "check_actuator_field", "actuator_rule", "Payload", "Moment", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "MAX_PRESSURE", "MAX_PAYLOAD"]
 
 #: The largest target angle (the unloaded bend a pressure is sought for), degrees: ten turns, as a
 #: measurement file allows (:data:`esba.calibration.measurements.MAX_ANGLE_DEG`); 1e6 deg is a typo.
@@ -93,6 +93,8 @@ MAX_TARGET_ANGLE_DEG = 3600.0
 MAX_PRESSURE = 10.0
 #: The largest payload a scene takes, N: ten times validity's far range (5 times the paper's 2 N).
 MAX_PAYLOAD = 100.0
+#: The largest point moment, N mm: the largest payload on a 1 m arm.
+MAX_MOMENT = MAX_PAYLOAD * 1000.0
 
 #: Standard gravity, m/s^2.
 STANDARD_GRAVITY = 9.81
@@ -313,6 +315,81 @@ class Payload:
         return Payload(self.force * factor, self.angle_deg, self.at, self.out_of_plane_deg)
 
 
+def _vector3(where: str, value: Any) -> tuple[float, float, float]:
+    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list)) or len(value) != 3:
+        raise SceneError(f"{where}={checks.quote(value)}: expected three numbers [x, y, z]")
+    return tuple(_number(where, v) for v in value)  # type: ignore[return-value]
+
+
+def _show(v) -> str:
+    return "[" + ", ".join(f"{x:g}" for x in v) + "]"
+
+
+@dataclass(frozen=True)
+class Moment:
+    """A point moment on the actuator (3-D only: the planar model has no moment term).
+
+    Parameters
+    ----------
+    moment : (mx, my, mz)
+        N mm, in the axes of the straight actuator: x along it (the paper's x, down), y the bending
+        direction, z the layer's normal (a moment about z bends in the paper's plane).
+    at : float
+        Point of application as a fraction of L from the base, 0 < at <= 1 (1 = tip).
+    arm : (ax, ay, az) or None
+        With an arm, the moment is a *couple*: two dead forces, +f at the section's centre plus the
+        arm and -f at the centre, f = (m x e) / |e|^2 fixed in space, on a rigid arm e fixed to the
+        section (perpendicular to ``moment``). It is ``moment`` at the straight state and turns with
+        the arm: a real lever with weights, conservative at any rotation. Without an arm, the moment
+        is a generalised force on the joint rotations: exact for a moment about z in the bending
+        plane (a constant bending moment, as in B2 of docs/3d.md), a first-order stand-in for the
+        other components (docs/3d.md says when that matters).
+
+    Examples
+    --------
+    >>> Moment((20.0, 0.0, 0.0), arm=(0.0, 1.0, 0.0)).kind
+    'couple'
+    >>> Moment((20.0, 0.0, 0.0), arm=(1.0, 0.0, 0.0))
+    Traceback (most recent call last):
+    ...
+    esba.model.scene.SceneError: moment.arm=[1, 0, 0]: expected a direction perpendicular to moment=[20, 0, 0] (then the couple's forces make exactly that moment)
+    """
+
+    moment: tuple[float, float, float]
+    at: float = 1.0
+    arm: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        m = _vector3("moment.moment", self.moment)
+        size = math.sqrt(sum(v * v for v in m))
+        if size > MAX_MOMENT:
+            raise SceneError(f"moment.moment={_show(m)}: its size {size:g} N mm is more than {MAX_MOMENT:g} N mm "
+                             f"({MAX_PAYLOAD:g} N on a 1 m arm: the linear-elastic model means nothing there)")
+        object.__setattr__(self, "moment", m)
+        at = _number("moment.at", self.at)
+        if not 0.0 < at <= 1.0:
+            raise SceneError(f"moment.at={at:g}: expected a fraction of the length with 0 < at <= 1 (1 = tip)")
+        object.__setattr__(self, "at", at)
+        if self.arm is not None:
+            e = _vector3("moment.arm", self.arm)
+            length = math.sqrt(sum(v * v for v in e))
+            if length == 0.0:
+                raise SceneError("moment.arm=[0, 0, 0]: a zero vector has no direction; expected the arm's direction in the section, e.g. [0, 1, 0]")
+            if abs(sum(a * b for a, b in zip(e, m))) > 1e-9 * length * size:
+                raise SceneError(f"moment.arm={_show(e)}: expected a direction perpendicular to moment={_show(m)} "
+                                 "(then the couple's forces make exactly that moment)")
+            object.__setattr__(self, "arm", e)
+
+    @property
+    def kind(self) -> str:
+        """``"couple"`` (dead forces on an arm) or ``"joint"`` (a generalised force on the joint rotations)."""
+        return "joint" if self.arm is None else "couple"
+
+    def describe(self) -> str:
+        arm = "" if self.arm is None else f" as a couple on arm {_show(self.arm)}"
+        return f"moment {_show(self.moment)} N mm{arm}, s={self.at:g}"
+
+
 @dataclass(frozen=True)
 class Scene:
     """An actuator, its loads and the model settings; validated on creation, frozen after.
@@ -339,6 +416,8 @@ class Scene:
         Segment count n, 1 to :data:`esba.infra.checks.MAX_SEGMENTS` (256).
     variant : str
         ``"paper"`` (default) or ``"printed"`` (see :mod:`derive.effects`).
+    moments : tuple of Moment
+        Point moments or couples (3-D only: a scene with any needs ``esba solve --3d``).
     obstacles : tuple of Obstacle
         Rigid obstacles the actuator may touch (:mod:`esba.model.contact.obstacles`); with any, the
         equilibrium is the constrained one of :mod:`esba.statics.contact` (frictionless contact).
@@ -355,6 +434,7 @@ class Scene:
     segments: int = 3
     variant: str = DEFAULT_VARIANT
     obstacles: tuple[Obstacle, ...] = ()
+    moments: tuple[Moment, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.actuator, Actuator):
@@ -374,6 +454,14 @@ class Scene:
         if not isinstance(payloads, (tuple, list)) or not all(isinstance(p, Payload) for p in payloads):
             raise SceneError(f"payloads={checks.quote(self.payloads)}: expected a list of Payload")
         object.__setattr__(self, "payloads", tuple(payloads))
+        moments = self.moments
+        if isinstance(moments, Moment):
+            moments = (moments,)
+        if not isinstance(moments, (tuple, list)) or not all(isinstance(m, Moment) for m in moments):
+            raise SceneError(f"moments={checks.quote(self.moments)}: expected a list of Moment")
+        if len(moments) > MAX_PAYLOADS:
+            raise SceneError(f"moments: {len(moments)} given; at most {MAX_PAYLOADS}")
+        object.__setattr__(self, "moments", tuple(moments))
         object.__setattr__(self, "gravity", _flag("gravity", self.gravity))
         object.__setattr__(self, "fibres", _flag("fibres", self.fibres))
         object.__setattr__(self, "g", _positive("g", self.g))
@@ -404,8 +492,10 @@ class Scene:
 
     @property
     def needs_3d(self) -> bool:
-        """True when a payload points out of the bending plane or an obstacle is a 3-D one (only the 3-D model carries them)."""
-        return any(p.out_of_plane_deg != 0.0 for p in self.payloads) or any(o.dimension == 3 for o in self.obstacles)
+        """True when a payload points out of the bending plane, the scene has a moment or an obstacle
+        is a 3-D one (only the 3-D model carries them)."""
+        return (any(p.out_of_plane_deg != 0.0 for p in self.payloads) or bool(self.moments)
+                or any(o.dimension == 3 for o in self.obstacles))
 
     def model(self) -> Model:
         """The generated model for this scene's segments, effects and variant (generated if missing).
@@ -418,6 +508,9 @@ class Scene:
                     f"payload {k}: out_of_plane_deg={p.out_of_plane_deg:g} points out of the bending plane, which the planar model "
                     "cannot carry: solve it in 3-D (esba solve --3d; esba.statics.spatial.solve_scene3d)"
                 )
+        if self.moments:
+            raise SceneError(f"moment 1: {self.moments[0].describe()}: the planar model has no moment term: solve it in 3-D "
+                             "(esba solve --3d; esba.statics.spatial.solve_scene3d)")
         for k, o in enumerate(self.obstacles, start=1):
             if o.dimension == 3:
                 raise SceneError(f"obstacle #{k}: {o.describe()} is a 3-D obstacle, which the planar model cannot carry: solve it in 3-D (esba solve --3d; esba.statics.contact.spatial.solve_contact3d)")
@@ -436,6 +529,15 @@ class Scene:
             values[f"Omega{k}"] = math.radians(p.angle_deg)
             values[f"s{k}"] = p.at
             values[f"Beta{k}"] = math.radians(p.out_of_plane_deg)
+        joints = [m for m in self.moments if m.kind == "joint"]
+        couples = [m for m in self.moments if m.kind == "couple"]
+        for k, m in enumerate(joints, start=1):
+            values.update({f"mx{k}": m.moment[0] * load_factor, f"my{k}": m.moment[1] * load_factor,
+                           f"mz{k}": m.moment[2] * load_factor, f"sm{k}": m.at})
+        for k, m in enumerate(couples, start=1):
+            values.update({f"cx{k}": m.moment[0] * load_factor, f"cy{k}": m.moment[1] * load_factor,
+                           f"cz{k}": m.moment[2] * load_factor, f"ax{k}": m.arm[0], f"ay{k}": m.arm[1], f"az{k}": m.arm[2],
+                           f"sc{k}": m.at})
         return values
 
     # -- derived scenes ----------------------------------------------------------------------
@@ -460,8 +562,8 @@ class Scene:
         return dataclasses.replace(self, **changes)
 
     def unloaded(self) -> Scene:
-        """The same actuator and pressure setting without payloads and without gravity."""
-        return dataclasses.replace(self, payloads=(), gravity=False)
+        """The same actuator and pressure setting without payloads, moments and gravity."""
+        return dataclasses.replace(self, payloads=(), moments=(), gravity=False)
 
     def describe(self) -> str:
         """A one-line summary, e.g. for a table header."""
@@ -469,6 +571,7 @@ class Scene:
         drive = f"P={self.pressure:g} MPa" if self.pressure is not None else f"unloaded angle {self.target_angle_deg:g} deg"
         loads = "; ".join(f"{p.force:g} N at {p.angle_deg:g} deg" + (f" ({p.out_of_plane_deg:g} deg out of plane)" if p.out_of_plane_deg else "") + f", s={p.at:g}" for p in self.payloads) or "no payload"
         extra = (", gravity" if self.gravity else "") + ("" if self.fibres else ", no fibres")
+        extra += "".join(f"; {m.describe()}" for m in self.moments)
         extra += "".join(f"; {o.describe()}" for o in self.obstacles)
         return (
             f"L={a.L:g} r1={a.r1:g} r2={a.r2:g} d={a.d:g} rho={a.rho_deg:g} deg E={a.E:g} MPa; "
@@ -485,9 +588,10 @@ MAIN_JOB = Scene(target_angle_deg=90.0, payloads=(Payload(2.0, 90.0, 1.0),), seg
 # TOML
 
 #: ``uncertainty`` (standard deviations of the parameters) is read by :func:`esba.calibration.uncertainty.load_sigmas`.
-_TOP_KEYS = {"segments", "variant", "gravity", "fibres", "actuator", "loads", "payloads", "obstacles", "uncertainty"}
+_TOP_KEYS = {"segments", "variant", "gravity", "fibres", "actuator", "loads", "payloads", "moments", "obstacles", "uncertainty"}
 _LOAD_KEYS = {"pressure", "target_angle_deg", "g"}
 _PAYLOAD_KEYS = {"force", "angle_deg", "at", "out_of_plane_deg"}
+_MOMENT_KEYS = {"moment", "at", "arm"}
 
 
 def _check_keys(where: str, table: Any, allowed: set[str]) -> Mapping[str, Any]:
@@ -525,13 +629,25 @@ def scene_from_dict(data: Mapping[str, Any]) -> Scene:
         if "force" not in item:
             raise SceneError(f"[[payloads]] #{k}: missing key force (N)")
         payloads.append(Payload(**item))
+    raw_moments = data.get("moments", [])
+    if not isinstance(raw_moments, list):
+        raise SceneError(f"moments={checks.quote(raw_moments)}: expected an array of tables [[moments]]")
+    moments = []
+    for k, item in enumerate(raw_moments, start=1):
+        item = _check_keys(f"[[moments]] #{k}", item, _MOMENT_KEYS)
+        if "moment" not in item:
+            raise SceneError(f"[[moments]] #{k}: missing key moment ([mx, my, mz], N mm)")
+        try:
+            moments.append(Moment(**item))
+        except SceneError as exc:
+            raise SceneError(f"[[moments]] #{k}: {exc}") from None
     raw_obstacles = data.get("obstacles", [])
     if not isinstance(raw_obstacles, list):
         raise SceneError(f"obstacles={checks.quote(raw_obstacles)}: expected an array of tables [[obstacles]]")
     obstacles = tuple(obstacle_from_dict(f"[[obstacles]] #{k}", item) for k, item in enumerate(raw_obstacles, start=1))
     kwargs: dict[str, Any] = {k: data[k] for k in ("segments", "variant", "gravity", "fibres") if k in data}
     kwargs.update(loads)
-    return Scene(actuator=actuator, payloads=tuple(payloads), obstacles=obstacles, **kwargs)
+    return Scene(actuator=actuator, payloads=tuple(payloads), moments=tuple(moments), obstacles=obstacles, **kwargs)
 
 
 def load_scene(path: str | Path) -> Scene:

@@ -9,6 +9,7 @@ positive definite), and its smallest eigenvalue and its mode.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Mapping
 
@@ -26,10 +27,11 @@ NEWTON_TOL = 1e-12
 
 
 def load_names(model: Model3D) -> list[str]:
-    """The parameters that are ramped as loads: payload magnitudes, moments, the mass."""
+    """The parameters that are ramped as loads: payload magnitudes, moments, couples, the mass."""
     out = []
     for name in model.parameters:
-        if name[:1] == "F" and name[1:].isdigit() or name[:2] in ("mx", "my", "mz") and name[2:].isdigit() or name == "M":
+        if (name[:1] == "F" and name[1:].isdigit() or name[:2] in ("mx", "my", "mz", "cx", "cy", "cz") and name[2:].isdigit()
+                or name == "M"):
             out.append(name)
     return out
 
@@ -273,7 +275,8 @@ def check_direction(name: str, direction) -> np.ndarray:
 
 
 def scene_values3d(scene, section: Mapping[str, float] | None = None, gravity_direction=(1.0, 0.0, 0.0)) -> tuple[object, dict[str, float]]:
-    """The spatial effects and parameter values of a planar-style scene (payloads may point out of plane).
+    """The spatial effects and parameter values of a scene (payloads may point out of plane; its
+    moments and couples come in as the ``moment`` and ``couple`` terms).
 
     Gravity (when the scene has it) acts along ``gravity_direction`` in the base frame (x down, the
     paper's; any direction for an actuator mounted another way), with g of the scene.
@@ -289,6 +292,9 @@ def scene_values3d(scene, section: Mapping[str, float] | None = None, gravity_di
     if scene.gravity:
         values.update(gx=values["g"] * down[0], gy=values["g"] * down[1], gz=values["g"] * down[2])
     effects = Effects3D.from_planar(scene.effects)
+    joints = sum(m.kind == "joint" for m in scene.moments)
+    if scene.moments:
+        effects = dataclasses.replace(effects, moments=joints, couples=len(scene.moments) - joints)
     return effects, values
 
 

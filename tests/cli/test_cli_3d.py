@@ -151,3 +151,60 @@ def test_section_stiffnesses_not_given_come_from_the_eccentric_section(capsys):
     d = json.loads(out)
     assert d["section_nmm2"]["GJ"] == 2e4 and d["section_nmm2"]["EI_side"] == pytest.approx(k.EI_side, rel=1e-12)
     assert d["section_from"].startswith("given in part")
+
+
+# --- point moments and couples (scene files, flags, the API) ----------------------------------
+
+def test_a_couple_from_flags_twists_the_finger_and_a_scene_file_says_the_same(capsys, tmp_path):
+    code, out, err = run(capsys, "solve", "--moment", "200,0,0", "--moment-arm", "0,1,0", *SECTION, "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    assert "as a couple on arm [0, 1, 0]" in d["scene"] and d["stable"]
+    assert sum(d["tau_deg"]) > 0.5  # a positive torque about x twists it positively
+    f = tmp_path / "couple.toml"
+    f.write_text("[[payloads]]\nforce = 2.0\n\n[[moments]]\nmoment = [200.0, 0.0, 0.0]\narm = [0.0, 1.0, 0.0]\n")
+    code, out2, err = run(capsys, "solve", str(f), *SECTION, "--json")
+    assert code == EXIT_OK, err
+    assert json.loads(out2)["tau_deg"] == d["tau_deg"]
+
+
+def test_scene_moments_enter_the_3d_values_by_kind():
+    from esba.model.scene import Moment
+    from esba.statics.spatial import scene_values3d
+
+    scene = MAIN_JOB.replace(moments=(Moment((0.0, 0.0, 50.0), at=0.5), Moment((20.0, 0.0, 0.0), arm=(0.0, 0.0, 2.0))))
+    assert scene.needs_3d
+    effects, values = scene_values3d(scene, {"EI_side": 4e5, "GJ": 1e6})
+    assert (effects.moments, effects.couples) == (1, 1)
+    assert (values["mz1"], values["sm1"], values["cx1"], values["az1"], values["sc1"]) == (50.0, 0.5, 20.0, 2.0, 1.0)
+    with pytest.raises(SceneError, match="the planar model has no moment term"):
+        scene.model()
+    assert scene.unloaded().moments == ()
+
+
+def test_a_couple_about_the_layers_normal_stays_in_the_plane_and_turns_with_the_arm():
+    """An in-plane couple (m about z, arm along the actuator) bends it in its plane only; its moment at the
+    tip is m cos(tip angle): the gradient of the energy at the solved state balances it."""
+    from esba.model.scene import Moment
+
+    scene = MAIN_JOB.replace(payloads=(), moments=(Moment((0.0, 0.0, -40.0), arm=(1.0, 0.0, 0.0)),))
+    eq = solve_scene3d(scene, {"EI_side": 4e5, "GJ": 1e6})
+    assert eq.ok and np.abs(eq.psi).max() < 1e-12 and np.abs(eq.tau).max() < 1e-12
+    free = solve_scene3d(scene.replace(moments=()), {"EI_side": 4e5, "GJ": 1e6})
+    assert eq.theta.sum() < free.theta.sum()  # -40 N mm about z opens the bend
+
+
+@pytest.mark.parametrize("args, message", [
+    (["solve", "--moment", "1,2"], "argument --moment: '1,2': expected three numbers X,Y,Z"),
+    (["solve", "--moment", "1,2,nan", *SECTION], "moment.moment=nan: expected a finite number"),
+    (["solve", "--moment-at", "0.5", *SECTION], "--moment-at given but there is no moment: add --moment MX,MY,MZ"),
+    (["solve", "--moment", "10,0,0", "--moment-arm", "1,0,0", *SECTION], "moment.arm=[1, 0, 0]: expected a direction perpendicular to moment=[10, 0, 0]"),
+    (["solve", "--moment", "10,0,0", "--moment-arm", "0,0,0", *SECTION], "moment.arm=[0, 0, 0]: a zero vector has no direction"),
+    (["solve", "--moment", "10,0,0", "--moment", "0,0,1", "--moment-at", "1", "--moment-at", "0.5", "--moment-at", "0.2", *SECTION],
+     "--moment-at given 3 times for 2 moments"),
+    (["solve", "--moment", "0,0,1", "--moment-at", "1.5", *SECTION], "moment.at=1.5: expected a fraction of the length"),
+])
+def test_bad_moments_are_refused_in_one_line(capsys, args, message):
+    code, out, err = run(capsys, *args)
+    assert code == EXIT_USAGE and out == ""
+    assert message in err and len(err.strip().splitlines()) == 1

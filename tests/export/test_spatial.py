@@ -273,6 +273,7 @@ def test_demo_prints_the_readme_example(build):
         (["--section", "GJ=1"], "--section"),
         (["--3d", "--effects", "rod,payload"], "--effects"),
         (["--3d", "--effects", "air,wings"], "--effects"),
+        (["--3d", "--effects", "air,couple"], "a couple is not in the 3-D export"),
     ],
 )
 def test_bad_flags_get_one_line_naming_the_field(tmp_path, capsys, args, field):
