@@ -13,6 +13,13 @@ B5  Prandtl's lateral-torsional buckling: a cantilever loaded at its tip in its 
     buckles sideways at P_cr = 4.0126 sqrt(EI_side GJ) / L^2 (EI_side / EI -> 0). Found as the
     load at which the 3n x 3n Hessian of the in-plane equilibrium becomes singular with a
     sideways-twist mode (a branch point), and extrapolated in n as B1.
+B6  Twist buckling under an end torque (Greenhill's problem on a cantilever): a couple of dead forces
+    on a rigid arm at the tip (the ``couple`` load; an arm along y, forces along z: the torque T = M
+    about the axis at the straight state) twists the rod by phi0 with GJ phi0 / L = M cos phi0, and
+    the twisted state of an isotropic rod (EI both ways) turns unstable at the twisting moment
+        T_cr = (pi / 2L) EI GJ / (GJ - EI)        (only when GJ > EI; none when GJ <= EI)
+    (linearised about the twisted state, derived in docs/3d.md; T_cr -> pi EI / 2L as GJ -> infinity).
+    Found as a Hessian zero on the twisted state and extrapolated in n as B1.
 """
 
 from __future__ import annotations
@@ -119,6 +126,52 @@ def lateral_torsional_load(n: int, EI_side: float = 1.0, GJ: float = 1.0, EI: fl
     vals["F1"] = F
     w, V = np.linalg.eigh(model.hessian(state["q"], vals))
     return BranchPoint(F, V[:, 0], state["q"])
+
+
+def greenhill_reference(EI: float = 1.0, GJ: float = 10.0, L: float = 1.0) -> tuple[float, float, float] | None:
+    """B6's closed form: (T_cr, phi0, M_cr), the twisting moment, the pre-buckling twist and the
+    couple's moment at the branch point; None when GJ <= EI (the twisted state never buckles)."""
+    if GJ <= EI:
+        return None
+    T = np.pi / (2.0 * L) * EI * GJ / (GJ - EI)
+    phi0 = T * L / GJ
+    return T, phi0, T / np.cos(phi0)
+
+
+def couple_values(L: float = 1.0, EI: float = 1.0, GJ: float = 10.0, M: float = 0.0) -> dict[str, float]:
+    """An isotropic rod (EI both ways) with the end couple of B6: moment (M, 0, 0), arm along y."""
+    return dict(L=L, EI=EI, EI_side=EI, GJ=GJ, kappa0=0.0, cx1=M, cy1=0.0, cz1=0.0, ax1=0.0, ay1=1.0, az1=0.0, sc1=1.0)
+
+
+def twist_buckling_couple(n: int, EI: float = 1.0, GJ: float = 10.0, L: float = 1.0, top: float | None = None) -> BranchPoint | None:
+    """B6: the end couple at which the twisted equilibrium's Hessian turns singular, or None when
+    it stays positive definite up to ``top`` (default: 20 pi EI / L).
+
+    The twisted state (theta = psi = 0, the twist uniform) is followed by Newton in the couple;
+    the smallest eigenvalue is bracketed in steps of 10 % and brought to zero by Brent's method.
+    """
+    model = load_model3d(n, "rod,couple")
+    vals = couple_values(L, EI, GJ)
+    state = {"q": np.zeros(model.size)}
+    top = 20.0 * np.pi * EI / L if top is None else top
+
+    def min_eig(M: float) -> float:
+        vals["cx1"] = M
+        q, ok, _ = newton3d(model, vals, state["q"])
+        if not ok:
+            raise RuntimeError(f"B6: Newton did not converge at M = {M:g}, n = {n}")
+        state["q"] = q
+        return float(np.linalg.eigvalsh(model.hessian(q, vals))[0])
+
+    lo = hi = 0.05 * np.pi * EI / L
+    while min_eig(hi) > 0:
+        lo, hi = hi, hi * 1.1
+        if hi > top:
+            return None
+    M = optimize.brentq(min_eig, lo, hi, xtol=1e-14, rtol=1e-13)
+    vals["cx1"] = M
+    w, V = np.linalg.eigh(model.hessian(state["q"], vals))
+    return BranchPoint(M, V[:, 0], state["q"])
 
 
 # ---------------------------------------------------------------------------------------------

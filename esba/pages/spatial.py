@@ -24,6 +24,10 @@ FLIP_EI_SIDE = ("silicone", 4.0e5)
 FLIP_TOP = 4.0
 #: The stated twist angle of the sideways-load study (degrees).
 TWIST_DEG = 10.0
+#: B6's torsional stiffnesses (EI = 1): a 45 deg pre-twist, and nearly rigid in torsion; and one
+#: softer in torsion than in bending (rubber's round rod, GJ = 2/3 EI), which never buckles.
+B6_GJ = (3.0, 1000.0)
+B6_SOFT = 2.0 / 3.0
 
 
 @dataclass
@@ -33,11 +37,13 @@ class SpatialData:
     b2: float = 0.0
     b3: list[tuple] = field(default_factory=list)
     b5: tuple = ()
+    b6: list[tuple] = field(default_factory=list)
     flips: list[tuple] = field(default_factory=list)
     twists: list[tuple] = field(default_factory=list)
     silicone: tuple = ()
     swung: list = field(default_factory=list)
     cost: dict[str, Any] = field(default_factory=dict)
+    b6_soft: bool = False
     paths: dict[str, Any] = field(default_factory=dict)
 
 
@@ -98,6 +104,13 @@ class SpatialPage(Page):
         say("B5 Prandtl")
         b8, b16 = rod3d.lateral_torsional_load(8), rod3d.lateral_torsional_load(16)
         d.b5 = (b8.load / rod3d.PRANDTL, b16.load / rod3d.PRANDTL, rod3d.richardson(b8.load, b16.load) / rod3d.PRANDTL)
+        # --- B6
+        say("B6 twist buckling under an end couple")
+        for GJ in B6_GJ:
+            T, phi0, M = rod3d.greenhill_reference(1.0, GJ)
+            c8, c16 = rod3d.twist_buckling_couple(8, GJ=GJ), rod3d.twist_buckling_couple(16, GJ=GJ)
+            d.b6.append((GJ, M, np.degrees(phi0), c8.load, c16.load, rod3d.richardson(c8.load, c16.load)))
+        d.b6_soft = rod3d.twist_buckling_couple(8, GJ=B6_SOFT, top=40.0) is None
         # --- the paper's actuator: a push in the bending plane until it flips
         say("the flip study")
         E, r1, r2 = MAIN_JOB.actuator.E, MAIN_JOB.actuator.r1, MAIN_JOB.actuator.r2
@@ -199,9 +212,16 @@ class SpatialPage(Page):
             "- Energies: the paper's in-plane terms (air, axial, radial, fibres) of `derive/energy.py` verbatim in theta_i, plus",
             "  1/2 EI_side (n/L) psi_i^2 and 1/2 GJ (n/L) tau_i^2. The plain rod replaces the paper's terms by 1/2 EI (n/L) (theta_i -",
             "  kappa0 L/n)^2.",
-            "- Loads: a payload F (cos B cos Omega, -cos B sin Omega, sin B) at any fraction s of L (B = 0 is Eq. 14); a point moment",
-            "  in body components whose potential is -m . sum_i sigma_i (tau_i, psi_i, theta_i) (exact for a moment about the bending",
-            "  axis in the plane, e.g. B2; in 3-D a conservative stand-in for a body-fixed moment); gravity along any (gx, gy, gz).",
+            "- Loads: a payload F (cos B cos Omega, -cos B sin Omega, sin B) at any fraction s of L (B = 0 is Eq. 14); gravity",
+            "  along any (gx, gy, gz); and two kinds of point moment (`[[moments]]` in a scene file, `--moment MX,MY,MZ`,",
+            "  `esba.model.scene.Moment`). With an arm (`arm = [ax, ay, az]`, `--moment-arm`) it is a *couple*: dead forces -f at",
+            "  the section's centre and +f at the centre plus the arm e, f = (m x e)/|e|^2 fixed in space, e turning with the",
+            "  section; potential -f . (R(s) e - e), its moment m at the straight state. It is a physical load at any rotation (a",
+            "  lever with weights on pulleys), conservative, and its load stiffness is what twist-buckles a shaft (B6). Without an",
+            "  arm, a generalised force on the joint rotations, potential -m . sum_i sigma_i (tau_i, psi_i, theta_i): exact for a",
+            "  moment about the layer's normal z bending the actuator in its plane (a constant bending moment: B2), and the body",
+            "  moment to first order in the sideways bend and twist, so for its other components only while they stay small. A",
+            "  moment fixed in space, or one that follows the section, is not conservative in 3-D and has no potential.",
             "- Gradient and Hessian by the screw-form Jacobian of the chain (each entry O(1), cumulative poses as symbols):",
             "  off the diagonal, d2U/dq_{j,a} dq_{k,b} = Omega_{j,a} . (sum over loads of D_{k,b} x w), one 3-term dot product.",
             "",
@@ -259,6 +279,22 @@ class SpatialPage(Page):
             "**B5, Prandtl's lateral-torsional buckling** of a cantilever loaded at its tip in its stiff plane (EI = 1e6 EI_side):",
             f"the branch point (the 3n x 3n Hessian singular, its mode sideways bend and twist) at {b8:.5f} (n = 8), {b16:.5f}",
             f"(n = 16) and {bex:.6f} (extrapolated) times 4.0126 sqrt(EI_side GJ) / L^2.",
+            "",
+            "**B6, twist buckling under an end torque** (Greenhill's problem on a cantilever): an isotropic rod (EI both ways) with",
+            "the couple of dead forces on a rigid arm at its tip (arm along y, forces along z: a torque M about the axis at the",
+            "straight state). The couple twists it by phi0 with GJ phi0 / L = M cos phi0; linearising the bending of the twisted",
+            "rod about that state (the internal moment is the couple's, constant along the rod; its arm turns with the tip) gives",
+            "z' = i k z for z = (v' - v'(L) - tan(phi0) w'(L)) + i w', k = M cos(phi0) / EI, with v'(0) = w'(0) = 0, so a",
+            "nontrivial solution needs k L = pi/2 + phi0: T_cr = M cos(phi0) = (pi / 2L) EI GJ / (GJ - EI), which tends to the",
+            "classical pi EI / 2L as GJ -> infinity and does not exist for GJ <= EI (the twist runs to 90 deg first). esba finds",
+            "it as a branch point (the Hessian singular on the twisted state; `esba.analysis.rod3d.twist_buckling_couple`):",
+            "",
+            "| GJ / EI | pre-twist phi0 (deg) | closed form M_cr L / EI | n = 8 | n = 16 | extrapolated | relative error |",
+            "|---|---|---|---|---|---|---|",
+            *[f"| {gj:g} | {phi:.3f} | {M:.6f} | {m8:.6f} | {m16:.6f} | {mex:.6f} | {abs(mex / M - 1):.1e} |" for gj, M, phi, m8, m16, mex in d.b6],
+            "",
+            f"With GJ = {B6_SOFT:.3g} EI (rubber's round rod, G = E/3, J = 2I) the twisted state "
+            f"{'stays stable up to M = 40 EI/L: the end couple never buckles it' if d.b6_soft else '**buckles**, against the closed form'}.",
             "",
             "## Sideways stiffness and twist for a gripper finger",
             "",

@@ -84,3 +84,30 @@ def test_b3_bathe_bolourchi_tip_positions_lie_within_the_references_spread():
             assert nearest < spread, (P, tip, nearest, spread)
         else:
             assert nearest < 2.5e-3 * np.linalg.norm(pts[0]), (P, tip, nearest)
+
+
+@pytest.mark.slow
+@pytest.mark.ci
+@pytest.mark.parametrize("GJ", [3.0, 1000.0])
+def test_b6_twist_buckling_under_an_end_couple_matches_the_closed_form(GJ):
+    """Greenhill's problem on a cantilever: the couple of dead forces on a tip arm buckles the twisted
+    rod at T_cr = (pi / 2L) EI GJ / (GJ - EI) (GJ = 3: a 45 deg pre-twist; GJ = 1000: nearly pi EI / 2L),
+    a branch point whose mode bends the rod out of its axis; n = 8, 16 extrapolated to 1e-4."""
+    from esba.analysis.rod3d import greenhill_reference, twist_buckling_couple
+
+    T, phi0, M = greenhill_reference(1.0, GJ)
+    b8, b16 = twist_buckling_couple(8, GJ=GJ), twist_buckling_couple(16, GJ=GJ)
+    assert abs(b16.load / M - 1) < 5e-3
+    assert abs(richardson(b8.load, b16.load) / M - 1) < 1e-4
+    n = 16
+    assert np.sum(b16.q[2 * n:]) == pytest.approx(phi0, rel=5e-3)  # the pre-buckling twist
+    assert np.abs(b16.q[:2 * n]).max() < 1e-10  # straight before it buckles
+    assert np.abs(b16.mode[:2 * n]).max() > 0.05  # the mode bends
+
+
+def test_b6_an_end_couple_never_buckles_a_rod_whose_twist_is_softer_than_its_bending():
+    """GJ <= EI (rubber's round rod: GJ = 2/3 EI): the twist tends to 90 deg and the state stays stable."""
+    from esba.analysis.rod3d import greenhill_reference, twist_buckling_couple
+
+    assert greenhill_reference(1.0, 2.0 / 3.0) is None
+    assert twist_buckling_couple(3, GJ=2.0 / 3.0, top=40.0) is None
