@@ -18,7 +18,8 @@
 
 /* A pivot within this of zero, relative to the largest, is critical (esba.model.stability). */
 #define CRITICAL_TOL RC({{CRITICAL_TOL}})
-/* Newton has converged when its step is below this (rad): round-off of the gradient beyond it. */
+/* Newton has converged when its step, or the error its contraction says is left after the step,
+ * is below this (rad): round-off of the gradient beyond it. */
 #define STEP_TOL RC({{STEP_TOL}})
 /* Newton that ends its iterations without a step below STEP_TOL has still converged when max
  * |dU/dq| is below this (N mm/rad; esba.solvers.newton's acceptance). */
@@ -305,6 +306,9 @@ static int newton(WORK *w, REAL *q, const REAL *p, int max_iter, REAL *contracti
         w->iterations++;
         if (f == RC(1.0) && size <= STEP_TOL) return 1;
         if (it > 0 && f == RC(1.0) && size <= RC(1e3) * STEP_TOL && size > RC(0.5) * previous) return 1;
+        /* converging quadratically: the error left after this step is at most theta / (1 - theta)
+         * times it (theta = this step over the last; Deuflhard), and that is below STEP_TOL */
+        if (it > 0 && f == RC(1.0) && size < RC(0.5) * previous && size * size <= (previous - size) * STEP_TOL) return 1;
         previous = size;
     }
     if (!eval_newton(w, q, p) || !factor(w, RC(0.0))) return 0;
@@ -398,14 +402,18 @@ static void at_lambda(WORK *w, REAL lam) {
     for (k = 0; k < NP; ++k) w->p[k] = w->p0[k] + lam * w->dp[k];
 }
 
-/* The tangent dq/dlambda = -H^-1 dg/dlambda at (q, w->p) into w->t. */
-static int tangent(WORK *w, const REAL *q) {
+/* The tangent dq/dlambda = -H^-1 dg/dlambda at (q, w->p) into w->t; factored: w->fac already
+ * holds the LDL^T factors of the Hessian at (q, w->p) (the check of the step that reached q). */
+static int tangent_at(WORK *w, const REAL *q, int factored) {
     int k;
-    if (!eval_tangent(w, q, w->p, w->dp, w->gl) || !eval_newton(w, q, w->p) || !factor(w, RC(0.0))) return 0;
+    if (!eval_tangent(w, q, w->p, w->dp, w->gl)) return 0;
+    if (!factored && (!eval_newton(w, q, w->p) || !factor(w, RC(0.0)))) return 0;
     solve(w, w->gl, w->t);
     for (k = 0; k < NQ; ++k) w->t[k] = -w->t[k];
     return all_finite(w->t, NQ);
 }
+
+static int tangent(WORK *w, const REAL *q) { return tangent_at(w, q, 0); }
 
 /* The share of v's squared norm out of the plane (psi and tau). */
 static REAL side_share(const REAL *v) {
@@ -510,16 +518,23 @@ static int settle(WORK *w, REAL *q) {
  * (ESBA_OUT_OF_DOMAIN) or where it jumps (snap()). q: in, the start; out, the state reached. */
 static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
     REAL lam = RC(0.0), h = H_MAX;
-    int step, status;
+    /* have: w->t is the tangent at (q, lam) (a halved step tries again from there). factored:
+     * w->fac holds the factors of the Hessian at lam, at q (settle()) or at the corrector's last
+     * iterate (an accepted step: its last step, below what newton() accepts, away from q), which
+     * the tangent uses instead of evaluating the Hessian once more */
+    int step, status, have = 0, factored = 0;
     at_lambda(w, RC(0.0));
     status = settle(w, q);
     if (status != ESBA_OK) return status;
+    factored = 1; /* settle() ends on the factors at the state it settled */
     if (max_abs(w->dp, NP) == 0) return ESBA_OK;
     for (step = 0; step < MAX_STEPS && lam < 1; ++step) {
         REAL target = lam + h < 1 ? lam + h : RC(1.0), contraction, low, predicted;
         int k, accepted;
         at_lambda(w, lam);
-        if (!tangent(w, q)) return ESBA_NOT_CONVERGED;
+        if (!have && !tangent_at(w, q, factored)) return ESBA_NOT_CONVERGED;
+        have = 1;
+        factored = 0;
         predicted = (target - lam) * SQRT(RC(N)) * norm2(w->t);
         if (predicted > MAX_PREDICT) {
             target = lam + (target - lam) * MAX_PREDICT / predicted;
@@ -534,10 +549,12 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
         at_lambda(w, target);
         accepted = newton(w, w->trial, w->p, MAX_NEWTON, &contraction, &low) && low > CRITICAL_TOL && contraction <= CONTRACTION &&
                    SQRT(RC(N)) * distance(w->trial, w->y) <= CORRECTOR_RATIO * predicted + JUMP_FLOOR && max_diff(w->trial, q) <= MAX_DQ;
-        if (accepted && eval_newton(w, w->trial, w->p) && factor(w, RC(0.0)) && w->rel > CRITICAL_TOL) {
+        if (accepted) {
             copy(q, w->trial, NQ);
             lam = target;
             out->steps++;
+            have = 0;
+            factored = 1;
             if (contraction < RC(0.1)) h = RC(2.0) * h < H_MAX ? RC(2.0) * h : H_MAX;
             continue;
         }
@@ -545,6 +562,7 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
         if (h >= H_MIN) continue;
         if (near_bound(w, q)) return ESBA_OUT_OF_DOMAIN;
         if (!snap(w, q, &lam, ramp_id, out)) return ESBA_NOT_CONVERGED;
+        have = 0;
         h = H_MAX;
     }
     return lam < 1 ? ESBA_NOT_CONVERGED : ESBA_OK;
