@@ -48,6 +48,8 @@
  * corrector may move it from there by at most CORRECTOR_RATIO of that plus JUMP_FLOOR: a corrector
  * that goes further has left the branch, and the step is halved. */
 #define MAX_PREDICT RC(0.25)
+/* The second-order term of a predictor is used when it is at most this share of the first-order one. */
+#define QUADRATIC RC(0.5)
 #define CORRECTOR_RATIO RC(0.5)
 #define JUMP_FLOOR RC({{JUMP_FLOOR}})
 /* Where the landing state of a jump is sought: this far past the end of the branch (load factor),
@@ -522,7 +524,8 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
      * w->fac holds the factors of the Hessian at lam, at q (settle()) or at the corrector's last
      * iterate (an accepted step: its last step, below what newton() accepts, away from q), which
      * the tangent uses instead of evaluating the Hessian once more */
-    int step, status, have = 0, factored = 0;
+    int step, status, have = 0, factored = 0, previous = 0;
+    REAL lam_tp = RC(0.0);
     at_lambda(w, RC(0.0));
     status = settle(w, q);
     if (status != ESBA_OK) return status;
@@ -546,11 +549,32 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
             if (w->trial[k] <= w->lb) w->trial[k] = RC(0.5) * (q[k] + w->lb);
         }
         copy(w->y, w->trial, NQ);
+        if (previous) {
+            /* the corrector starts from the second-order predictor: the tangent's change since the
+             * last accepted step gives d2q/dlambda2; used only when its term is at most
+             * QUADRATIC of the tangent's (else the Euler predictor), and the corrector's distance
+             * is still measured from the Euler predictor w->y */
+            REAL d = target - lam, lin = RC(0.0), quad = RC(0.0);
+            for (k = 0; k < NQ; ++k) {
+                REAL a = RC(0.5) * d * d * (w->t[k] - w->tp[k]) / (lam - lam_tp);
+                if (FABS(a) > quad) quad = FABS(a);
+                if (FABS(d * w->t[k]) > lin) lin = FABS(d * w->t[k]);
+            }
+            if (isfinite(quad) && quad <= QUADRATIC * lin) {
+                for (k = 0; k < NQ; ++k) w->trial[k] += RC(0.5) * d * d * (w->t[k] - w->tp[k]) / (lam - lam_tp);
+                for (k = 0; k < N; ++k) {
+                    if (w->trial[k] <= w->lb) w->trial[k] = RC(0.5) * (q[k] + w->lb);
+                }
+            }
+        }
         at_lambda(w, target);
         accepted = newton(w, w->trial, w->p, MAX_NEWTON, &contraction, &low) && low > CRITICAL_TOL && contraction <= CONTRACTION &&
                    SQRT(RC(N)) * distance(w->trial, w->y) <= CORRECTOR_RATIO * predicted + JUMP_FLOOR && max_diff(w->trial, q) <= MAX_DQ;
         if (accepted) {
             copy(q, w->trial, NQ);
+            copy(w->tp, w->t, NQ);
+            lam_tp = lam;
+            previous = 1;
             lam = target;
             out->steps++;
             have = 0;
@@ -563,6 +587,7 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
         if (near_bound(w, q)) return ESBA_OUT_OF_DOMAIN;
         if (!snap(w, q, &lam, ramp_id, out)) return ESBA_NOT_CONVERGED;
         have = 0;
+        previous = 0;
         h = H_MAX;
     }
     return lam < 1 ? ESBA_NOT_CONVERGED : ESBA_OK;
