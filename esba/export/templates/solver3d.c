@@ -24,6 +24,9 @@
 /* Newton that ends its iterations without a step below STEP_TOL has still converged when max
  * |dU/dq| is below this (N mm/rad; esba.solvers.newton's acceptance). */
 #define GRAD_TOL RC({{GRAD_TOL}})
+/* A state on the way (a load step before the last of a ramp) is converged to this (rad): only the
+ * end of a ramp needs STEP_TOL. */
+#define PATH_TOL (STEP_TOL > RC(1e-8) ? STEP_TOL : RC(1e-8))
 /* Newton steps below this (rad) are round-off: their ratio says nothing. */
 #define TINY RC({{TINY}})
 /* Largest ratio of a step's second Newton correction to its first (Deuflhard's test that the
@@ -287,8 +290,10 @@ static void solve(WORK *w, const REAL *b, REAL *x) {
 /* ---------------------------------------------------------------- Newton and the minimiser */
 
 /* Newton on dU/dq = 0 at p from q (in place), every step kept inside the domain. Returns 1 when it
- * converged. *contraction: its second step over its first; *low: the smallest relative pivot met. */
-static int newton(WORK *w, REAL *q, const REAL *p, int max_iter, REAL *contraction, REAL *low) {
+ * converged (a step below STEP_TOL, or an error left below tol by its contraction). *contraction:
+ * its second step over its first; *low: the smallest relative pivot met. On return w->fac holds the
+ * factors of the Hessian at its last iterate. */
+static int newton_to(WORK *w, REAL *q, const REAL *p, int max_iter, REAL tol, REAL *contraction, REAL *low) {
     REAL first = RC(0.0), previous = RC(0.0);
     int it;
     *contraction = RC(0.0);
@@ -309,13 +314,17 @@ static int newton(WORK *w, REAL *q, const REAL *p, int max_iter, REAL *contracti
         if (f == RC(1.0) && size <= STEP_TOL) return 1;
         if (it > 0 && f == RC(1.0) && size <= RC(1e3) * STEP_TOL && size > RC(0.5) * previous) return 1;
         /* converging quadratically: the error left after this step is at most theta / (1 - theta)
-         * times it (theta = this step over the last; Deuflhard), and that is below STEP_TOL */
-        if (it > 0 && f == RC(1.0) && size < RC(0.5) * previous && size * size <= (previous - size) * STEP_TOL) return 1;
+         * times it (theta = this step over the last; Deuflhard), and that is below tol */
+        if (it > 0 && f == RC(1.0) && size < RC(0.5) * previous && size * size <= (previous - size) * tol) return 1;
         previous = size;
     }
     if (!eval_newton(w, q, p) || !factor(w, RC(0.0))) return 0;
     if (w->rel < *low) *low = w->rel;
     return max_abs(w->g, NQ) <= GRAD_TOL;
+}
+
+static int newton(WORK *w, REAL *q, const REAL *p, int max_iter, REAL *contraction, REAL *low) {
+    return newton_to(w, q, p, max_iter, STEP_TOL, contraction, low);
 }
 
 /* A stable state near q at p (in place): Newton with the Hessian shifted (H + mu I) until it is
@@ -405,7 +414,8 @@ static void at_lambda(WORK *w, REAL lam) {
 }
 
 /* The tangent dq/dlambda = -H^-1 dg/dlambda at (q, w->p) into w->t; factored: w->fac already
- * holds the LDL^T factors of the Hessian at (q, w->p) (the check of the step that reached q). */
+ * holds the LDL^T factors of the Hessian at (q, w->p), or at the corrector's last iterate that
+ * reached q (ramp()). */
 static int tangent_at(WORK *w, const REAL *q, int factored) {
     int k;
     if (!eval_tangent(w, q, w->p, w->dp, w->gl)) return 0;
@@ -514,7 +524,9 @@ static int settle(WORK *w, REAL *q) {
 }
 
 /* Ramp lambda from 0 to 1 (p = w->p0 + lambda w->dp) from q, following the stable branch by
- * natural-parameter continuation (tangent predictor, Newton corrector, accepted only with every
+ * natural-parameter continuation (tangent predictor, with a second-order term from the last step's
+ * tangent when that is small; Newton corrector, to PATH_TOL on the way and STEP_TOL at the end of
+ * the ramp; a step accepted only with every
  * Hessian met positive definite, a contracting corrector and a bounded change); a step that fails
  * is halved, and when it falls below H_MIN the stable branch has ended: at the domain's edge
  * (ESBA_OUT_OF_DOMAIN) or where it jumps (snap()). q: in, the start; out, the state reached. */
@@ -522,8 +534,8 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
     REAL lam = RC(0.0), h = H_MAX;
     /* have: w->t is the tangent at (q, lam) (a halved step tries again from there). factored:
      * w->fac holds the factors of the Hessian at lam, at q (settle()) or at the corrector's last
-     * iterate (an accepted step: its last step, below what newton() accepts, away from q), which
-     * the tangent uses instead of evaluating the Hessian once more */
+     * iterate (an accepted step: one Newton step away from q, small enough for newton() to stop),
+     * which the tangent uses instead of evaluating the Hessian once more */
     int step, status, have = 0, factored = 0, previous = 0;
     REAL lam_tp = RC(0.0);
     at_lambda(w, RC(0.0));
@@ -568,7 +580,7 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
             }
         }
         at_lambda(w, target);
-        accepted = newton(w, w->trial, w->p, MAX_NEWTON, &contraction, &low) && low > CRITICAL_TOL && contraction <= CONTRACTION &&
+        accepted = newton_to(w, w->trial, w->p, MAX_NEWTON, target < 1 ? PATH_TOL : STEP_TOL, &contraction, &low) && low > CRITICAL_TOL && contraction <= CONTRACTION &&
                    SQRT(RC(N)) * distance(w->trial, w->y) <= CORRECTOR_RATIO * predicted + JUMP_FLOOR && max_diff(w->trial, q) <= MAX_DQ;
         if (accepted) {
             copy(q, w->trial, NQ);
