@@ -63,6 +63,7 @@ class Batch3DResult:
     stable: np.ndarray  # the model's Hessian at q is positive definite
     snaps: np.ndarray
     iterations: np.ndarray  # Newton iterations of the C's load history
+    steps: np.ndarray  # its accepted load steps
     timings: dict = field(default_factory=dict)
 
     @property
@@ -190,5 +191,5 @@ def solve_batch3d(n: int, values: Mapping[str, object], effects: str | None = No
     gn, stable = _check(spec, q, pm)
     verified = np.isfinite(gn) & (gn <= GRAD_TOL) & stable
     t4 = time.perf_counter()
-    return Batch3DResult(q, status, verified, gn, stable, results["snaps"] + results["sideways"], np.array(results["iterations"]),
+    return Batch3DResult(q, status, verified, gn, stable, results["snaps"] + results["sideways"], np.array(results["iterations"]), np.array(results["steps"]),
                          {"setup": t1 - t0, "pack": t2 - t1, "solve": t3 - t2, "check": t4 - t3, "total": t4 - t0})

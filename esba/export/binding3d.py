@@ -224,6 +224,14 @@ class Library3D:
         record array (the C layout), for :meth:`batch_records`."""
         return np.zeros(count, dtype=np.dtype(self.types[kind]))
 
+    def as_records(self, kind: str, values: Sequence[Mapping]) -> np.ndarray:
+        """Parameter (``params``) or load (``loads``, as for :meth:`loads`) mappings as a record array."""
+        make = self.params if kind == "params" else self.loads
+        out = self.records(kind, len(values))
+        for i, v in enumerate(values):
+            out[i] = np.frombuffer(bytes(make(v)), dtype=out.dtype)[0]
+        return out
+
     def batch_records(self, params: np.ndarray, loads: np.ndarray) -> np.ndarray:
         """``{name}_equilibrium_batch`` on record arrays of :meth:`records` (one C call, no Python
         per element): the results as a record array of the result structure."""
