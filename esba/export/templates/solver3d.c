@@ -41,9 +41,10 @@
 #define MAX_SADDLES 6      /* saddles the minimiser leaves along their softest mode */
 /* How far the minimiser moves off a saddle it fell onto (rad, along the unit mode). */
 #define SADDLE_KICK RC(1e-3)
-/* Load steps: the largest (4 steps per ramp) and the smallest before the stable branch is
- * declared ended (a fold or a branch point: the Hessian turns singular there). */
-#define H_MAX RC(0.25)
+/* Load steps: the largest (the whole ramp: MAX_PREDICT bounds a step by how far the state moves)
+ * and the smallest before the stable branch is declared ended (a fold or a branch point: the
+ * Hessian turns singular there). */
+#define H_MAX RC(1.0)
 #define H_MIN RC({{H_MIN}})
 /* Largest change of one unknown in one step (rad): a longer step is halved. */
 #define MAX_DQ RC(0.5)
@@ -515,8 +516,8 @@ static int snap(WORK *w, REAL *q, REAL *lam, int ramp_id, {{NAME}}_result *out) 
 static int settle(WORK *w, REAL *q) {
     REAL contraction, low;
     copy(w->hold, q, NQ);
-    if (newton(w, q, w->p, MAX_NEWTON, &contraction, &low) && eval_newton(w, q, w->p) && factor(w, RC(0.0)) && w->rel > CRITICAL_TOL)
-        return ESBA_OK;
+    /* Newton's last Hessian (one converged step from q) stands for q's: w->fac holds its factors */
+    if (newton(w, q, w->p, MAX_NEWTON, &contraction, &low) && w->rel > CRITICAL_TOL) return ESBA_OK;
     copy(q, w->hold, NQ);
     if (minimise(w, q, w->p)) return ESBA_OK;
     copy(q, w->hold, NQ);
@@ -541,7 +542,7 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
     at_lambda(w, RC(0.0));
     status = settle(w, q);
     if (status != ESBA_OK) return status;
-    factored = 1; /* settle() ends on the factors at the state it settled */
+    factored = 1; /* settle() ends on the factors of the Hessian at the state it settled, or one converged Newton step from it */
     if (max_abs(w->dp, NP) == 0) return ESBA_OK;
     for (step = 0; step < MAX_STEPS && lam < 1; ++step) {
         REAL target = lam + h < 1 ? lam + h : RC(1.0), contraction, low, predicted;
