@@ -51,7 +51,7 @@
 /* A load step's predictor moves the state by at most MAX_PREDICT (rad, in sqrt(n) |dq|) and the
  * corrector may move it from there by at most CORRECTOR_RATIO of that plus JUMP_FLOOR: a corrector
  * that goes further has left the branch, and the step is halved. */
-#define MAX_PREDICT RC(0.25)
+#define MAX_PREDICT RC(0.5)
 /* The second-order term of a predictor is used when it is at most this share of the first-order one. */
 #define QUADRATIC RC(0.5)
 #define CORRECTOR_RATIO RC(0.5)
