@@ -457,4 +457,5 @@ def batch3d_benchmark(size: int = 2000, segments: int = 3, samples: int = 20) ->
             gaps.append(float(np.abs(py.q - best.q[i]).max()))
     return {"size": count, "segments": segments, "us": best.per_equilibrium_us(), "solve_us": 1e6 * best.timings["solve"] / count,
             "check_us": 1e6 * best.timings["check"] / count, "counts": best.counts(), "ok": int(best.ok.sum()),
+            "newton_iterations": float(best.iterations.mean()), "steps": float(best.steps.mean()),
             "max_q_difference_vs_solve3d": max(gaps) if gaps else None, "samples": len(gaps), "target_us": 60.0}

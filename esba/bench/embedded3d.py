@@ -2,7 +2,7 @@
 
 For n = 3 and 8: microseconds per 3-D equilibrium in C (the export built ``-O2`` as a shared
 library; each scene solved ``repeat`` times by one call of ``{name}_equilibrium_batch``, timed
-around the call, median over scenes), the same scenes by Python's 3-D solve
+around the call on record arrays in the C layout (no Python per element), median over scenes), the same scenes by Python's 3-D solve
 (:func:`esba.statics.spatial.solve3d`, certified by IPOPT as it always is), the largest difference
 of their states, the object's code size (``size``, host ``-O2``), the work memory, and the sizes for
 a Cortex-M4 (``arm-none-eabi-gcc ... -Os``) in double and single precision where that compiler is
@@ -21,7 +21,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from esba.export import build
-from esba.export.binding3d import Library3D, loads3d
+from esba.export.binding3d import STATUS3D, Library3D, loads3d
 from esba.export.spatial import ExportSpec3D, export_c3d
 from esba.model.spatial import load_model3d
 from esba.statics.spatial import solve3d
@@ -55,13 +55,15 @@ def embedded3d_benchmark(ns: Sequence[int] = EMBEDDED3D_NS, repeat: int = 11, pr
             model = load_model3d(n)
             c_us, py_us, gaps, statuses = [], [], [], []
             for p, f, om, be, s in SCENES3D:
-                loads = loads3d(p, [(f, math.radians(om), math.radians(be), s)])
-                lib.batch([params], [loads])  # warm
+                loads = lib.as_records("loads", [loads3d(p, [(f, math.radians(om), math.radians(be), s)])])
+                one = lib.as_records("params", [params])
+                lib.batch_records(one, loads)  # warm
+                many_params, many_loads = np.repeat(one, repeat), np.repeat(loads, repeat)
                 t0 = time.perf_counter()
-                results = lib.batch([params] * repeat, [loads] * repeat)
+                results = lib.batch_records(many_params, many_loads)
                 c_us.append(1e6 * (time.perf_counter() - t0) / repeat)
                 r = results[0]
-                statuses.append(r.status_name)
+                statuses.append(STATUS3D[r["status"]] if 0 <= r["status"] < len(STATUS3D) else f"unknown({r['status']})")
                 values = {**params, "P": p, "F1": f, "Omega1": math.radians(om), "Beta1": math.radians(be), "s1": s}
                 values = {k: values[k] for k in model.parameters}
                 solve3d(model, values)
@@ -71,7 +73,7 @@ def embedded3d_benchmark(ns: Sequence[int] = EMBEDDED3D_NS, repeat: int = 11, pr
                     py = solve3d(model, values)
                     times.append(time.perf_counter() - t0)
                 py_us.append(1e6 * statistics.median(times))
-                gaps.append(float(np.abs(py.q - r.q).max()))
+                gaps.append(float(np.abs(py.q - r["q"]).max()))
             obj = work / f"n{n}.o"
             build.run_compiler(cc, ["-std=c99", "-O2", "-c", str(export.source), "-o", str(obj)])
             size = build.object_size(obj)

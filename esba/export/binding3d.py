@@ -219,6 +219,32 @@ class Library3D:
         self.fn["equilibrium_batch"](self.spec.n, count, P, L, R, self._work)
         return [result_of(r) for r in R]
 
+    def records(self, kind: str, count: int) -> np.ndarray:
+        """``count`` zeroed C structures of ``kind`` (``params``, ``loads``, ``result``) as a NumPy
+        record array (the C layout), for :meth:`batch_records`."""
+        return np.zeros(count, dtype=np.dtype(self.types[kind]))
+
+    def as_records(self, kind: str, values: Sequence[Mapping]) -> np.ndarray:
+        """Parameter (``params``) or load (``loads``, as for :meth:`loads`) mappings as a record array."""
+        make = self.params if kind == "params" else self.loads
+        out = self.records(kind, len(values))
+        for i, v in enumerate(values):
+            out[i] = np.frombuffer(bytes(make(v)), dtype=out.dtype)[0]
+        return out
+
+    def batch_records(self, params: np.ndarray, loads: np.ndarray) -> np.ndarray:
+        """``{name}_equilibrium_batch`` on record arrays of :meth:`records` (one C call, no Python
+        per element): the results as a record array of the result structure."""
+        count = len(loads)
+        if len(params) != count or params.dtype != np.dtype(self.types["params"]) or loads.dtype != np.dtype(self.types["loads"]):
+            raise ValueError(f"batch_records: {len(params)} params and {count} loads of this export's record types expected")
+        params, loads = np.ascontiguousarray(params), np.ascontiguousarray(loads)
+        out = self.records("result", count)
+        t, ptr = self.types, ctypes.POINTER
+        self.fn["equilibrium_batch"](self.spec.n, count, params.ctypes.data_as(ptr(t["params"])), loads.ctypes.data_as(ptr(t["loads"])),
+                                     out.ctypes.data_as(ptr(t["result"])), self._work)
+        return out
+
     def pressure_for_angle(self, params, loads, total_angle: float, max_pressure: float = 10.0, start=None) -> CResult3D:
         r = self.types["result"]()
         st = self.state(*start) if start is not None else None

@@ -76,7 +76,8 @@ code (also in `out->status`). Results are always finite: on bad input they are z
   history: from the straight state (`from == NULL`) the pressure is raised with the other loads
   off, then the payloads, moments and weight together, as esba's `solve3d` does; or from a
   `{name}_state` every load moves together (a warm start). The stable branch is followed by
-  continuation (tangent predictor, Newton corrector, the 3n x 3n Hessian factored as LDL^T). Where
+  continuation (tangent predictor, with a second-order term from the last step's tangent where it
+  is small; Newton corrector; the 3n x 3n Hessian factored as LDL^T). Where
   the branch ends (its steps shrink to nothing while the Hessian turns singular) the critical
   mode is found by inverse iteration; the state is kicked along it, the energy minimised just past
   the end, and the ramp goes on from where it lands: `ESBA_SNAPPED` when the mode lies in the

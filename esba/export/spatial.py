@@ -331,7 +331,7 @@ def _values(spec: ExportSpec3D, model: Model3D, sizes: dict[str, int], command: 
         lower = "    (void)a;\n    return RC(-1e30); /* no radial term: no edge */\n"
     real_size = 8 if real == "double" else 4
     npar = len(model.parameters)
-    work_bytes = 8 * (sizes["arg"] + sizes["res"]) + 4 * sizes["iw"] + real_size * (sizes["w"] + 4 * npar + 2 * m * m + 6 * m + 13 * m + 14) + 4
+    work_bytes = 8 * (sizes["arg"] + sizes["res"]) + 4 * sizes["iw"] + real_size * (sizes["w"] + 4 * npar + 2 * m * m + 6 * m + 14 * m + 14) + 4
     tol = TOLERANCES[real]
     meanings = flag_meanings()
     sec = spec.section_values()

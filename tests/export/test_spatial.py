@@ -303,3 +303,30 @@ def test_batch3d_matches_solve3d_and_reports_each_status():
         values = {**TABLE1, **SECTION, "P": P[i], "F1": F[i], "Omega1": np.pi / 2, "Beta1": beta[i], "s1": 1.0}
         py = solve3d(model, {k: values[k] for k in model.parameters})
         assert py.converged and py.stable and np.abs(py.q - r.q[i]).max() < ATOL
+
+
+def test_batch3d_check_is_the_models_gradient_and_hessian():
+    """esba.export.batch3d's check (the model's function compiled over chunks, a Cholesky test):
+    max |dU/dq| and the positive definiteness of the Hessian (its smallest eigenvalue > 0) at
+    states that are not equilibria, stable or not, in a batch that is not a whole number of chunks;
+    a state that is not a number is neither."""
+    if compiler() is None:
+        pytest.skip("no C compiler: the 3-D batch's check cannot be built here")
+    from esba.export.batch3d import CHECK_CHUNK, _check
+
+    spec = ExportSpec3D(3)
+    model = load_model3d(3)
+    rng = np.random.default_rng(0)
+    count = CHECK_CHUNK + 44
+    q = rng.uniform(-1.0, 1.0, (count, 9))
+    q[:, :3] = rng.uniform(-0.3, 1.5, (count, 3))
+    q[-1, 0] = np.nan
+    values = {**TABLE1, **SECTION, "P": 0.1, "F1": 3.0, "Omega1": math.pi, "Beta1": 0.0, "s1": 1.0}
+    values = {k: values[k] for k in model.parameters}
+    gn, stable = _check(spec, q, np.array([[values[k] for k in model.parameters]] * count))
+    smallest = np.array([np.linalg.eigvalsh(model.hessian(x, values))[0] for x in q[:-1]])
+    grad = np.array([np.abs(model.gradient(x, values)).max() for x in q[:-1]])
+    assert 0 < stable[:-1].sum() < count - 1  # both kinds are there
+    assert np.array_equal(stable[:-1], smallest > 0)
+    assert np.allclose(gn[:-1], grad, rtol=1e-12, atol=1e-10)
+    assert gn[-1] == np.inf and not stable[-1]

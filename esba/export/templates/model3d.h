@@ -139,7 +139,7 @@ typedef struct {
     {{NAME}}_real p[{{NP}}], p0[{{NP}}], dp[{{NP}}], unit[{{NP}}];
     {{NAME}}_real h[{{MM}}], fac[{{MM}}], jac[{{NJ}}];
     {{NAME}}_real g[{{M}}], gl[{{M}}], piv[{{M}}], z[{{M}}];
-    {{NAME}}_real x[{{M}}], y[{{M}}], t[{{M}}], v[{{M}}], trial[{{M}}], keep[{{M}}], best[{{M}}], lo[{{M}}], hold[{{M}}];
+    {{NAME}}_real x[{{M}}], y[{{M}}], t[{{M}}], v[{{M}}], trial[{{M}}], keep[{{M}}], best[{{M}}], lo[{{M}}], hold[{{M}}], tp[{{M}}];
     {{NAME}}_real tip[3], rot[9], lb, rel;
     int iterations;
 } {{NAME}}_work;

@@ -18,11 +18,15 @@
 
 /* A pivot within this of zero, relative to the largest, is critical (esba.model.stability). */
 #define CRITICAL_TOL RC({{CRITICAL_TOL}})
-/* Newton has converged when its step is below this (rad): round-off of the gradient beyond it. */
+/* Newton has converged when its step, or the error its contraction says is left after the step,
+ * is below this (rad): round-off of the gradient beyond it. */
 #define STEP_TOL RC({{STEP_TOL}})
 /* Newton that ends its iterations without a step below STEP_TOL has still converged when max
  * |dU/dq| is below this (N mm/rad; esba.solvers.newton's acceptance). */
 #define GRAD_TOL RC({{GRAD_TOL}})
+/* A state on the way (a load step before the last of a ramp) is converged to this (rad): only the
+ * end of a ramp needs STEP_TOL. */
+#define PATH_TOL (STEP_TOL > RC(1e-8) ? STEP_TOL : RC(1e-8))
 /* Newton steps below this (rad) are round-off: their ratio says nothing. */
 #define TINY RC({{TINY}})
 /* Largest ratio of a step's second Newton correction to its first (Deuflhard's test that the
@@ -37,16 +41,19 @@
 #define MAX_SADDLES 6      /* saddles the minimiser leaves along their softest mode */
 /* How far the minimiser moves off a saddle it fell onto (rad, along the unit mode). */
 #define SADDLE_KICK RC(1e-3)
-/* Load steps: the largest (4 steps per ramp) and the smallest before the stable branch is
- * declared ended (a fold or a branch point: the Hessian turns singular there). */
-#define H_MAX RC(0.25)
+/* Load steps: the largest (the whole ramp: MAX_PREDICT bounds a step by how far the state moves)
+ * and the smallest before the stable branch is declared ended (a fold or a branch point: the
+ * Hessian turns singular there). */
+#define H_MAX RC(1.0)
 #define H_MIN RC({{H_MIN}})
 /* Largest change of one unknown in one step (rad): a longer step is halved. */
 #define MAX_DQ RC(0.5)
 /* A load step's predictor moves the state by at most MAX_PREDICT (rad, in sqrt(n) |dq|) and the
  * corrector may move it from there by at most CORRECTOR_RATIO of that plus JUMP_FLOOR: a corrector
  * that goes further has left the branch, and the step is halved. */
-#define MAX_PREDICT RC(0.25)
+#define MAX_PREDICT RC(0.5)
+/* The second-order term of a predictor is used when it is at most this share of the first-order one. */
+#define QUADRATIC RC(0.5)
 #define CORRECTOR_RATIO RC(0.5)
 #define JUMP_FLOOR RC({{JUMP_FLOOR}})
 /* Where the landing state of a jump is sought: this far past the end of the branch (load factor),
@@ -284,8 +291,10 @@ static void solve(WORK *w, const REAL *b, REAL *x) {
 /* ---------------------------------------------------------------- Newton and the minimiser */
 
 /* Newton on dU/dq = 0 at p from q (in place), every step kept inside the domain. Returns 1 when it
- * converged. *contraction: its second step over its first; *low: the smallest relative pivot met. */
-static int newton(WORK *w, REAL *q, const REAL *p, int max_iter, REAL *contraction, REAL *low) {
+ * converged (a step below STEP_TOL, or an error left below tol by its contraction). *contraction:
+ * its second step over its first; *low: the smallest relative pivot met. On return w->fac holds the
+ * factors of the Hessian at its last iterate. */
+static int newton_to(WORK *w, REAL *q, const REAL *p, int max_iter, REAL tol, REAL *contraction, REAL *low) {
     REAL first = RC(0.0), previous = RC(0.0);
     int it;
     *contraction = RC(0.0);
@@ -305,11 +314,18 @@ static int newton(WORK *w, REAL *q, const REAL *p, int max_iter, REAL *contracti
         w->iterations++;
         if (f == RC(1.0) && size <= STEP_TOL) return 1;
         if (it > 0 && f == RC(1.0) && size <= RC(1e3) * STEP_TOL && size > RC(0.5) * previous) return 1;
+        /* converging quadratically: the error left after this step is at most theta / (1 - theta)
+         * times it (theta = this step over the last; Deuflhard), and that is below tol */
+        if (it > 0 && f == RC(1.0) && size < RC(0.5) * previous && size * size <= (previous - size) * tol) return 1;
         previous = size;
     }
     if (!eval_newton(w, q, p) || !factor(w, RC(0.0))) return 0;
     if (w->rel < *low) *low = w->rel;
     return max_abs(w->g, NQ) <= GRAD_TOL;
+}
+
+static int newton(WORK *w, REAL *q, const REAL *p, int max_iter, REAL *contraction, REAL *low) {
+    return newton_to(w, q, p, max_iter, STEP_TOL, contraction, low);
 }
 
 /* A stable state near q at p (in place): Newton with the Hessian shifted (H + mu I) until it is
@@ -398,14 +414,19 @@ static void at_lambda(WORK *w, REAL lam) {
     for (k = 0; k < NP; ++k) w->p[k] = w->p0[k] + lam * w->dp[k];
 }
 
-/* The tangent dq/dlambda = -H^-1 dg/dlambda at (q, w->p) into w->t. */
-static int tangent(WORK *w, const REAL *q) {
+/* The tangent dq/dlambda = -H^-1 dg/dlambda at (q, w->p) into w->t; factored: w->fac already
+ * holds the LDL^T factors of the Hessian at (q, w->p), or at the corrector's last iterate that
+ * reached q (ramp()). */
+static int tangent_at(WORK *w, const REAL *q, int factored) {
     int k;
-    if (!eval_tangent(w, q, w->p, w->dp, w->gl) || !eval_newton(w, q, w->p) || !factor(w, RC(0.0))) return 0;
+    if (!eval_tangent(w, q, w->p, w->dp, w->gl)) return 0;
+    if (!factored && (!eval_newton(w, q, w->p) || !factor(w, RC(0.0)))) return 0;
     solve(w, w->gl, w->t);
     for (k = 0; k < NQ; ++k) w->t[k] = -w->t[k];
     return all_finite(w->t, NQ);
 }
+
+static int tangent(WORK *w, const REAL *q) { return tangent_at(w, q, 0); }
 
 /* The share of v's squared norm out of the plane (psi and tau). */
 static REAL side_share(const REAL *v) {
@@ -495,8 +516,8 @@ static int snap(WORK *w, REAL *q, REAL *lam, int ramp_id, {{NAME}}_result *out) 
 static int settle(WORK *w, REAL *q) {
     REAL contraction, low;
     copy(w->hold, q, NQ);
-    if (newton(w, q, w->p, MAX_NEWTON, &contraction, &low) && eval_newton(w, q, w->p) && factor(w, RC(0.0)) && w->rel > CRITICAL_TOL)
-        return ESBA_OK;
+    /* Newton's last Hessian (one converged step from q) stands for q's: w->fac holds its factors */
+    if (newton(w, q, w->p, MAX_NEWTON, &contraction, &low) && w->rel > CRITICAL_TOL) return ESBA_OK;
     copy(q, w->hold, NQ);
     if (minimise(w, q, w->p)) return ESBA_OK;
     copy(q, w->hold, NQ);
@@ -504,22 +525,32 @@ static int settle(WORK *w, REAL *q) {
 }
 
 /* Ramp lambda from 0 to 1 (p = w->p0 + lambda w->dp) from q, following the stable branch by
- * natural-parameter continuation (tangent predictor, Newton corrector, accepted only with every
+ * natural-parameter continuation (tangent predictor, with a second-order term from the last step's
+ * tangent when that is small; Newton corrector, to PATH_TOL on the way and STEP_TOL at the end of
+ * the ramp; a step accepted only with every
  * Hessian met positive definite, a contracting corrector and a bounded change); a step that fails
  * is halved, and when it falls below H_MIN the stable branch has ended: at the domain's edge
  * (ESBA_OUT_OF_DOMAIN) or where it jumps (snap()). q: in, the start; out, the state reached. */
 static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
     REAL lam = RC(0.0), h = H_MAX;
-    int step, status;
+    /* have: w->t is the tangent at (q, lam) (a halved step tries again from there). factored:
+     * w->fac holds the factors of the Hessian at lam, at q (settle()) or at the corrector's last
+     * iterate (an accepted step: one Newton step away from q, small enough for newton() to stop),
+     * which the tangent uses instead of evaluating the Hessian once more */
+    int step, status, have = 0, factored = 0, previous = 0;
+    REAL lam_tp = RC(0.0);
     at_lambda(w, RC(0.0));
     status = settle(w, q);
     if (status != ESBA_OK) return status;
+    factored = 1; /* settle() ends on the factors of the Hessian at the state it settled, or one converged Newton step from it */
     if (max_abs(w->dp, NP) == 0) return ESBA_OK;
     for (step = 0; step < MAX_STEPS && lam < 1; ++step) {
         REAL target = lam + h < 1 ? lam + h : RC(1.0), contraction, low, predicted;
         int k, accepted;
         at_lambda(w, lam);
-        if (!tangent(w, q)) return ESBA_NOT_CONVERGED;
+        if (!have && !tangent_at(w, q, factored)) return ESBA_NOT_CONVERGED;
+        have = 1;
+        factored = 0;
         predicted = (target - lam) * SQRT(RC(N)) * norm2(w->t);
         if (predicted > MAX_PREDICT) {
             target = lam + (target - lam) * MAX_PREDICT / predicted;
@@ -531,13 +562,36 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
             if (w->trial[k] <= w->lb) w->trial[k] = RC(0.5) * (q[k] + w->lb);
         }
         copy(w->y, w->trial, NQ);
+        if (previous) {
+            /* the corrector starts from the second-order predictor: the tangent's change since the
+             * last accepted step gives d2q/dlambda2; used only when its term is at most
+             * QUADRATIC of the tangent's (else the Euler predictor), and the corrector's distance
+             * is still measured from the Euler predictor w->y */
+            REAL d = target - lam, lin = RC(0.0), quad = RC(0.0);
+            for (k = 0; k < NQ; ++k) {
+                REAL a = RC(0.5) * d * d * (w->t[k] - w->tp[k]) / (lam - lam_tp);
+                if (FABS(a) > quad) quad = FABS(a);
+                if (FABS(d * w->t[k]) > lin) lin = FABS(d * w->t[k]);
+            }
+            if (isfinite(quad) && quad <= QUADRATIC * lin) {
+                for (k = 0; k < NQ; ++k) w->trial[k] += RC(0.5) * d * d * (w->t[k] - w->tp[k]) / (lam - lam_tp);
+                for (k = 0; k < N; ++k) {
+                    if (w->trial[k] <= w->lb) w->trial[k] = RC(0.5) * (q[k] + w->lb);
+                }
+            }
+        }
         at_lambda(w, target);
-        accepted = newton(w, w->trial, w->p, MAX_NEWTON, &contraction, &low) && low > CRITICAL_TOL && contraction <= CONTRACTION &&
+        accepted = newton_to(w, w->trial, w->p, MAX_NEWTON, target < 1 ? PATH_TOL : STEP_TOL, &contraction, &low) && low > CRITICAL_TOL && contraction <= CONTRACTION &&
                    SQRT(RC(N)) * distance(w->trial, w->y) <= CORRECTOR_RATIO * predicted + JUMP_FLOOR && max_diff(w->trial, q) <= MAX_DQ;
-        if (accepted && eval_newton(w, w->trial, w->p) && factor(w, RC(0.0)) && w->rel > CRITICAL_TOL) {
+        if (accepted) {
             copy(q, w->trial, NQ);
+            copy(w->tp, w->t, NQ);
+            lam_tp = lam;
+            previous = 1;
             lam = target;
             out->steps++;
+            have = 0;
+            factored = 1;
             if (contraction < RC(0.1)) h = RC(2.0) * h < H_MAX ? RC(2.0) * h : H_MAX;
             continue;
         }
@@ -545,6 +599,8 @@ static int ramp(WORK *w, REAL *q, int ramp_id, {{NAME}}_result *out) {
         if (h >= H_MIN) continue;
         if (near_bound(w, q)) return ESBA_OUT_OF_DOMAIN;
         if (!snap(w, q, &lam, ramp_id, out)) return ESBA_NOT_CONVERGED;
+        have = 0;
+        previous = 0;
         h = H_MAX;
     }
     return lam < 1 ? ESBA_NOT_CONVERGED : ESBA_OK;
