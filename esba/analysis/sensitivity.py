@@ -278,7 +278,7 @@ def with_parameters(scene: Scene, values: Mapping[str, float]) -> Scene:
     if act:
         top["actuator"] = dataclasses.replace(scene.actuator, **act)
     if payloads != list(scene.payloads):
-        top["payloads"] = tuple(Payload(p.force, p.angle_deg, p.at) for p in payloads)
+        top["payloads"] = tuple(Payload(p.force, p.angle_deg, p.at, p.out_of_plane_deg) for p in payloads)
     return dataclasses.replace(scene, **top) if top else scene
 
 
