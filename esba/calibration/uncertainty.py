@@ -93,6 +93,10 @@ __all__ = [
 #: The most Monte Carlo samples one run may draw (they are all held in memory).
 MAX_SAMPLES = 1_000_000
 
+#: The most samples of a 3-D Monte Carlo (:mod:`esba.calibration.uncertainty3d`): each is a load
+#: history of damped Newton solves in Python, about 10 ms at n = 3 (the 3-D sweep's bound too).
+MAX_SAMPLES_3D = 100_000
+
 #: Outputs reported by propagation and Monte Carlo, with their units.
 OUTPUTS = (("tip_x", "mm"), ("tip_y", "mm"), ("total_angle", "deg"))
 
@@ -527,6 +531,19 @@ def check_samples(samples: int, n: int, parameters: int = 1) -> None:
         )
 
 
+def check_samples3d(samples: int) -> None:
+    """An :class:`UncertaintyError` for more samples than a 3-D Monte Carlo takes (:data:`MAX_SAMPLES_3D`).
+
+    >>> check_samples3d(200_000)
+    Traceback (most recent call last):
+    ...
+    esba.calibration.sigmas.UncertaintyError: samples=200000: at most 100000 in 3-D (each sample is a load history of Newton solves in Python, about 10 ms at n = 3); split a larger study into runs with other seeds
+    """
+    if samples > MAX_SAMPLES_3D:
+        raise UncertaintyError(f"samples={samples}: at most {MAX_SAMPLES_3D} in 3-D (each sample is a load history of Newton solves in Python, "
+                               "about 10 ms at n = 3); split a larger study into runs with other seeds")
+
+
 def _in_this_process(scene, fn, bounds, args_of, on_result, progress: str | None) -> None:
     """Each chunk in this process, in order (with a tqdm bar on stderr when ``progress`` names it)."""
     bar = None
@@ -602,6 +619,8 @@ def check_monte_carlo(scene: Scene, sigmas: Sequence[Sigma], options: MonteCarlo
         raise UncertaintyError(f"options={options!r}: expected MonteCarloOptions")
     if not isinstance(scene, Scene):
         raise UncertaintyError(f"scene={scene!r}: expected a Scene")
+    if three_d:
+        check_samples3d(options.samples)
     check_samples(options.samples, 3 * scene.segments if three_d else scene.segments, len(sigmas))
     return options, _checked_sigmas(scene, sigmas, three_d)
 

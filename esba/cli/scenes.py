@@ -198,9 +198,12 @@ def _uncertainty_args(args: argparse.Namespace, scene, section: dict | None = No
             MonteCarloOptions,
             UncertaintyError,
             check_samples,
+            check_samples3d,
         )
 
         try:
+            if section is not None:
+                check_samples3d(args.monte_carlo)
             extra = {} if args.mc_chunk is None else {"chunk": args.mc_chunk}
             mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=0 if args.seed is None else args.seed, **extra)
             check_samples(args.monte_carlo, scene.segments * (1 if section is None else 3), len(sigmas))  # before the nominal solve
