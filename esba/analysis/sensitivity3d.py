@@ -11,7 +11,7 @@ The parameters (:func:`parameter_names3d`) are the planar scene's (the same name
 meaning, a target angle included: the pressure then follows it in closed form) and, in 3-D,
 each payload's angle out of the bending plane ``Beta1``, ... (deg, the scene's
 ``out_of_plane_deg``) and the section's sideways and torsional stiffness ``EI_side``, ``GJ``
-(N mm^2). The section is an input here: when it comes from the eccentric section
+(N mm^2). A scene's point moments and couples are held (no moment is a parameter). The section is an input here: when it comes from the eccentric section
 (:func:`esba.statics.spatial.check_section`) it is derived once for the nominal scene and held,
 so a change of E or r2 does not move EI_side and GJ (give them their own sigma); the 3-D sweep
 (:mod:`esba.studies.sweep3d`) holds the section the same way.
@@ -35,7 +35,7 @@ Beta, which pushes the finger out of its plane).
 >>> section = check_section({"EI_side": 4e5, "GJ": 1e5}, scene)
 >>> s = sensitivities3d(scene, section, solve_scene3d(scene, section))
 >>> s.status, round(s.output("tip_z", "Beta1"), 4), round(s.output("twist", "GJ") * 1e6, 4)   # mm per deg; deg per N mm^2, x 1e6
-('ok', 0.1064, -0.1081)
+('ok', 0.0296, -4.264)
 """
 
 from __future__ import annotations
@@ -146,14 +146,16 @@ def with_parameters3d(scene: Scene, section: Mapping[str, float], values: Mappin
     return scene, section
 
 
-def _build(model, unloaded, names: tuple[str, ...], down: tuple[float, float, float]) -> ca.Function:
-    """(q, p, v) -> G, H, dG/dp, y, dy/dq, dy/dp, d(v'Hv)/dq, d(v'Hv)/dp, p in scene-file units."""
+def _build(model, unloaded, names: tuple[str, ...], down: tuple[float, float, float], fixed: tuple[str, ...]) -> ca.Function:
+    """(q, p, fixed, v) -> G, H, dG/dp, y, dy/dq, dy/dp, d(v'Hv)/dq, d(v'Hv)/dp, p in scene-file units;
+    ``fixed`` the model's parameters that no scene parameter sets (a moment's components: held)."""
     n = model.n
     q = ca.SX.sym("q", model.size)
     p = ca.SX.sym("p", len(names))
+    fx = ca.SX.sym("fixed", len(fixed))
     v = ca.SX.sym("v", model.size)
     parts = ca.vertsplit(p)
-    values: dict[str, Any] = model_values(unloaded, names, parts)  # the planar names; a target angle sets P
+    values: dict[str, Any] = model_values(unloaded, names, parts, dict(zip(fixed, ca.vertsplit(fx))))  # a target angle sets P
     for name, x in zip(names, parts):
         if _beta(name):
             values[name] = x * (math.pi / 180.0)
@@ -165,18 +167,24 @@ def _build(model, unloaded, names: tuple[str, ...], down: tuple[float, float, fl
     tip = model.functions["kinematics"](q, values["L"])[0]
     y = ca.vertcat(tip, ca.sum1(q[:n]), ca.sum1(q[n:2 * n]), ca.sum1(q[2 * n:]))
     curv = ca.dot(v, ca.mtimes(H, v))
-    return ca.Function("esba3d_sensitivity", [q, p, v],
+    return ca.Function("esba3d_sensitivity", [q, p, fx, v],
                        [G, H, ca.jacobian(G, p), y, ca.jacobian(y, q), ca.jacobian(y, p), ca.gradient(curv, q), ca.gradient(curv, p)],
                        {"cse": True})
 
 
-def _function(model, scene: Scene, names: tuple[str, ...], down) -> ca.Function:
-    key = ("sensitivity3d", names, tuple(float(x) for x in down), scene.variant)
+def _function(model, scene: Scene, names: tuple[str, ...], down, fixed: tuple[str, ...]) -> ca.Function:
+    key = ("sensitivity3d", names, tuple(float(x) for x in down), scene.variant, fixed)
     found = model.registry.get(key)
     if found is None:
-        found = _build(model, scene.unloaded().model(), names, tuple(float(x) for x in down))
+        found = _build(model, scene.unloaded().model(), names, tuple(float(x) for x in down), fixed)
         model.registry[key] = found
     return found
+
+
+def _fixed(model, names: Sequence[str]) -> tuple[str, ...]:
+    """The model's parameters that no scene parameter of ``names`` sets (a moment's components)."""
+    made = {*names, "P", "gx", "gy", "gz"}  # model_values keeps each name (a target angle sets P); gravity's components follow g
+    return tuple(k for k in model.parameters if k not in made)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -267,11 +275,14 @@ def sensitivities3d(scene: Scene, section: Mapping[str, float], result, paramete
     chosen = names if parameters is None else check_names3d(scene, list(parameters))
     params = scene_parameters3d(scene, section)
     p = np.array([x.value for x in params])
-    fun = _function(model, scene, names, down)
+    fixed = _fixed(model, names)
+    fun = _function(model, scene, names, down, fixed)
     q = np.asarray(result.q, dtype=float)
-    eig, vecs = np.linalg.eigh(model.hessian(q, scene_values3d(scene, section, down)[1]))
+    values = scene_values3d(scene, section, down)[1]
+    fx = np.array([float(values[k]) for k in fixed])
+    eig, vecs = np.linalg.eigh(model.hessian(q, values))
     v = vecs[:, 0]
-    out = [np.asarray(x, dtype=float) for x in fun(q, p, v)]
+    out = [np.asarray(x, dtype=float) for x in fun(q, p, fx, v)]
     N, m = model.size, len(names)
     H, G_p, y_q, y_p = out[1], out[2].reshape(N, m), out[4].reshape(6, N), out[5].reshape(6, m)
     curv_q, curv_p = out[6].ravel(), out[7].ravel()
@@ -279,7 +290,7 @@ def sensitivities3d(scene: Scene, section: Mapping[str, float], result, paramete
     if s_cols:  # the payload point: from the left, where the segment fractions' clamps are smooth
         left = p.copy()
         left[s_cols] *= 1.0 - 1e-13
-        ol = [np.asarray(x, dtype=float) for x in fun(q, left, v)]
+        ol = [np.asarray(x, dtype=float) for x in fun(q, left, fx, v)]
         G_p[:, s_cols] = ol[2].reshape(N, m)[:, s_cols]
         curv_p[s_cols] = ol[7].ravel()[s_cols]
     ratio = float(eig[0] / max(abs(eig[-1]), 1e-300))

@@ -147,3 +147,19 @@ def test_samples_outside_the_rules_are_counted_not_solved():
     mc = monte_carlo3d(SIDE, sig, MonteCarloOptions(samples=30, seed=1), section=section)
     bad = np.abs(mc.samples[0]) > 90
     assert bad.any() and np.array_equal(mc.code == 1, bad) and np.all(np.isnan(mc.q[bad]))
+
+
+@pytest.mark.parametrize("arm", [None, (0.0, 1.0, 0.0)], ids=["joint moment", "couple"])
+def test_a_scenes_moments_are_held_and_the_sensitivities_still_the_solves_derivatives(arm):
+    from esba.model.scene import Moment
+
+    scene = SIDE.replace(moments=(Moment((0.0, 0.0, 5.0), arm=arm),))
+    section = check_section(SECTION, scene)
+    s = sensitivities3d(scene, section, solve_scene3d(scene, section), ["GJ", "Beta1", "E"])
+    assert s.ok
+    for name in ("GJ", "Beta1", "E"):
+        value = next(p.value for p in s.parameters if p.name == name)
+        h = 1e-5 * max(abs(value), 1.0)
+        fd = (_outputs(*with_parameters3d(scene, section, {name: value + h})) - _outputs(*with_parameters3d(scene, section, {name: value - h}))) / (2 * h)
+        exact = np.array([s.output(o, name) for o, _ in OUTPUTS3D])
+        assert np.abs(fd - exact).max() <= 1e-6 * np.abs(exact).max(), name
