@@ -57,6 +57,7 @@ from .sensitivity import (
     SensitivityOptions,
     held_fixed,
     _zero_round_off,
+    fold_check,
     model_values,
     parameter_names,
     scene_parameters,
@@ -293,26 +294,11 @@ def sensitivities3d(scene: Scene, section: Mapping[str, float], result, paramete
         ol = [np.asarray(x, dtype=float) for x in fun(q, left, fx, v)]
         G_p[:, s_cols] = ol[2].reshape(N, m)[:, s_cols]
         curv_p[s_cols] = ol[7].ravel()[s_cols]
-    ratio = float(eig[0] / max(abs(eig[-1]), 1e-300))
     dq = -np.linalg.solve(H, G_p)
     dout = y_q @ dq + y_p
-    dlam = curv_p + curv_q @ dq
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dist = np.where(dlam * eig[0] < 0, -eig[0] / dlam, np.inf)
-        relative = np.where(p != 0.0, np.abs(dist) / np.abs(p), np.inf)
-    closest = int(np.argmin(relative))
-    status, message = "ok", ""
-    if not result.ok:
-        status = "not_stable"
-        why = "not converged" if not result.converged else "unstable: the 3n x 3n Hessian is not positive definite"
-        message = f"no sensitivities: the state is not a converged stable equilibrium ({why})"
-    elif ratio < options.fold_tol or relative[closest] < options.fold_distance_tol:
-        status = "near_fold"
-        why = (f"{ratio:.2g} x the largest < fold_tol = {options.fold_tol:g}" if ratio < options.fold_tol else
-               f"it reaches 0 when {names[closest]} changes by {dist[closest]:+.3g} {params[closest].unit}, "
-               f"{relative[closest]:.2g} of its value < fold_distance_tol = {options.fold_distance_tol:g}")
-        message = (f"no sensitivities: the 3n x 3n Hessian is nearly singular (smallest eigenvalue {eig[0]:.3g} N mm/rad^2; {why}): the "
-                   "equilibrium is at or next to a fold or a sideways buckling point, where dq/dp grows without bound")
+    why = None if result.ok else ("not converged" if not result.converged else "unstable: the 3n x 3n Hessian is not positive definite")
+    ratio, dist, status, message = fold_check(eig, curv_p + curv_q @ dq, p, names, [x.unit for x in params], options, why,
+                                              hessian="3n x 3n Hessian", where="a fold or a sideways buckling point", unknown="dq")
     scale = np.where(p != 0.0, np.abs(p), 1.0)
     dq, dout = _zero_round_off(dq, scale), _zero_round_off(dout, scale)
     cols = [names.index(c) for c in chosen]

@@ -279,23 +279,35 @@ def propagate(result: Equilibrium, sigmas: Sequence[Sigma], options: Sensitivity
         given = ", ".join(s.given for s in sigmas)
         message = f"the first-order covariance of {given} overflows (not a finite number): the sigmas are far beyond the model's range"
         return Propagation(sigmas, "overflow", message, np.full((n, n), np.nan), nan2, math.nan, {}, result.tip[:2].copy(), result.total_angle_deg)
-    shares = {}
-    for k, (out, _) in enumerate(OUTPUTS):
-        row = S[n + k] ** 2
-        total = float(row.sum())
-        shares[out] = {name: (float(v) / total if total > 0 else 0.0) for name, v in zip(names, row)}
-    status, message = "ok", ""
-    far = [(s, d) for s, d in zip(sigmas, sens.fold_distance) if math.isfinite(d) and 3.0 * s.sigma >= 0.5 * abs(d)]
-    if far:
-        status = "beyond_linear_range"
-        message = "; ".join(
-            f"3 sigma of {s.name} ({3 * s.sigma:.3g} {s.unit}) reaches the fold estimated {0.5 * abs(d):.3g} {s.unit} away"
-            for s, d in far
-        ) + ": the first-order uncertainty cannot be trusted there (check it with Monte Carlo)"
+    shares = variance_shares(S[n:], names, OUTPUTS)
+    status, message = linear_range(sigmas, sens.fold_distance)
     return Propagation(
         sigmas=sigmas, status=status, message=message, cov_theta=cov[:n, :n], cov_tip=cov[n:n + 2, n:n + 2],
         var_total=float(cov[n + 2, n + 2]), shares=shares, nominal_tip=result.tip[:2].copy(), nominal_total_deg=result.total_angle_deg,
     )
+
+
+def variance_shares(effects: np.ndarray, names: Sequence[str], outputs: Sequence[tuple[str, str]]) -> dict:
+    """Each parameter's share of each output's first-order variance; ``effects`` (one row per
+    output, one column per parameter) are the parameters' 1-sigma effects."""
+    shares = {}
+    for k, (out, _) in enumerate(outputs):
+        row = effects[k] ** 2
+        total = float(row.sum())
+        shares[out] = {name: (float(v) / total if total > 0 else 0.0) for name, v in zip(names, row)}
+    return shares
+
+
+def linear_range(sigmas: Sequence[Sigma], fold_distance: np.ndarray, what: str = "the fold") -> tuple[str, str]:
+    """``("ok", "")``, or ``("beyond_linear_range", why)`` when 3 sigma of a parameter reaches half
+    its estimated distance to ``what`` (:attr:`esba.analysis.sensitivity.Sensitivities.fold_distance`)."""
+    far = [(s, d) for s, d in zip(sigmas, fold_distance) if math.isfinite(d) and 3.0 * s.sigma >= 0.5 * abs(d)]
+    if not far:
+        return "ok", ""
+    return "beyond_linear_range", "; ".join(
+        f"3 sigma of {s.name} ({3 * s.sigma:.3g} {s.unit}) reaches {what} estimated {0.5 * abs(d):.3g} {s.unit} away"
+        for s, d in far
+    ) + ": the first-order uncertainty cannot be trusted there (check it with Monte Carlo)"
 
 
 # ---------------------------------------------------------------------------------------------

@@ -60,7 +60,9 @@ from .uncertainty import (
     MonteCarloOptions,
     Propagation,
     check_monte_carlo,
+    linear_range,
     run_samples,
+    variance_shares,
 )
 
 __all__ = ["OUTPUTS3D", "Propagation3D", "propagate3d", "solve_samples3d", "MonteCarlo3D", "monte_carlo3d", "uncertainty3d_rows"]
@@ -165,17 +167,8 @@ def propagate3d(scene: Scene, section: Mapping[str, float], result, sigmas: Sequ
     if not (np.all(np.isfinite(cov_q)) and np.all(np.isfinite(cov_out))):
         given = ", ".join(s.given for s in sigmas)
         return _empty(sigmas, "overflow", f"the first-order covariance of {given} overflows (not a finite number): the sigmas are far beyond the model's range", n, nominal)
-    shares = {}
-    for k, (out, _) in enumerate(OUTPUTS3D):
-        row = So[k] ** 2
-        total = float(row.sum())
-        shares[out] = {name: (float(v) / total if total > 0 else 0.0) for name, v in zip(names, row)}
-    status, message = "ok", ""
-    far = [(s, d) for s, d in zip(sigmas, sens.fold_distance) if math.isfinite(d) and 3.0 * s.sigma >= 0.5 * abs(d)]
-    if far:
-        status = "beyond_linear_range"
-        message = "; ".join(f"3 sigma of {s.name} ({3 * s.sigma:.3g} {s.unit}) reaches the fold or buckling point estimated {0.5 * abs(d):.3g} {s.unit} away"
-                            for s, d in far) + ": the first-order uncertainty cannot be trusted there (check it with Monte Carlo)"
+    shares = variance_shares(So, names, OUTPUTS3D)
+    status, message = linear_range(sigmas, sens.fold_distance, "the fold or buckling point")
     return Propagation3D(sigmas=sigmas, status=status, message=message, cov_theta=cov_q[:n, :n], cov_tip=cov_out[:2, :2], var_total=float(cov_out[3, 3]),
                          shares=shares, nominal_tip=tip[:2].copy(), nominal_total_deg=float(nominal[3]), cov_q=cov_q, cov_out=cov_out, nominal_out=nominal)
 

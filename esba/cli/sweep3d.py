@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from .arguments import ACTUATOR_FLAGS, UsageError, load_scene_file, refuse, scene_changes
-from .cluster import on_cluster, study_stopped
+from .cluster import on_cluster, rows_held, study_stopped
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 #: The sweep's flags that only the 3-D sweep takes (any of them picks it).
@@ -58,9 +58,7 @@ def run_sweep3d(args: argparse.Namespace) -> int:
         plan = plan_sweep3d(base, section_arg(args.section), **{k: v for k, v in axes.items() if v is not None})
     except (Sweep3DError, SceneError) as exc:
         raise UsageError(str(exc)) from None
-    from .sweep import _rows_held
-
-    cluster = on_cluster(args) and not (args.resume and _rows_held(None if out is None else str(out)) >= plan.size)  # nothing left: no cluster
+    cluster = on_cluster(args) and not (args.resume and rows_held(None if out is None else str(out)) >= plan.size)  # nothing left: no cluster
     try:
         with open_runner(args.workers if cluster else None, args.scheduler if cluster else None, args.connect_timeout) as runner:
             study = sweep3d_study(plan, runner=runner, chunk=args.chunk or 8, out=out, resume=args.resume)

@@ -265,7 +265,7 @@ def sweep3d_study(plan: Sweep3DPlan, *, runner=None, chunk: int = 8, out: str | 
     by :func:`resumed_row_problem3d`; a new study when the file does not exist or is empty), as the
     planar study does (:func:`esba.studies.sweep_runner.sweep_study`): every point is solved alone,
     so the resumed file is the uninterrupted one, byte for byte."""
-    from esba.studies.chunks import StudyError, StudyFile, chunk_bounds, run_chunks
+    from esba.studies.chunks import StudyFile, checked_rows, chunk_bounds, run_chunks
     from esba.studies.distributed import ModelKey, SerialRunner
 
     if isinstance(chunk, bool) or not isinstance(chunk, int) or not 1 <= chunk <= 10_000:
@@ -282,16 +282,11 @@ def sweep3d_study(plan: Sweep3DPlan, *, runner=None, chunk: int = 8, out: str | 
     if out is not None:
         file = StudyFile(out, "sweep3d", plan.identity(), columns, plan.size)
 
-        def count(row: dict[str, str]) -> None:  # each row the file holds, checked before it is kept
-            nonlocal start
-            problem = resumed_row_problem3d(plan, start, row)
-            if problem:
-                raise StudyError(f"--resume {out}: row {start + 1} {problem}; it is not kept: remove the file or give another output to start anew")
-            start += 1
+        def count(row: dict[str, str]) -> None:  # each row the file holds, once checked
             counts[row["status"]] = counts.get(row["status"], 0) + 1
 
         if resume and file.path.exists() and file.path.stat().st_size > 0:
-            file.resume(count)
+            start = file.resume(checked_rows(out, lambda i, row: resumed_row_problem3d(plan, i, row), count))
         else:
             file.start({})
 

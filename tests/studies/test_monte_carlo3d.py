@@ -20,6 +20,7 @@ from esba.statics.spatial import check_section
 from esba.studies.chunks import StudyError, sidecar
 from esba.studies.distributed import SerialRunner
 from esba.studies.monte_carlo import monte_carlo3d, monte_carlo_study
+from tests.studies.runners import StopAfter
 
 pytestmark = pytest.mark.timeout(600)
 needs_dask = pytest.mark.skipif(importlib.util.find_spec("distributed") is None, reason="dask.distributed is not installed")
@@ -29,20 +30,6 @@ SECTION = check_section({"EI_side": 4e5, "GJ": 1e5}, SCENE)
 SIGMAS = resolve_sigmas(SCENE, [parse_sigma("GJ=20%"), parse_sigma("Beta1=±5"), parse_sigma("E=5%")], SECTION)
 OPTIONS = MonteCarloOptions(samples=36, seed=2, chunk=10)
 FIELDS = ("samples", "code", "q", "tip", "theta", "total_angle")
-
-
-class _StopAfter:
-    """Wraps a runner: the study is interrupted after ``k`` chunks were handed back (as by Ctrl-C)."""
-
-    def __init__(self, runner, k: int) -> None:
-        self.runner, self.k = runner, k
-        self.workers, self.description = runner.workers, runner.description
-
-    def map_ordered(self, fn, args, done=None):
-        for i, result in enumerate(self.runner.map_ordered(fn, args, done)):
-            if i == self.k:
-                raise KeyboardInterrupt
-            yield result
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +46,7 @@ def _same(a, b):
 def _stream_interrupt_resume(tmp_path, runner, whole):
     out = tmp_path / "mc3d.csv"
     with pytest.raises(KeyboardInterrupt):
-        monte_carlo_study(SCENE, SIGMAS, OPTIONS, runner=_StopAfter(SerialRunner(), 2), out=out, three_d=True, section=SECTION)
+        monte_carlo_study(SCENE, SIGMAS, OPTIONS, runner=StopAfter(SerialRunner(), 2), out=out, three_d=True, section=SECTION)
     mc, info = monte_carlo_study(SCENE, SIGMAS, OPTIONS, runner=runner, out=out, resume=True, three_d=True, section=SECTION)
     assert info["resumed_from_sample"] == 20
     _same(mc, whole)

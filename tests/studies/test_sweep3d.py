@@ -14,6 +14,7 @@ from esba.statics.equilibrium import solve
 from esba.statics.spatial import solve_scene3d
 from esba.studies.chunks import sidecar
 from esba.studies.sweep3d import Sweep3DError, plan_sweep3d, sweep3d_study
+from tests.studies.runners import StopAfter
 
 SECTION = {"EI_side": 4e5, "GJ": 1e5}
 BASE = Scene(pressure=0.12, payloads=(Payload(0.6, 90.0),))
@@ -101,20 +102,6 @@ def test_cli_3d_sweep_writes_one_csv_and_refuses_bad_flags(tmp_path, capsys):
 # resuming a 3-D study, and the 3-D Monte Carlo as a study file
 
 
-class _StopAfter:
-    """Wraps a runner: the study is interrupted after ``k`` chunks were handed back (as by Ctrl-C)."""
-
-    def __init__(self, runner, k: int) -> None:
-        self.runner, self.k = runner, k
-        self.workers, self.description = runner.workers, runner.description
-
-    def map_ordered(self, fn, args, done=None):
-        for i, result in enumerate(self.runner.map_ordered(fn, args, done)):
-            if i == self.k:
-                raise KeyboardInterrupt
-            yield result
-
-
 def _interrupted_then_resumed(tmp_path, runner):
     from esba.studies.distributed import SerialRunner
 
@@ -123,7 +110,7 @@ def _interrupted_then_resumed(tmp_path, runner):
     sweep3d_study(plan, chunk=3, out=whole)
     out = tmp_path / "cut.csv"
     with pytest.raises(KeyboardInterrupt):
-        sweep3d_study(plan, runner=_StopAfter(SerialRunner(), 1), chunk=1, out=out)
+        sweep3d_study(plan, runner=StopAfter(SerialRunner(), 1), chunk=1, out=out)
     text = out.read_text(encoding="utf-8")
     assert len(text.splitlines()) == 2  # the column names and one row
     out.write_text(text + whole.read_text(encoding="utf-8").splitlines(keepends=True)[2][:30], encoding="utf-8")  # a row cut short
