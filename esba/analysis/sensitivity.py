@@ -418,8 +418,32 @@ def fold_check(eig: np.ndarray, dlam: np.ndarray, p: np.ndarray, names: Sequence
     return ratio, dist, status, message
 
 
+class ParameterColumns:
+    """What the planar and the 3-D sensitivities share: ``status`` and ``parameters`` (a column each)."""
+
+    status: str
+    parameters: tuple[Parameter, ...]
+
+    @property
+    def ok(self) -> bool:
+        """The derivatives are meaningful (a stable equilibrium away from a fold)."""
+        return self.status == "ok"
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The parameter names, in column order."""
+        return tuple(p.name for p in self.parameters)
+
+    def index(self, name: str) -> int:
+        """Column of parameter ``name``."""
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise SensitivityError(f"parameter {name!r}: allowed are {', '.join(self.names)}") from None
+
+
 @dataclass(frozen=True, eq=False, repr=False)
-class Sensitivities(Report):
+class Sensitivities(ParameterColumns, Report):
     """First-order response of an equilibrium to each scene parameter.
 
     Derivatives are per unit of the parameter (:attr:`Parameter.unit`); angles in radians, tip
@@ -476,23 +500,6 @@ class Sensitivities(Report):
         from esba.statics.text import sensitivity_rows
 
         return "\n".join(f"{k:>12}: {v}" for k, v in sensitivity_rows({"sensitivities": self.to_dict()}))
-
-    @property
-    def ok(self) -> bool:
-        """The derivatives are meaningful (a stable equilibrium away from a fold)."""
-        return self.status == "ok"
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """The parameter names, in column order."""
-        return tuple(p.name for p in self.parameters)
-
-    def index(self, name: str) -> int:
-        """Column of parameter ``name``."""
-        try:
-            return self.names.index(name)
-        except ValueError:
-            raise SensitivityError(f"parameter {name!r}: allowed are {', '.join(self.names)}") from None
 
     def total_angle(self, name: str) -> float:
         """d theta_TOL / d p, degrees per unit of p."""

@@ -53,6 +53,7 @@ from esba.model.scene import Payload, Scene, SceneError
 
 from .sensitivity import (
     Parameter,
+    ParameterColumns,
     SensitivityError,
     SensitivityOptions,
     held_fixed,
@@ -189,7 +190,7 @@ def _fixed(model, names: Sequence[str]) -> tuple[str, ...]:
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class Sensitivities3D(Report):
+class Sensitivities3D(ParameterColumns, Report):
     """First-order response of a 3-D equilibrium to each parameter (per unit of the parameter).
 
     Attributes
@@ -229,20 +230,10 @@ class Sensitivities3D(Report):
             rows.append(f"{p.name:>12}: d tip {d[0]:.4g}, {d[1]:.4g}, {d[2]:.4g} mm, d angle {d[3]:.4g}, sideways {d[4]:.4g}, twist {d[5]:.4g} deg per {p.unit}")
         return "\n".join(rows)
 
-    @property
-    def ok(self) -> bool:
-        return self.status == "ok"
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        return tuple(p.name for p in self.parameters)
-
     def output(self, output: str, name: str) -> float:
         """d output / d parameter, in the output's reported unit (mm or deg) per unit of the parameter."""
         i = [o for o, _ in OUTPUTS3D].index(output)
-        if name not in self.names:
-            raise SensitivityError(f"parameter {name!r}: allowed are {', '.join(self.names)}")
-        v = float(self.dout[i, self.names.index(name)])
+        v = float(self.dout[i, self.index(name)])
         return math.degrees(v) if i >= 3 else v
 
     def to_dict(self) -> dict:
