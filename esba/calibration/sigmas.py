@@ -203,7 +203,8 @@ def _check_names(scene: Scene, names: list[str], three_d: bool) -> None:
     try:
         (check_names3d if three_d else check_names)(scene, names, "sigma of")
     except SensitivityError as exc:
-        raise UncertaintyError(str(exc)) from None
+        spatial = not three_d and any(n in ("EI_side", "GJ") or (n.startswith("Beta") and n[4:].isdigit()) for n in names)
+        raise UncertaintyError(str(exc) + (" (EI_side, GJ and Beta<k> are the 3-D model's: esba solve --3d)" if spatial else "")) from None
 
 
 def _checked_sigmas(scene: Scene | None, sigmas: Sequence[Sigma], three_d: bool = False) -> tuple[Sigma, ...]:

@@ -21,7 +21,9 @@ stable), ``not ok`` (with the reason) or ``infeasible`` (an actuator outside the
 
 The chunks run through :func:`esba.studies.chunks.run_chunks` on a runner of
 :mod:`esba.studies.distributed` (serial, or Dask), as the planar sweep's do; with ``out`` the rows
-stream to a CSV :class:`esba.studies.chunks.StudyFile` (kind ``sweep3d``) and its metadata beside it.
+stream to a CSV :class:`esba.studies.chunks.StudyFile` (kind ``sweep3d``) and its metadata beside it,
+and ``resume=True`` continues an interrupted study from the rows its file holds (each checked against
+the plan: :func:`resumed_row_problem3d`), here or on Dask.
 
 >>> from esba.model.scene import Scene, Payload
 >>> plan = plan_sweep3d(Scene(pressure=0.1, payloads=(Payload(0.5, 90.0),)), {"EI_side": 4e5, "GJ": 1e5}, payload_out_of_plane=[0.0, 30.0])

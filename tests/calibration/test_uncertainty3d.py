@@ -131,7 +131,7 @@ def test_3d_sigmas_need_the_3d_model_and_the_3d_monte_carlo_takes_no_batch_optio
     from esba.statics.batch import BatchOptions
 
     section, sig = side
-    with pytest.raises(UncertaintyError, match="'GJ' is not a parameter of this scene"):
+    with pytest.raises(UncertaintyError, match=r"'GJ' is not a parameter of this scene.*are the 3-D model's: esba solve --3d\)"):
         resolve_sigmas(SIDE, [parse_sigma("GJ=5%")])  # no section: the planar parameters
     with pytest.raises(UncertaintyError, match="samples=100001: at most 100000 in 3-D"):
         monte_carlo3d(SIDE, sig, MonteCarloOptions(samples=100_001), section=section)  # refused before any sample is solved
