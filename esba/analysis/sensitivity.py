@@ -82,6 +82,7 @@ __all__ = [
     "UNITS",
     "ROUND_OFF",
     "held_fixed",
+    "fold_check",
 ]
 
 #: User units of every kind of scene parameter (as in the scene file).
@@ -278,7 +279,7 @@ def with_parameters(scene: Scene, values: Mapping[str, float]) -> Scene:
     if act:
         top["actuator"] = dataclasses.replace(scene.actuator, **act)
     if payloads != list(scene.payloads):
-        top["payloads"] = tuple(Payload(p.force, p.angle_deg, p.at) for p in payloads)
+        top["payloads"] = tuple(Payload(p.force, p.angle_deg, p.at, p.out_of_plane_deg) for p in payloads)
     return dataclasses.replace(scene, **top) if top else scene
 
 
@@ -387,8 +388,62 @@ def _build(model: Model, names: tuple[str, ...], fixed_names: tuple[str, ...]) -
     return fun
 
 
+def fold_check(eig: np.ndarray, dlam: np.ndarray, p: np.ndarray, names: Sequence[str], units: Sequence[str], options: SensitivityOptions,
+               not_stable: str | None = None, *, hessian: str = "Hessian", where: str = "a fold (a snap-through)", unknown: str = "dtheta") -> tuple:
+    """Whether derivatives at a state with Hessian eigenvalues ``eig`` (ascending) mean anything:
+    ``(ratio, fold_distance, status, message)``. ``dlam`` is d(smallest eigenvalue)/dp per
+    parameter, so the linear distance to a zero eigenvalue is -eig[0]/dlam (inf when it does not
+    fall); ``not_stable`` says why the state is not a converged stable equilibrium (None: it is).
+    The planar sensitivities and the 3-D ones (:mod:`esba.analysis.sensitivity3d`, ``hessian``,
+    ``where`` and ``unknown`` in their words) judge by this one rule."""
+    ratio = float(eig[0] / max(abs(eig[-1]), 1e-300))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dist = np.where(dlam * eig[0] < 0, -eig[0] / dlam, np.inf)
+        relative = np.where(p != 0.0, np.abs(dist) / np.abs(p), np.inf)
+    closest = int(np.argmin(relative))
+    status, message = "ok", ""
+    if not_stable is not None:
+        status = "not_stable"
+        message = f"no sensitivities: the state is not a converged stable equilibrium ({not_stable})"
+    elif ratio < options.fold_tol or relative[closest] < options.fold_distance_tol:
+        status = "near_fold"
+        why = (f"{ratio:.2g} x the largest < fold_tol = {options.fold_tol:g}" if ratio < options.fold_tol else
+               f"it reaches 0 when {names[closest]} changes by {dist[closest]:+.3g} {units[closest]}, "
+               f"{relative[closest]:.2g} of its value < fold_distance_tol = {options.fold_distance_tol:g}")
+        message = (
+            f"no sensitivities: the {hessian} is nearly singular (smallest eigenvalue {eig[0]:.3g} N mm/rad^2; {why}): the equilibrium "
+            f"is at or next to {where}, where {unknown}/dp grows without bound and a first-order answer holds for no "
+            "finite change"
+        )
+    return ratio, dist, status, message
+
+
+class ParameterColumns:
+    """What the planar and the 3-D sensitivities share: ``status`` and ``parameters`` (a column each)."""
+
+    status: str
+    parameters: tuple[Parameter, ...]
+
+    @property
+    def ok(self) -> bool:
+        """The derivatives are meaningful (a stable equilibrium away from a fold)."""
+        return self.status == "ok"
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The parameter names, in column order."""
+        return tuple(p.name for p in self.parameters)
+
+    def index(self, name: str) -> int:
+        """Column of parameter ``name``."""
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise SensitivityError(f"parameter {name!r}: allowed are {', '.join(self.names)}") from None
+
+
 @dataclass(frozen=True, eq=False, repr=False)
-class Sensitivities(Report):
+class Sensitivities(ParameterColumns, Report):
     """First-order response of an equilibrium to each scene parameter.
 
     Derivatives are per unit of the parameter (:attr:`Parameter.unit`); angles in radians, tip
@@ -445,23 +500,6 @@ class Sensitivities(Report):
         from esba.statics.text import sensitivity_rows
 
         return "\n".join(f"{k:>12}: {v}" for k, v in sensitivity_rows({"sensitivities": self.to_dict()}))
-
-    @property
-    def ok(self) -> bool:
-        """The derivatives are meaningful (a stable equilibrium away from a fold)."""
-        return self.status == "ok"
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """The parameter names, in column order."""
-        return tuple(p.name for p in self.parameters)
-
-    def index(self, name: str) -> int:
-        """Column of parameter ``name``."""
-        try:
-            return self.names.index(name)
-        except ValueError:
-            raise SensitivityError(f"parameter {name!r}: allowed are {', '.join(self.names)}") from None
 
     def total_angle(self, name: str) -> float:
         """d theta_TOL / d p, degrees per unit of p."""
@@ -541,29 +579,11 @@ def sensitivities(result: Equilibrium, parameters: Sequence[str] | None = None, 
     H, G_p = np.asarray(out[1], dtype=float), np.asarray(out[2], dtype=float).reshape(n, m)
     tip_th, tip_p = np.asarray(out[4], dtype=float).reshape(2, n), np.asarray(out[5], dtype=float).reshape(2, m)
     curv_th, curv_p = np.asarray(out[6], dtype=float).ravel(), np.asarray(out[7], dtype=float).ravel()
-    ratio = float(eig[0] / max(abs(eig[-1]), 1e-300))
     dtheta = -np.linalg.solve(H, G_p)
     dtip = tip_th @ dtheta + tip_p
     # d(lambda_min)/dp = v' (dH/dp + dH/dtheta dtheta/dp) v, then the linear distance to lambda_min = 0
-    dlam = curv_p + curv_th @ dtheta
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dist = np.where(dlam * eig[0] < 0, -eig[0] / dlam, np.inf)
-        relative = np.where(p != 0.0, np.abs(dist) / np.abs(p), np.inf)
-    closest = int(np.argmin(relative))
-    status, message = "ok", ""
-    if not result.ok:
-        status = "not_stable"
-        message = f"no sensitivities: the state is not a converged stable equilibrium ({result.message or result.status})"
-    elif ratio < options.fold_tol or relative[closest] < options.fold_distance_tol:
-        status = "near_fold"
-        why = (f"{ratio:.2g} x the largest < fold_tol = {options.fold_tol:g}" if ratio < options.fold_tol else
-               f"it reaches 0 when {names[closest]} changes by {dist[closest]:+.3g} {params[closest].unit}, "
-               f"{relative[closest]:.2g} of its value < fold_distance_tol = {options.fold_distance_tol:g}")
-        message = (
-            f"no sensitivities: the Hessian is nearly singular (smallest eigenvalue {eig[0]:.3g} N mm/rad^2; {why}): the equilibrium "
-            "is at or next to a fold (a snap-through), where dtheta/dp grows without bound and a first-order answer holds for no "
-            "finite change"
-        )
+    ratio, dist, status, message = fold_check(eig, curv_p + curv_th @ dtheta, p, names, [q.unit for q in params], options,
+                                              None if result.ok else (result.message or result.status))
     # round-off of exact zeros, judged against every parameter of the scene (whatever subset is asked for)
     scale = np.where(p != 0.0, np.abs(p), 1.0)
     dtotal = _zero_round_off(np.sum(dtheta, axis=0)[None, :], scale)[0]

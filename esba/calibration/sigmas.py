@@ -24,9 +24,9 @@ from esba.analysis.sensitivity import (
     UNITS,
     SensitivityError,
     check_names,
-    parameter_names,
     scene_parameters,
 )
+from esba.analysis.sensitivity3d import check_names3d, scene_parameters3d
 from esba.infra import checks, inputs, jsonsafe
 from esba.infra.errors import InputError
 from esba.model.scene import Scene
@@ -159,8 +159,11 @@ def load_sigmas(path: str | Path) -> tuple[SigmaSpec, ...]:
     return sigmas_from_table(data.get("uncertainty", {}), f"scene file {str(path)!r} [uncertainty]")
 
 
-def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec]) -> tuple[Sigma, ...]:
+def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec], section: dict | None = None) -> tuple[Sigma, ...]:
     """Absolute sigmas for ``scene``; a later spec of the same name replaces an earlier one.
+
+    With ``section`` (both stiffnesses of the 3-D section, N mm^2) the parameters are the 3-D
+    scene's (:func:`esba.analysis.sensitivity3d.parameter_names3d`: also ``Beta<k>``, ``EI_side``, ``GJ``).
 
     Raises
     ------
@@ -178,13 +181,10 @@ def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec]) -> tuple[Sigma, ...
         if not isinstance(s, SigmaSpec):
             raise UncertaintyError(f"sigmas: expected SigmaSpec, got {checks.quote(s)}")
         by_name[s.name] = s
-    try:
-        check_names(scene, list(by_name), "sigma of")
-    except SensitivityError as exc:
-        raise UncertaintyError(str(exc)) from None
-    params = {p.name: p for p in scene_parameters(scene)}
+    _check_names(scene, list(by_name), section is not None)
+    params = {p.name: p for p in (scene_parameters(scene) if section is None else scene_parameters3d(scene, section))}
     out = []
-    for name in parameter_names(scene):
+    for name in params:
         if name not in by_name:
             continue
         s, p = by_name[name], params[name]
@@ -199,8 +199,16 @@ def resolve_sigmas(scene: Scene, specs: Sequence[SigmaSpec]) -> tuple[Sigma, ...
     return tuple(out)
 
 
-def _checked_sigmas(scene: Scene | None, sigmas: Sequence[Sigma]) -> tuple[Sigma, ...]:
-    """``sigmas`` as a tuple if they are resolved sigmas of parameters of ``scene``."""
+def _check_names(scene: Scene, names: list[str], three_d: bool) -> None:
+    try:
+        (check_names3d if three_d else check_names)(scene, names, "sigma of")
+    except SensitivityError as exc:
+        spatial = not three_d and any(n in ("EI_side", "GJ") or (n.startswith("Beta") and n[4:].isdigit()) for n in names)
+        raise UncertaintyError(str(exc) + (" (EI_side, GJ and Beta<k> are the 3-D model's: esba solve --3d)" if spatial else "")) from None
+
+
+def _checked_sigmas(scene: Scene | None, sigmas: Sequence[Sigma], three_d: bool = False) -> tuple[Sigma, ...]:
+    """``sigmas`` as a tuple if they are resolved sigmas of parameters of ``scene`` (its 3-D parameters with ``three_d``)."""
     if isinstance(sigmas, (str, bytes)) or not isinstance(sigmas, (list, tuple)):
         raise UncertaintyError(f"sigmas={checks.quote(sigmas)}: expected a list of Sigma (from resolve_sigmas)")
     sigmas = tuple(sigmas)
@@ -210,10 +218,7 @@ def _checked_sigmas(scene: Scene | None, sigmas: Sequence[Sigma]) -> tuple[Sigma
         if not isinstance(s, Sigma):
             raise UncertaintyError(f"sigmas: expected Sigma (from resolve_sigmas), got {checks.quote(s)}")
     if scene is not None:
-        try:
-            check_names(scene, [s.name for s in sigmas], "sigma of")
-        except SensitivityError as exc:
-            raise UncertaintyError(str(exc)) from None
+        _check_names(scene, [s.name for s in sigmas], three_d)
     return sigmas
 
 
@@ -229,8 +234,12 @@ def domain(scene: Scene, name: str) -> tuple[float, float, bool, bool, str]:
     '0 < s1 <= 1 (1 = tip)'
     """
     a = scene.actuator
-    kind = name.rstrip("0123456789") if name[:1] in "FOs" else name
+    kind = name.rstrip("0123456789") if name[:1] in "FOsB" else name
     inf = math.inf
+    if kind == "Beta":
+        return -90.0, 90.0, True, True, "-90 <= Beta <= 90 deg (out of the bending plane)"
+    if kind in ("EI_side", "GJ"):
+        return 0.0, inf, False, False, f"{name} > 0 N*mm^2"
     if kind in ("L", "E", "g", "target_angle"):
         return 0.0, inf, False, False, f"{name} > 0 {UNITS[kind]}"
     if kind == "r1":
@@ -248,7 +257,7 @@ def domain(scene: Scene, name: str) -> tuple[float, float, bool, bool, str]:
     return -inf, inf, False, False, f"any {name}"
 
 
-def outside_domain(scene: Scene, sigmas: Sequence[Sigma]) -> list[str]:
+def outside_domain(scene: Scene, sigmas: Sequence[Sigma], three_d: bool = False) -> list[str]:
     """One line for each sigma whose +-3 sigma range (a tolerance: its +-t) leaves the parameter's
     :func:`domain`: part of the Monte Carlo's samples fall outside the scene's rules (they are
     counted and left out), and the first-order answer stands on values the model does not take.
@@ -260,7 +269,7 @@ def outside_domain(scene: Scene, sigmas: Sequence[Sigma]) -> list[str]:
     "sigma 'E=1000%': E = 0.54 +- 3 sigma spans -15.7 to 16.7 MPa, beyond the domain E > 0 MPa; ..."
     """
     out = []
-    for s in _checked_sigmas(scene, sigmas):
+    for s in _checked_sigmas(scene, sigmas, three_d):
         low, high, low_in, high_in, rule = domain(scene, s.name)
         reach = s.half_width if s.half_width is not None else 3.0 * s.sigma
         lo, hi = s.nominal - reach, s.nominal + reach

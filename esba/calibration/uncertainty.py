@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable, NamedTuple, Sequence
+from typing import Callable, ClassVar, NamedTuple, Sequence
 
 import numpy as np
 
@@ -92,6 +92,10 @@ __all__ = [
 
 #: The most Monte Carlo samples one run may draw (they are all held in memory).
 MAX_SAMPLES = 1_000_000
+
+#: The most samples of a 3-D Monte Carlo (:mod:`esba.calibration.uncertainty3d`): each is a load
+#: history of damped Newton solves in Python, about 10 ms at n = 3 (the 3-D sweep's bound too).
+MAX_SAMPLES_3D = 100_000
 
 #: Outputs reported by propagation and Monte Carlo, with their units.
 OUTPUTS = (("tip_x", "mm"), ("tip_y", "mm"), ("total_angle", "deg"))
@@ -184,6 +188,12 @@ class Propagation(Report):
     nominal_total_deg: float
 
     _plotter = "esba.figures.results:draw_propagation"
+    #: The outputs (name, unit) whose standard deviations :meth:`std` gives.
+    outputs: ClassVar[tuple[tuple[str, str], ...]] = OUTPUTS
+
+    def nominal(self, output: str) -> float:
+        """The solved value of ``tip_x``, ``tip_y`` (mm) or ``total_angle`` (deg)."""
+        return {"tip_x": float(self.nominal_tip[0]), "tip_y": float(self.nominal_tip[1]), "total_angle": float(self.nominal_total_deg)}[output]
 
     def headline(self) -> str:
         """One line: the status and the standard deviations of the total angle and the tip."""
@@ -269,23 +279,35 @@ def propagate(result: Equilibrium, sigmas: Sequence[Sigma], options: Sensitivity
         given = ", ".join(s.given for s in sigmas)
         message = f"the first-order covariance of {given} overflows (not a finite number): the sigmas are far beyond the model's range"
         return Propagation(sigmas, "overflow", message, np.full((n, n), np.nan), nan2, math.nan, {}, result.tip[:2].copy(), result.total_angle_deg)
-    shares = {}
-    for k, (out, _) in enumerate(OUTPUTS):
-        row = S[n + k] ** 2
-        total = float(row.sum())
-        shares[out] = {name: (float(v) / total if total > 0 else 0.0) for name, v in zip(names, row)}
-    status, message = "ok", ""
-    far = [(s, d) for s, d in zip(sigmas, sens.fold_distance) if math.isfinite(d) and 3.0 * s.sigma >= 0.5 * abs(d)]
-    if far:
-        status = "beyond_linear_range"
-        message = "; ".join(
-            f"3 sigma of {s.name} ({3 * s.sigma:.3g} {s.unit}) reaches the fold estimated {0.5 * abs(d):.3g} {s.unit} away"
-            for s, d in far
-        ) + ": the first-order uncertainty cannot be trusted there (check it with Monte Carlo)"
+    shares = variance_shares(S[n:], names, OUTPUTS)
+    status, message = linear_range(sigmas, sens.fold_distance)
     return Propagation(
         sigmas=sigmas, status=status, message=message, cov_theta=cov[:n, :n], cov_tip=cov[n:n + 2, n:n + 2],
         var_total=float(cov[n + 2, n + 2]), shares=shares, nominal_tip=result.tip[:2].copy(), nominal_total_deg=result.total_angle_deg,
     )
+
+
+def variance_shares(effects: np.ndarray, names: Sequence[str], outputs: Sequence[tuple[str, str]]) -> dict:
+    """Each parameter's share of each output's first-order variance; ``effects`` (one row per
+    output, one column per parameter) are the parameters' 1-sigma effects."""
+    shares = {}
+    for k, (out, _) in enumerate(outputs):
+        row = effects[k] ** 2
+        total = float(row.sum())
+        shares[out] = {name: (float(v) / total if total > 0 else 0.0) for name, v in zip(names, row)}
+    return shares
+
+
+def linear_range(sigmas: Sequence[Sigma], fold_distance: np.ndarray, what: str = "the fold") -> tuple[str, str]:
+    """``("ok", "")``, or ``("beyond_linear_range", why)`` when 3 sigma of a parameter reaches half
+    its estimated distance to ``what`` (:attr:`esba.analysis.sensitivity.Sensitivities.fold_distance`)."""
+    far = [(s, d) for s, d in zip(sigmas, fold_distance) if math.isfinite(d) and 3.0 * s.sigma >= 0.5 * abs(d)]
+    if not far:
+        return "ok", ""
+    return "beyond_linear_range", "; ".join(
+        f"3 sigma of {s.name} ({3 * s.sigma:.3g} {s.unit}) reaches {what} estimated {0.5 * abs(d):.3g} {s.unit} away"
+        for s, d in far
+    ) + ": the first-order uncertainty cannot be trusted there (check it with Monte Carlo)"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -447,6 +469,9 @@ class MonteCarlo:
     total_angle: np.ndarray
     backend: str = field(default="")
 
+    #: The outputs (name, unit) whose statistics :meth:`values` gives.
+    outputs: ClassVar[tuple[tuple[str, str], ...]] = OUTPUTS
+
     @property
     def ok(self) -> np.ndarray:
         """Samples that reached a stable equilibrium."""
@@ -490,8 +515,8 @@ class MonteCarlo:
             "seed": self.options.seed,
             "chunk": self.options.chunk,
             "counts": self.counts,
-            "mean": {o: self.mean(o) for o, _ in OUTPUTS},
-            "std": {o: self.std(o) for o, _ in OUTPUTS},
+            "mean": {o: self.mean(o) for o, _ in self.outputs},
+            "std": {o: self.std(o) for o, _ in self.outputs},
             "cov_tip_mm2": self.cov_tip.tolist(),
             "backend": self.backend,
         })
@@ -516,6 +541,19 @@ def check_samples(samples: int, n: int, parameters: int = 1) -> None:
             f"samples={samples} at n = {n} would keep about {need / 2**30:.1f} GiB of samples (limit "
             f"{MAX_BATCH_BYTES / 2**30:g} GiB): at most {most} at this n"
         )
+
+
+def check_samples3d(samples: int) -> None:
+    """An :class:`UncertaintyError` for more samples than a 3-D Monte Carlo takes (:data:`MAX_SAMPLES_3D`).
+
+    >>> check_samples3d(200_000)
+    Traceback (most recent call last):
+    ...
+    esba.calibration.sigmas.UncertaintyError: samples=200000: at most 100000 in 3-D (each sample is a load history of Newton solves in Python, about 10 ms at n = 3); split a larger study into runs with other seeds
+    """
+    if samples > MAX_SAMPLES_3D:
+        raise UncertaintyError(f"samples={samples}: at most {MAX_SAMPLES_3D} in 3-D (each sample is a load history of Newton solves in Python, "
+                               "about 10 ms at n = 3); split a larger study into runs with other seeds")
 
 
 def _in_this_process(scene, fn, bounds, args_of, on_result, progress: str | None) -> None:
@@ -572,14 +610,54 @@ def monte_carlo(
     progress : bool
         A tqdm bar on stderr over the samples of completed chunks.
     """
+    options, sigmas = check_monte_carlo(scene, sigmas, options)
+    names = tuple(s.name for s in sigmas)
+    batch = _batch_options(options, scene)
+
+    def before(bounds):
+        if batch.compile == "always" and bounds:
+            prepare(scene.model(), batch, scene.pressure is None)  # compiled once here, not once per worker
+
+    values, merged = run_samples(scene, sigmas, options, solve_samples, lambda v: (scene, names, v, batch), ("code", "theta", "tip", "total_angle"),
+                                 chunks=chunks, execute=execute, solved=solved, on_chunk=on_chunk, progress=progress, before=before)
+    backend = "compiled C" if batch.compile == "always" else "CasADi's interpreter"
+    return MonteCarlo(sigmas, options, values, merged["code"], merged["theta"], merged["tip"], merged["total_angle"], backend)
+
+
+def check_monte_carlo(scene: Scene, sigmas: Sequence[Sigma], options: MonteCarloOptions | None, three_d: bool = False) -> tuple[MonteCarloOptions, tuple[Sigma, ...]]:
+    """The options (default if None) and the sigmas, checked for ``scene`` (its 3-D parameters with ``three_d``) and for memory."""
     options = MonteCarloOptions() if options is None else options
     if not isinstance(options, MonteCarloOptions):
         raise UncertaintyError(f"options={options!r}: expected MonteCarloOptions")
     if not isinstance(scene, Scene):
         raise UncertaintyError(f"scene={scene!r}: expected a Scene")
-    check_samples(options.samples, scene.segments, len(sigmas))
-    sigmas = _checked_sigmas(scene, sigmas)
-    names = tuple(s.name for s in sigmas)
+    if three_d:
+        check_samples3d(options.samples)
+    check_samples(options.samples, 3 * scene.segments if three_d else scene.segments, len(sigmas))
+    return options, _checked_sigmas(scene, sigmas, three_d)
+
+
+def run_samples(
+    scene: Scene,
+    sigmas: Sequence[Sigma],
+    options: MonteCarloOptions,
+    fn: Callable[..., dict[str, np.ndarray]],
+    args_of: Callable[[np.ndarray], tuple],
+    keys: Sequence[str],
+    *,
+    chunks: Sequence[int] | None = None,
+    execute: Callable | None = None,
+    solved: dict[str, np.ndarray] | None = None,
+    on_chunk: Callable[[int, dict[str, np.ndarray]], None] | None = None,
+    progress: bool = False,
+    before: Callable[[list], None] | None = None,
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Draw every sample (:func:`draw_samples`) and solve samples k..N in chunks, each
+    ``fn(*args_of(values[:, a:b]))`` (a pure function returning arrays, one row per sample): the
+    chunking, ``execute``, ``solved``, ``on_chunk`` and ``progress`` of :func:`monte_carlo`, whose
+    planar and 3-D Monte Carlos (:mod:`esba.calibration.uncertainty3d`) both run through here.
+    ``before(bounds)`` runs once before the chunks. Returns the samples and the arrays ``keys``
+    of every sample, in order."""
     values = draw_samples(sigmas, options.samples, options.seed)
     N = options.samples
     done = 0 if solved is None else len(solved["code"])
@@ -594,9 +672,8 @@ def monte_carlo(
     for size in chunks:
         start = bounds[-1][1] if bounds else done
         bounds.append((start, start + size))
-    batch = _batch_options(options, scene)
-    if batch.compile == "always" and bounds:
-        prepare(scene.model(), batch, scene.pressure is None)  # compiled once here, not once per worker
+    if before is not None:
+        before(bounds)
     parts: list[dict[str, np.ndarray]] = [] if solved is None else [solved]
 
     def keep(a: int, b: int, part: dict[str, np.ndarray]) -> None:
@@ -605,10 +682,8 @@ def monte_carlo(
         parts.append(part)
 
     run = _in_this_process if execute is None else execute
-    run(scene, solve_samples, bounds, lambda a, b: (scene, names, values[:, a:b], batch), keep, "esba Monte Carlo" if progress else None)
-    merged = {k: np.concatenate([p[k] for p in parts]) for k in ("code", "theta", "tip", "total_angle")}
-    backend = "compiled C" if batch.compile == "always" else "CasADi's interpreter"
-    return MonteCarlo(sigmas, options, values, merged["code"], merged["theta"], merged["tip"], merged["total_angle"], backend)
+    run(scene, fn, bounds, lambda a, b: args_of(values[:, a:b]), keep, "esba Monte Carlo" if progress else None)
+    return values, {k: np.concatenate([p[k] for p in parts]) for k in keys}
 
 
 @dataclass(frozen=True)
@@ -645,9 +720,12 @@ def compare(first: Propagation, mc: MonteCarlo) -> Agreement:
         raise UncertaintyError(f"compare({type(first).__name__}, {type(mc).__name__}): expected a Propagation (propagate) and a MonteCarlo (monte_carlo)")
     tol = mc.options.agree_rel
     counts = mc.counts
+    if first.outputs != mc.outputs:
+        raise UncertaintyError(f"compare: the first order gives {', '.join(o for o, _ in first.outputs)}, the Monte Carlo {', '.join(o for o, _ in mc.outputs)}: "
+                               "compare a planar propagation with a planar Monte Carlo, a 3-D one with a 3-D one")
     rows = []
-    nominal = {"tip_x": first.nominal_tip[0], "tip_y": first.nominal_tip[1], "total_angle": first.nominal_total_deg}
-    for out, unit in OUTPUTS:
+    nominal = {o: first.nominal(o) for o, _ in first.outputs}
+    for out, unit in mc.outputs:
         s1 = first.std(out) if first.has_numbers else math.nan
         s2 = mc.std(out)
         k = max(counts["ok"], 2)

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 from pathlib import Path
@@ -95,3 +96,20 @@ def study_stopped(exc: Exception, out: str | None, what: str = "rows") -> int:
         message += f"; the {what} solved so far are {kept}: rerun with --resume to go on"
     print(f"esba: error: {message}", file=sys.stderr)
     return EXIT_FAILED
+
+
+def rows_held(path: str | None) -> int:
+    """The lines after the column names in the study file ``path`` (0 when there is none, or it is
+    not a regular file: a device or FIFO is refused by the study itself): a resumed study that holds
+    every row of its plan solves nothing, so it needs no cluster (its rows are still checked one by
+    one as they are read back). Counted in blocks: the memory stays bounded whatever the file holds."""
+    if path is None or not os.path.isfile(path):
+        return 0
+    lines = 0
+    try:
+        with open(path, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                lines += block.count(b"\n")
+    except OSError:
+        return 0
+    return max(0, lines - 1)

@@ -50,18 +50,24 @@ def _section_arg(items: list[str] | None) -> dict[str, float]:
 
 
 def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
-    """``esba solve --3d``: the spatial model (docs/3d.md); no figure, no uncertainty yet."""
+    """``esba solve --3d``: the spatial model (docs/3d.md), its sensitivities and uncertainty (first
+    order and Monte Carlo, in this process or on Dask, streamed to a resumable sample file)."""
     import numpy as np
 
     from esba.model.spatial import load_model3d
-    from esba.statics.spatial import scene_values3d, solve_scene3d, tip_compliance
+    from esba.statics.spatial import SpatialError, check_direction, check_section, scene_values3d, solve_scene3d, tip_compliance
 
-    refuse(args, ["monte_carlo", "sigma", "mc_out", "mc_chunk", "seed", "history", "sensitivities"], "with --3d (the 3-D solve has none yet)")
+    refuse(args, ["history"], "with --3d (the 3-D solve has none yet)")
     section = _section_arg(args.section)
+    if scene.obstacles:
+        refuse(args, ["monte_carlo", "sigma", "sensitivities"], "with obstacles in 3-D (contact has no uncertainty yet)")
+    try:
+        full_section = check_section(section, scene)
+    except SpatialError as exc:
+        raise UsageError(f"--section: {exc}") from None
+    sigmas, mc_options, chunked = _uncertainty_args(args, scene, full_section)
     down = (1.0, 0.0, 0.0)
     if args.gravity_direction is not None:
-        from esba.statics.spatial import SpatialError, check_direction
-
         try:
             parts = [float(v) for v in args.gravity_direction.split(",")]
         except ValueError:
@@ -103,6 +109,30 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
     if result.stable:
         C, _ = tip_compliance(model, values, result.q)
         data["tip_compliance"] = C.tolist()
+    if args.sensitivities:
+        from esba.analysis.sensitivity3d import sensitivities3d
+
+        data["sensitivities"] = sensitivities3d(scene, full_section, result, gravity_direction=down).to_dict()
+    if sigmas:
+        from esba.calibration.sigmas import outside_domain
+        from esba.calibration.uncertainty import compare
+        from esba.calibration.uncertainty3d import monte_carlo3d, propagate3d
+
+        propagation = propagate3d(scene, full_section, result, sigmas, gravity_direction=down)
+        data["uncertainty"] = propagation.to_dict()
+        data["uncertainty"]["outside_domain"] = outside_domain(scene, sigmas, three_d=True)
+        if mc_options is not None:
+            if chunked:
+                code = _chunked_or_exit(args, scene, sigmas, mc_options, full_section, down)
+                if isinstance(code, int):
+                    return code
+                mc, info = code
+            else:
+                mc, info = monte_carlo3d(scene, sigmas, mc_options, section=full_section, gravity_direction=down), None
+            data["monte_carlo"] = mc.to_dict()
+            if info is not None:
+                data["monte_carlo"]["study"] = info
+            data["agreement"] = compare(propagation, mc).to_dict()
 
     def table(d: dict) -> str:
         rows = [f"{'scene':>10}: {d['scene']}", f"{'model':>10}: {d['model']}",
@@ -111,6 +141,17 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
             rows.append(f"{key:>10}: " + "  ".join(f"{v:.4f}" for v in d[key]))
         rows.append(f"{'state':>10}: {'stable' if d['stable'] else 'UNSTABLE (the softest mode: ' + format(d['min_eigenvalue'], '.3g') + ')'}; IPOPT {d['ipopt']}")
         rows += [f"{'note':>10}: {n}" for n in d["notes"]]
+        if "sensitivities" in d:
+            from esba.analysis.sensitivity3d import OUTPUTS3D
+
+            sens = d["sensitivities"]
+            rows.append(f"{'d/dp':>10}: {sens['status']}" + (f": {sens['message']}" if sens["message"] else "") + " (per unit of each parameter)")
+            for name, r in sens["parameters"].items() if sens["status"] == "ok" else ():
+                rows.append(f"{name:>10}: " + ", ".join(f"{o} {r[f'd{o}_{u}_per_unit']:.4g} {u}" for o, u in OUTPUTS3D) + f" per {r['unit']}")
+        if "uncertainty" in d:
+            from esba.calibration.uncertainty3d import uncertainty3d_rows
+
+            rows += [f"{k:>10}: {v}" for k, v in uncertainty3d_rows(d)]
         return "\n".join(rows)
 
     forces = []
@@ -130,21 +171,18 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
         outputs.write_text(page, tube_html(scene.segments, result.q, values, forces, scene.describe()))
         print(f"esba: wrote {page}", file=sys.stderr)
     print_result(args, data, table)
+    for line in data.get("uncertainty", {}).get("outside_domain", ()):
+        print(f"esba: warning: {line}", file=sys.stderr)
+    if "agreement" in data and data["monte_carlo"]["counts"]["ok"] < 2:
+        print(f"esba: warning: {data['agreement']['verdict']}", file=sys.stderr)
     return EXIT_OK if result.ok else EXIT_FAILED
 
 
-def _cmd_solve(args: argparse.Namespace) -> int:
-    from esba.statics.equilibrium import EquilibriumError, SolverOptions, SolverOptionsError, solve
-    from esba.statics.text import solve_table
-
-    scene = scene_from_args(args)
-    if args.three_d or scene.needs_3d:
-        return _cmd_solve3d(args, scene)
-    for flag, given in (("--section", args.section), ("--html", args.html), ("--gravity-direction", args.gravity_direction)):
-        if given:
-            raise UsageError(f"{flag} is for the 3-D model: give --3d (or a payload out of the plane)")
-    figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
-    sigmas = _sigmas_for(args, scene)  # bad sigmas are usage errors, before any solve
+def _uncertainty_args(args: argparse.Namespace, scene, section: dict | None = None) -> tuple:
+    """The sigmas (3-D ones with ``section``), the Monte Carlo's options (None without
+    --monte-carlo) and whether it runs in chunks (--workers, --scheduler, --mc-out, --resume):
+    every flag checked before anything is solved."""
+    sigmas = _sigmas_for(args, scene, section)  # bad sigmas are usage errors, before any solve
     if args.monte_carlo is not None and not sigmas:
         raise UsageError("--monte-carlo needs uncertain parameters: --sigma NAME=SIGMA or an [uncertainty] table in the scene file")
     chunked = on_cluster(args) or args.mc_out is not None or args.resume
@@ -160,14 +198,47 @@ def _cmd_solve(args: argparse.Namespace) -> int:
             MonteCarloOptions,
             UncertaintyError,
             check_samples,
+            check_samples3d,
         )
 
         try:
+            if section is not None:
+                check_samples3d(args.monte_carlo)
             extra = {} if args.mc_chunk is None else {"chunk": args.mc_chunk}
             mc_options = MonteCarloOptions(samples=args.monte_carlo, seed=0 if args.seed is None else args.seed, **extra)
-            check_samples(args.monte_carlo, scene.segments, len(sigmas))  # before the nominal solve
+            check_samples(args.monte_carlo, scene.segments * (1 if section is None else 3), len(sigmas))  # before the nominal solve
         except UncertaintyError as exc:
             raise UsageError(f"--monte-carlo: {exc}") from None
+    return sigmas, mc_options, chunked
+
+
+def _chunked_or_exit(args: argparse.Namespace, scene, sigmas, options, section: dict | None = None, down=(1.0, 0.0, 0.0)):
+    """The chunked Monte Carlo (:func:`_monte_carlo_in_chunks`) as ``(mc, info)``, or the exit code
+    of an interruption (130) or of a study stopped at run time (1)."""
+    from esba.studies.chunks import StudyStopped
+
+    try:
+        return _monte_carlo_in_chunks(args, scene, sigmas, options, section, down)
+    except KeyboardInterrupt:
+        where = f": the samples solved so far are in {args.mc_out}; rerun with --resume to go on" if args.mc_out else ""
+        print(f"esba: interrupted{where}", file=sys.stderr)
+        return 130
+    except StudyStopped as exc:  # the scheduler lost, a chunk's workers dying, a full disk: exit 1
+        return study_stopped(exc, args.mc_out, "samples")
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from esba.statics.equilibrium import EquilibriumError, SolverOptions, SolverOptionsError, solve
+    from esba.statics.text import solve_table
+
+    scene = scene_from_args(args)
+    if args.three_d or scene.needs_3d:
+        return _cmd_solve3d(args, scene)
+    for flag, given in (("--section", args.section), ("--html", args.html), ("--gravity-direction", args.gravity_direction)):
+        if given:
+            raise UsageError(f"{flag} is for the 3-D model: give --3d (or a payload out of the plane)")
+    figure = scene_figure(args, DEFAULT_SOLVE_FIGURE)
+    sigmas, mc_options, chunked = _uncertainty_args(args, scene)
     if args.no_continuation and args.history is not None:
         raise UsageError("--history and --no-continuation: a history is a continuation; give one of the two")
     try:
@@ -200,16 +271,10 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         data["uncertainty"]["outside_domain"] = outside_domain(scene, sigmas)
         if mc_options is not None:
             if chunked:
-                from esba.studies.chunks import StudyStopped
-
-                try:
-                    mc, info = _monte_carlo_in_chunks(args, scene, sigmas, mc_options)
-                except KeyboardInterrupt:
-                    where = f": the samples solved so far are in {args.mc_out}; rerun with --resume to go on" if args.mc_out else ""
-                    print(f"esba: interrupted{where}", file=sys.stderr)
-                    return 130
-                except StudyStopped as exc:  # the scheduler lost, a chunk's workers dying, a full disk: exit 1
-                    return study_stopped(exc, args.mc_out, "samples")
+                code = _chunked_or_exit(args, scene, sigmas, mc_options)
+                if isinstance(code, int):
+                    return code
+                mc, info = code
             else:
                 mc, info = monte_carlo(scene, sigmas, mc_options), None
             data["monte_carlo"] = mc.to_dict()
@@ -237,26 +302,29 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _monte_carlo_in_chunks(args: argparse.Namespace, scene, sigmas, options):
-    """The Monte Carlo on --workers or --scheduler, or streamed to --mc-out (esba.studies.monte_carlo)."""
+def _monte_carlo_in_chunks(args: argparse.Namespace, scene, sigmas, options, section: dict | None = None, down=(1.0, 0.0, 0.0)):
+    """The Monte Carlo (in 3-D with ``section``) on --workers or --scheduler, or streamed to --mc-out (esba.studies.monte_carlo)."""
     from esba.studies.chunks import StudyError
     from esba.studies.distributed import DistributedError, open_runner
-    from esba.studies.monte_carlo import monte_carlo, monte_carlo_study
+    from esba.studies.monte_carlo import monte_carlo, monte_carlo3d, monte_carlo_study
 
     progress = sys.stderr.isatty()
+    space = {} if section is None else {"section": section, "gravity_direction": down}
     try:
         with open_runner(args.workers, args.scheduler, args.connect_timeout) as runner:
             if args.mc_out is None:
                 t0 = time.perf_counter()
-                mc = monte_carlo(scene, sigmas, options, runner=runner, progress=progress)
+                mc = (monte_carlo if section is None else monte_carlo3d)(scene, sigmas, options, runner=runner, progress=progress, **space)
                 return mc, {"runner": runner.description, "workers": runner.workers, "seconds": time.perf_counter() - t0}
-            return monte_carlo_study(scene, sigmas, options, runner=runner, out=args.mc_out, resume=args.resume, progress=progress)
+            return monte_carlo_study(scene, sigmas, options, runner=runner, out=args.mc_out, resume=args.resume, progress=progress,
+                                     three_d=section is not None, **space)
     except (DistributedError, StudyError) as exc:
         raise UsageError(str(exc)) from None
 
 
-def _sigmas_for(args: argparse.Namespace, scene) -> tuple:
-    """The scene file's [uncertainty] table, then --sigma flags (a flag replaces the file's entry)."""
+def _sigmas_for(args: argparse.Namespace, scene, section: dict | None = None) -> tuple:
+    """The scene file's [uncertainty] table, then --sigma flags (a flag replaces the file's entry);
+    with ``section``, the 3-D scene's parameters (Beta1, EI_side, GJ too)."""
     from esba.calibration.uncertainty import (
         UncertaintyError,
         load_sigmas,
@@ -267,7 +335,7 @@ def _sigmas_for(args: argparse.Namespace, scene) -> tuple:
     try:
         specs = list(load_sigmas(args.scene)) if args.scene else []
         specs += [parse_sigma(text) for text in args.sigma or ()]
-        return resolve_sigmas(scene, specs) if specs else ()
+        return resolve_sigmas(scene, specs, section) if specs else ()
     except UncertaintyError as exc:
         raise UsageError(str(exc)) from None
 

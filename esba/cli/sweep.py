@@ -19,7 +19,7 @@ from .arguments import (
     scene_changes,
     segments_arg,
 )
-from .cluster import add_cluster_flags, chunk_arg, on_cluster, study_stopped
+from .cluster import add_cluster_flags, chunk_arg, on_cluster, rows_held, study_stopped
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 
@@ -105,23 +105,6 @@ def _warn_sweep(tally) -> None:
         print(f"esba: warning: {line}", file=sys.stderr)
 
 
-def _rows_held(path: str | None) -> int:
-    """The lines after the column names in the study file ``path`` (0 when there is none, or it is
-    not a regular file: a device or FIFO is refused by the study itself): a resumed study that holds
-    every row of its plan solves nothing, so it needs no cluster (its rows are still checked one by
-    one as they are read back). Counted in blocks: the memory stays bounded whatever the file holds."""
-    if path is None or not os.path.isfile(path):
-        return 0
-    lines = 0
-    try:
-        with open(path, "rb") as fh:
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                lines += block.count(b"\n")
-    except OSError:
-        return 0
-    return max(0, lines - 1)
-
-
 def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, figure) -> int:
     """``esba sweep`` chunk by chunk (--workers, --scheduler, --resume): esba.studies.sweep_runner."""
     from esba.figures.scenes import save_figure
@@ -147,7 +130,7 @@ def _sweep_in_chunks(args: argparse.Namespace, base, options, out: str | None, f
     except (SweepError, SceneError, StudyError) as exc:
         raise UsageError(str(exc)) from None
     workers, scheduler = args.workers, args.scheduler
-    if args.resume and _rows_held(out) >= plan.size:  # nothing left to solve: no cluster to start for it
+    if args.resume and rows_held(out) >= plan.size:  # nothing left to solve: no cluster to start for it
         workers = scheduler = None
     try:
         with open_runner(workers, scheduler, args.connect_timeout) as runner:

@@ -70,7 +70,8 @@ try:
 except ImportError:  # pragma: no cover - not POSIX: studies are not locked
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["StudyError", "StudyStopped", "StudyFile", "study_hash", "sidecar", "read_header", "write_study", "chunk_bounds", "run_chunks", "HEADER", "MAX_CHUNK"]
+__all__ = ["StudyError", "StudyStopped", "StudyFile", "study_hash", "sidecar", "read_header", "write_study", "checked_rows", "chunk_bounds", "run_chunks",
+           "HEADER", "MAX_CHUNK"]
 
 _log = logging.getLogger("esba.studies.chunks")
 
@@ -427,6 +428,23 @@ def _lock_holder(fd: int) -> int | None:
     except (OSError, ValueError):
         pass
     return None
+
+
+def checked_rows(out: str | Path, problem: Callable[[int, dict[str, str]], str], keep: Callable[[dict[str, str]], None]) -> Callable[[dict[str, str]], None]:
+    """An ``on_row`` for :meth:`StudyFile.resume`: each row the file holds is checked by
+    ``problem(index, row)`` (``""``: it is what the study writes there) before ``keep(row)``;
+    the first that is not raises a :class:`StudyError` naming it, and the file is left as it is."""
+    index = 0
+
+    def on_row(row: dict[str, str]) -> None:
+        nonlocal index
+        why = problem(index, row)
+        if why:
+            raise StudyError(f"--resume {out}: row {index + 1} {why}; it is not kept: remove the file or give another output to start anew")
+        index += 1
+        keep(row)
+
+    return on_row
 
 
 def chunk_bounds(start: int, stop: int, chunk: int) -> list[tuple[int, int]]:

@@ -21,7 +21,9 @@ stable), ``not ok`` (with the reason) or ``infeasible`` (an actuator outside the
 
 The chunks run through :func:`esba.studies.chunks.run_chunks` on a runner of
 :mod:`esba.studies.distributed` (serial, or Dask), as the planar sweep's do; with ``out`` the rows
-stream to a CSV :class:`esba.studies.chunks.StudyFile` (kind ``sweep3d``) and its metadata beside it.
+stream to a CSV :class:`esba.studies.chunks.StudyFile` (kind ``sweep3d``) and its metadata beside it,
+and ``resume=True`` continues an interrupted study from the rows its file holds (each checked against
+the plan: :func:`resumed_row_problem3d`), here or on Dask.
 
 >>> from esba.model.scene import Scene, Payload
 >>> plan = plan_sweep3d(Scene(pressure=0.1, payloads=(Payload(0.5, 90.0),)), {"EI_side": 4e5, "GJ": 1e5}, payload_out_of_plane=[0.0, 30.0])
@@ -101,9 +103,13 @@ class Sweep3DPlan:
         return {k: float(v[j]) for (k, v), j in zip(self.axes.items(), idx)}
 
     def identity(self) -> dict[str, Any]:
-        """Everything that fixes the rows (JSON-ready)."""
-        return {"model": "3d", "base": self.base.describe(), "segments": self.base.segments, "variant": self.base.variant,
-                "section": dict(self.section), "axes": {k: list(v) for k, v in self.axes.items()}}
+        """Everything that fixes the rows (JSON-ready): the scene, the section, the axes and the esba code."""
+        import dataclasses
+
+        from esba.studies.distributed import code_digest
+
+        return {"model": "3d", "base": self.base.describe(), "scene": dataclasses.asdict(self.base), "segments": self.base.segments,
+                "variant": self.base.variant, "section": dict(self.section), "axes": {k: list(v) for k, v in self.axes.items()}, "esba": code_digest()}
 
 
 def plan_sweep3d(base: Scene | None = None, section: Mapping[str, float] | None = None, **axes: Sequence[float]) -> Sweep3DPlan:
@@ -195,6 +201,52 @@ def solve_points3d(plan: Sweep3DPlan, start: int, stop: int) -> list[dict[str, A
     return rows
 
 
+_STATUSES3D = ("ok", "not ok", "infeasible")
+
+
+def resumed_row_problem3d(plan: Sweep3DPlan, index: int, cells: Mapping[str, str]) -> str:
+    """Why row ``index`` (0-based) of a 3-D study file cannot be point ``index`` of ``plan`` solved, or ``""``.
+
+    Its axis cells must be the plan's point exactly (numbers are written in their shortest
+    round-trip form); its status one the sweep writes; an ``ok`` row a stable state with finite
+    angles and tip, whose total angle and twist are the sums of its angles.
+
+    >>> plan = plan_sweep3d(Scene(pressure=0.1), {"EI_side": 4e5, "GJ": 1e5}, GJ=[1e4, 2e4])
+    >>> resumed_row_problem3d(plan, 1, {"GJ_nmm2": "10000.0", "status": "infeasible"})
+    'has GJ_nmm2=10000.0 where the plan has 20000.0 (an edited or misplaced row)'
+    """
+    n = plan.base.segments
+
+    def number(column: str) -> float:
+        raw = cells.get(column, "")
+        value = checks.number(column, raw, subnormal=True) if raw != "" else float("nan")
+        if raw != "" and not np.isfinite(value):
+            raise ValueError(raw)
+        return value
+
+    point = plan.point(index)
+    try:
+        for axis, want in point.items():
+            column = _LOAD_AXES[axis][1] if axis in _LOAD_AXES else _ACTUATOR_COLUMNS[axis]
+            if number(column) != want:
+                return f"has {column}={cells.get(column)} where the plan has {want!r} (an edited or misplaced row)"
+        status = cells.get("status")
+        if status not in _STATUSES3D:
+            return f"has status={checks.quote(status, 30)}; a 3-D sweep writes {', '.join(_STATUSES3D)}"
+        angles = {c: [number(f"{c}{i}_deg") for i in range(1, n + 1)] for c in ("theta", "psi", "tau")}
+        results = [number(c) for c in ("min_eigenvalue", "total_angle_deg", "total_twist_deg", "tip_x_mm", "tip_y_mm", "tip_z_mm")]
+    except ValueError:
+        return "has a cell that is not a finite number (as written, an empty cell is no value)"
+    if status == "ok":
+        if cells.get("stable") != "True" or any(np.isnan(v) for v in [*results, *sum(angles.values(), [])]):
+            return "is ok but is not a stable state with every angle and the tip"
+        for total, c in ((results[1], "theta"), (results[2], "tau")):
+            s = float(np.sum(angles[c]))
+            if abs(total - s) > 1e-9 * max(1.0, abs(s)):
+                return f"is ok but its total of {c} ({total!r}) is not the sum of its angles ({s:.12g})"
+    return ""
+
+
 @dataclass
 class Sweep3DStudy:
     plan: Sweep3DPlan
@@ -205,25 +257,40 @@ class Sweep3DStudy:
     seconds: float = 0.0
     out: Path | None = None
     hash: str | None = None
+    resumed_from: int = 0
 
 
-def sweep3d_study(plan: Sweep3DPlan, *, runner=None, chunk: int = 8, out: str | Path | None = None) -> Sweep3DStudy:
+def sweep3d_study(plan: Sweep3DPlan, *, runner=None, chunk: int = 8, out: str | Path | None = None, resume: bool = False) -> Sweep3DStudy:
     """Solve the grid chunk by chunk on ``runner`` (default in this process); with ``out`` (a .csv)
-    stream the rows to a study file with its ``.study.json`` (else keep them in memory)."""
-    from esba.studies.chunks import StudyFile, chunk_bounds, run_chunks
+    stream the rows to a study file with its ``.study.json`` (else keep them in memory). With
+    ``resume`` continue the study in ``out`` from the rows it holds (each checked against the plan
+    by :func:`resumed_row_problem3d`; a new study when the file does not exist or is empty), as the
+    planar study does (:func:`esba.studies.sweep_runner.sweep_study`): every point is solved alone,
+    so the resumed file is the uninterrupted one, byte for byte."""
+    from esba.studies.chunks import StudyFile, checked_rows, chunk_bounds, run_chunks
     from esba.studies.distributed import ModelKey, SerialRunner
 
     if isinstance(chunk, bool) or not isinstance(chunk, int) or not 1 <= chunk <= 10_000:
         raise Sweep3DError(f"chunk={chunk!r}: expected a whole number of points from 1 to 10000")
+    if resume and out is None:
+        raise Sweep3DError("resume=True needs the study's file: give out=FILE.csv")
     runner = SerialRunner() if runner is None else runner
     t0 = time.perf_counter()
     columns = row_fields3d(plan.base.segments, plan)
     file = None
-    if out is not None:
-        file = StudyFile(out, "sweep3d", plan.identity(), columns, plan.size)
-        file.start({})
     rows: list[dict[str, Any]] = []
     counts: dict[str, int] = {}
+    start = 0
+    if out is not None:
+        file = StudyFile(out, "sweep3d", plan.identity(), columns, plan.size)
+
+        def count(row: dict[str, str]) -> None:  # each row the file holds, once checked
+            counts[row["status"]] = counts.get(row["status"], 0) + 1
+
+        if resume and file.path.exists() and file.path.stat().st_size > 0:
+            start = file.resume(checked_rows(out, lambda i, row: resumed_row_problem3d(plan, i, row), count))
+        else:
+            file.start({})
 
     def keep(a: int, b: int, part: list[dict[str, Any]]) -> None:
         for r in part:
@@ -233,11 +300,11 @@ def sweep3d_study(plan: Sweep3DPlan, *, runner=None, chunk: int = 8, out: str | 
         else:
             rows.extend(part)
 
-    bounds = chunk_bounds(0, plan.size, chunk)
+    bounds = chunk_bounds(start, plan.size, chunk)
     try:
         run_chunks(runner, ModelKey.of(plan.base), solve_points3d, bounds, lambda a, b: (plan, a, b), keep)
     finally:
         if file is not None:
             file.close()
     return Sweep3DStudy(plan, rows, counts, runner.description, len(bounds), time.perf_counter() - t0,
-                        file.path if file is not None else None, file.hash if file is not None else None)
+                        file.path if file is not None else None, file.hash if file is not None else None, start)

@@ -43,7 +43,7 @@ from esba.statics.batch import (
 from esba.model.validity import Tally
 from esba.statics.batch_options import DEFAULT_BATCH_OPTIONS
 
-from .chunks import MAX_CHUNK, StudyError, StudyFile, chunk_bounds, run_chunks
+from .chunks import MAX_CHUNK, StudyError, StudyFile, checked_rows, chunk_bounds, run_chunks
 from .distributed import ModelKey, SerialRunner
 from .sweep import (
     AXES,
@@ -237,19 +237,12 @@ def sweep_study(
     if out is not None:
         file = StudyFile(out, "sweep", _identity(plan, options), row_fields(plan.base.segments), plan.size)
 
-        kept = 0
-
-        def count(row: dict[str, str]) -> None:  # each row the file holds, checked before it is kept
-            nonlocal kept
-            problem = resumed_row_problem(plan, kept, row)
-            if problem:
-                raise StudyError(f"--resume {out}: row {kept + 1} {problem}; it is not kept: remove the file or give another output to start anew")
-            kept += 1
+        def count(row: dict[str, str]) -> None:  # each row the file holds, once checked
             counts[row["status"]] = counts.get(row["status"], 0) + 1
             tally.add(row.get("validity") or "")
 
         if resume and file.path.exists() and file.path.stat().st_size > 0:
-            start = file.resume(count)
+            start = file.resume(checked_rows(out, lambda i, row: resumed_row_problem(plan, i, row), count))
             decided = file.settings.get("compile")
             if decided not in ("always", "never"):
                 file.close()

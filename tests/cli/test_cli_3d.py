@@ -50,7 +50,7 @@ def test_a_payload_out_of_the_plane_picks_the_3d_model_and_moves_the_tip_sideway
     (["solve", "--payload-out-of-plane", "120", *SECTION], "payload.out_of_plane_deg=120: expected an angle from -90 to 90"),
     (["solve", "--payload-out-of-plane", "nan", *SECTION], "out_of_plane_deg"),
     (["equilibria", "--payload-out-of-plane", "10", "--max-bend", "200"], "--plot and --max-bend are not used with --3d"),  # picks the 3-D search
-    (["solve", "--3d", *SECTION, "--sensitivities"], "--sensitivities is not used with --3d"),
+    (["solve", "--3d", *SECTION, "--history", "together"], "--history is not used with --3d"),  # --sensitivities and --sigma are (tests/studies/test_monte_carlo3d.py)
     (["solve", "--3d", "--gravity", "--gravity-direction", "0,0,0", *SECTION], "a zero vector has no direction"),
     (["solve", "--3d", "--gravity", "--gravity-direction", "nan,0,1", *SECTION], "expected three finite numbers"),
     (["solve", "--3d", "--gravity", "--gravity-direction", "down", *SECTION], "expected X,Y,Z, three numbers"),

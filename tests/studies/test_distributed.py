@@ -40,6 +40,7 @@ from esba.studies.distributed import (
 from esba.studies.monte_carlo import monte_carlo, monte_carlo_study
 from esba.studies.sweep import plan_sweep, sweep
 from esba.studies.sweep_runner import read_rows, sweep_study
+from tests.studies.runners import StopAfter
 
 #: Every test here may start a cluster or a process: one that hangs (a wait on Dask, a process that
 #: does not end) fails with pytest-timeout's message after this long, seconds, instead of holding
@@ -211,26 +212,12 @@ class _Interrupted(Exception):
     pass
 
 
-class _StopAfter:
-    """Wraps a runner: the study is interrupted after ``k`` chunks were handed back (as by Ctrl-C)."""
-
-    def __init__(self, runner, k: int) -> None:
-        self.runner, self.k = runner, k
-        self.workers, self.description = runner.workers, runner.description
-
-    def map_ordered(self, fn, args, done=None):
-        for i, result in enumerate(self.runner.map_ordered(fn, args, done)):
-            if i == self.k:
-                raise KeyboardInterrupt
-            yield result
-
-
 @needs_dask
 def test_an_interrupted_study_resumes_from_its_file(cluster, reference, tmp_path):
     out = tmp_path / "grid.csv"
     plan = plan_sweep(BASE, **GRID)
     with pytest.raises(KeyboardInterrupt):
-        sweep_study(plan, INTERPRETED, runner=_StopAfter(cluster, 3), chunk=10, out=out)
+        sweep_study(plan, INTERPRETED, runner=StopAfter(cluster, 3), chunk=10, out=out)
     assert len(read_rows(out)) == 30  # three whole chunks on disk
     # the last chunk was cut short while being written: its broken tail row is dropped
     text = out.read_text(encoding="utf-8")
@@ -273,7 +260,7 @@ def test_monte_carlo_streams_its_samples_and_resumes(cluster, tmp_path):
     whole = monte_carlo(MAIN_JOB, sig, opts)
     out = tmp_path / "mc.csv"
     with pytest.raises(KeyboardInterrupt):
-        monte_carlo_study(MAIN_JOB, sig, opts, runner=_StopAfter(cluster, 2), out=out)
+        monte_carlo_study(MAIN_JOB, sig, opts, runner=StopAfter(cluster, 2), out=out)
     mc, info = monte_carlo_study(MAIN_JOB, sig, opts, runner=cluster, out=out, resume=True)
     assert info["resumed_from_sample"] == 50
     for name in ("code", "theta", "tip", "total_angle"):

@@ -14,6 +14,7 @@ from esba.statics.equilibrium import solve
 from esba.statics.spatial import solve_scene3d
 from esba.studies.chunks import sidecar
 from esba.studies.sweep3d import Sweep3DError, plan_sweep3d, sweep3d_study
+from tests.studies.runners import StopAfter
 
 SECTION = {"EI_side": 4e5, "GJ": 1e5}
 BASE = Scene(pressure=0.12, payloads=(Payload(0.6, 90.0),))
@@ -95,3 +96,73 @@ def test_cli_3d_sweep_writes_one_csv_and_refuses_bad_flags(tmp_path, capsys):
         assert main(["sweep", *argv]) == 2
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and match in err, err
+
+
+# ---------------------------------------------------------------------------------------------
+# resuming a 3-D study, and the 3-D Monte Carlo as a study file
+
+
+def _interrupted_then_resumed(tmp_path, runner):
+    from esba.studies.distributed import SerialRunner
+
+    plan = plan_sweep3d(BASE, SECTION, **GRID)
+    whole = tmp_path / "whole.csv"
+    sweep3d_study(plan, chunk=3, out=whole)
+    out = tmp_path / "cut.csv"
+    with pytest.raises(KeyboardInterrupt):
+        sweep3d_study(plan, runner=StopAfter(SerialRunner(), 1), chunk=1, out=out)
+    text = out.read_text(encoding="utf-8")
+    assert len(text.splitlines()) == 2  # the column names and one row
+    out.write_text(text + whole.read_text(encoding="utf-8").splitlines(keepends=True)[2][:30], encoding="utf-8")  # a row cut short
+    again = sweep3d_study(plan, runner=runner, chunk=2, out=out, resume=True)
+    assert again.resumed_from == 1 and again.counts == {"ok": 4} and again.chunks == 2
+    assert out.read_bytes() == whole.read_bytes()  # byte for byte the uninterrupted study
+    assert sidecar(out).read_text(encoding="utf-8") == sidecar(whole).read_text(encoding="utf-8")
+    return plan, out
+
+
+def test_an_interrupted_3d_study_resumes_from_its_file(tmp_path):
+    from esba.studies.distributed import SerialRunner
+
+    _interrupted_then_resumed(tmp_path, SerialRunner())
+
+
+@needs_dask
+@pytest.mark.timeout(300)
+def test_an_interrupted_3d_study_resumes_on_two_dask_workers(tmp_path):
+    from esba.studies.distributed import open_runner
+
+    with open_runner(workers=2) as runner:
+        _interrupted_then_resumed(tmp_path, runner)
+
+
+def test_resume_refuses_another_3d_study_and_an_edited_row(tmp_path):
+    from esba.studies.chunks import StudyError
+
+    plan, out = _interrupted_then_resumed(tmp_path, None)
+    with pytest.raises(StudyError, match="belongs to another study .* it differs in axes.GJ"):
+        sweep3d_study(plan_sweep3d(BASE, SECTION, payload_out_of_plane=[0.0, 40.0], GJ=[3e4, 1e5]), out=out, resume=True)
+    text = out.read_text(encoding="utf-8").splitlines(keepends=True)
+    text[2] = text[2].replace(",100000.0,", ",100001.0,", 1)
+    edited = "".join(text)
+    out.write_text(edited, encoding="utf-8")
+    with pytest.raises(StudyError, match=r"row 2 has GJ_nmm2=100001.0 where the plan has 100000.0"):
+        sweep3d_study(plan, out=out, resume=True)
+    assert out.read_text(encoding="utf-8") == edited  # left as it was found, not rewritten
+
+
+def test_cli_3d_sweep_resumes_and_refuses_resume_without_out(tmp_path, capsys):
+    from esba.cli import main
+
+    out = tmp_path / "s.csv"
+    argv = ["sweep", "--pressure", "0.12", "--payload", "0.6", "--payload-out-of-plane", "0,40", "--section", "EI_side=4e5", "--GJ", "1e5", "--out", str(out)]
+    assert main(argv) == 0
+    whole = out.read_bytes()
+    out.write_bytes(b"".join(whole.splitlines(keepends=True)[:2]))
+    capsys.readouterr()
+    assert main([*argv, "--resume", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["resumed_from_row"] == 1 and d["counts"] == {"ok": 2} and out.read_bytes() == whole
+    assert main(["sweep", "--3d", "--pressure", "0.1", "--resume"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--resume continues a 3-D study from the CSV file it streams to: give --out FILE.csv" in err

@@ -87,3 +87,33 @@ def test_the_seeded_monte_carlo_of_the_sensing_page_is_the_same_on_every_machine
     a, b = _everywhere(FIRST_ORDER, tmp_path)
     assert a[0] == b[0] == 4 and a[4] == b[4], (a, b)
     assert a[1:4] == pytest.approx(b[1:4], rel=1e-3), (a, b)
+
+
+MONTE_CARLO_3D = """
+import json
+from esba.calibration.sigmas import parse_sigma, resolve_sigmas
+from esba.calibration.uncertainty import MonteCarloOptions
+from esba.calibration.uncertainty3d import monte_carlo3d, propagate3d
+from esba.model.scene import Payload, Scene
+from esba.statics.spatial import check_section, solve_scene3d
+scene = Scene(pressure=0.12, payloads=(Payload(0.6, 90.0, 1.0, 20.0),))
+section = check_section({"EI_side": 4e5, "GJ": 1e5}, scene)
+sig = resolve_sigmas(scene, [parse_sigma("GJ=20%"), parse_sigma("Beta1=±5"), parse_sigma("E=5%")], section)
+mc = monte_carlo3d(scene, sig, MonteCarloOptions(samples=30, seed=5, chunk=7), section=section)
+u = propagate3d(scene, section, solve_scene3d(scene, section), sig)
+print(json.dumps({"codes": mc.code.tolist(), "mc": mc.to_dict()["std"], "first": u.to_dict()["std"], "tip": mc.tip.tolist()}))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.ci
+@pytest.mark.timeout(900)
+def test_the_3d_monte_carlo_is_the_same_on_every_machine(tmp_path):
+    # each sample is solved alone along its load history: the outcomes are the same everywhere and
+    # the numbers differ by the BLAS kernels' round-off only
+    a, b = _everywhere(MONTE_CARLO_3D, tmp_path)
+    assert a["codes"] == b["codes"] and set(a["codes"]) == {0}, (a, b)
+    for key in ("mc", "first"):
+        assert a[key] == pytest.approx(b[key], rel=1e-9), (key, a[key], b[key])
+    difference = max(abs(x - y) for p, q in zip(a["tip"], b["tip"]) for x, y in zip(p, q))
+    assert difference <= 1e-9, difference
