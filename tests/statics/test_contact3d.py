@@ -97,27 +97,32 @@ def test_a_sideways_wall_pushes_with_the_dead_load_that_holds_the_same_shape():
     assert np.max(np.abs(dead.q - r.q)) <= DEAD_LOAD
 
 
-@pytest.mark.parametrize("seed", [11, 12])
-def test_complementarity_to_solver_tolerance_on_random_3d_scenes(seed):
-    r = solve_contact3d(random_scene(np.random.default_rng(seed)))
-    _kkt_holds(r)
+#: The seeds of the random scenes: the page's (esba.analysis.contact3d_cases.RANDOM_SEEDS) and twelve more.
+RANDOM_3D_SEEDS = tuple(range(11, 19)) + tuple(range(20, 32))
+#: Seeds whose load history finds no equilibrium in contact beyond some load (measured): a sphere near the tip
+#: that the pressure pushes the finger around, the contact branch ending at a fold (the contact slides off).
+LOST_SEEDS = {14}
+
+
+@pytest.mark.parametrize("seed", RANDOM_3D_SEEDS)
+def test_complementarity_to_solver_tolerance_on_every_random_3d_scene(seed):
+    """Every scene is a KKT point to round-off: the equilibrium at the scene's loads, or (a seed of
+    LOST_SEEDS, and only those) the last equilibrium of its load history, which the result says is not
+    at the full load (status, message, ``reached``)."""
+    scene = random_scene(np.random.default_rng(seed))
+    r = solve_contact3d(scene)
     assert len(r.contacts) >= 1
-
-
-@pytest.mark.slow
-def test_complementarity_to_solver_tolerance_on_more_random_3d_scenes():
-    """Twelve more: every one that converges is a KKT point to round-off; one that does not says so
-    (a contact sliding off the rounded tip with force left, a jump the solve does not locate). Measured:
-    10 of 12 converge (seeds 27 and 30 do not); fewer than 9 would be a regression."""
-    solved = 0
-    for seed in range(20, 32):
-        r = solve_contact3d(random_scene(np.random.default_rng(seed)))
-        if r.success:
-            _kkt_holds(r)
-            solved += 1
-        else:
-            assert r.status in ("Passed_Through_Obstacle", "Closest_Points_Not_Converged") and r.message
-    assert solved >= 9
+    k = r.kkt
+    assert k.stationarity <= KKT_STATIONARITY
+    assert k.complementarity <= KKT_COMPLEMENTARITY
+    assert k.min_gap >= KKT_GAP and k.min_force >= 0.0
+    assert k.stability == "stable" and np.all(k.reduced_eigenvalues > 0)
+    if seed in LOST_SEEDS:
+        assert not r.success and r.status == "Contact_Equilibrium_Lost"
+        assert r.reached < (1.0, 1.0) and r.pressure < scene.pressure and "no equilibrium in contact found beyond" in r.message
+    else:
+        assert r.ok and r.status == "Solve_Succeeded" and r.reached == (1.0, 1.0), r.message
+        assert r.pressure == scene.pressure
 
 
 @pytest.mark.parametrize("item, message", [
