@@ -22,7 +22,7 @@ from esba.statics.contact import solve_contact
 from esba.statics.contact.spatial import ContactEquilibrium3D, ContactProblem3D, solve_contact3d
 from esba.statics.spatial import solve_scene3d
 
-__all__ = ["Contact3DCases", "contact3d_cases", "SPHERE_SCENE", "TILTED_SCENE", "WALL_PAYLOAD", "RANDOM_SEEDS"]
+__all__ = ["Contact3DCases", "contact3d_cases", "SPHERE_SCENE", "TILTED_SCENE", "TIP_SLIDE_SCENE", "TIP_SLIDE_PRESSURES", "WALL_PAYLOAD", "RANDOM_SEEDS"]
 
 #: A sphere inside the bend at 0.14 MPa, n = 3 (the example of esba.statics.contact.spatial).
 SPHERE_SCENE = Scene(pressure=0.14, obstacles=(Sphere(centre=(66.0, 52.0, 3.0), radius=10.0),))
@@ -31,6 +31,11 @@ SPHERE_SCENE = Scene(pressure=0.14, obstacles=(Sphere(centre=(66.0, 52.0, 3.0), 
 TILTED_SCENE = Scene(segments=8, pressure=0.2, obstacles=(Cylinder3D(centre=(70.0, 45.0, 0.0), axis=(0.0, 0.5, 1.0), radius=15.0),))
 #: The off-plane tip load of the wall case: 0.3 N straight out of the plane (Beta = 90 deg), at 90 deg target angle.
 WALL_PAYLOAD = Payload(0.3, 90.0, 1.0, 90.0)
+#: A cylinder of tilted axis beside the tip (the obstacle of random scene 30, rounded): as the pressure falls
+#: from 0.095 to 0.065 MPa the contact slides from inside segment 3 onto the rounded tip, then lifts off.
+TIP_SLIDE_SCENE = Scene(pressure=0.09, obstacles=(Cylinder3D(centre=(91.4, 51.3, 6.4), axis=(-0.934, -0.173, 0.312), radius=11.5),))
+#: The pressures of the path through that slide, MPa (falling).
+TIP_SLIDE_PRESSURES = tuple(float(p) for p in np.linspace(0.095, 0.065, 7))
 #: The pressures of the 3-D path (the sphere scene), MPa.
 PATH_PRESSURES = tuple(float(p) for p in np.linspace(0.0, 0.2, 11))
 #: The seeds of the random scenes (tests/statics/test_contact3d.py solves the same ones).
@@ -50,6 +55,7 @@ class Contact3DCases:
     costs: list[tuple[str, float]]
     ratio: float
     path: object = None  # esba.statics.contact.spatial_path.ContactPath3D of the sphere scene, 0 to 0.2 MPa
+    tip_path: object = None  # the same of TIP_SLIDE_SCENE at TIP_SLIDE_PRESSURES: the contact slides onto the tip
 
 
 def random_scene(rng: np.random.Generator) -> Scene:
@@ -126,7 +132,8 @@ def contact3d_cases(progress: Callable[[str], None] | None = None) -> Contact3DC
     from esba.statics.contact.spatial_path import contact_path3d
 
     path = contact_path3d(SPHERE_SCENE, PATH_PRESSURES)
-    say("path")
+    tip_path = contact_path3d(TIP_SLIDE_SCENE, TIP_SLIDE_PRESSURES)
+    say("paths")
     problem = ContactProblem3D(SPHERE_SCENE)
     solve_contact3d(SPHERE_SCENE, problem=problem)  # built and warmed once: the medians are solves
     free_scene = SPHERE_SCENE.replace(obstacles=())
@@ -139,4 +146,4 @@ def contact3d_cases(progress: Callable[[str], None] | None = None) -> Contact3DC
          _median(lambda: solve_contact(Scene(pressure=0.1, obstacles=(HalfPlane(at=(135.0, 0.0)),))))),
     ]
     say("costs")
-    return Contact3DCases(restriction, out_of_reach, wall_case, sphere, tilted, rows, costs, costs[1][1] / free_s, path)
+    return Contact3DCases(restriction, out_of_reach, wall_case, sphere, tilted, rows, costs, costs[1][1] / free_s, path, tip_path)

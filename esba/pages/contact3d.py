@@ -42,6 +42,18 @@ def _contact_rows(r) -> list[str]:
     return lines
 
 
+def _path_rows(path, spec: str) -> list[str]:
+    """A 3-D contact path's contact force against pressure and its events."""
+    lines = [
+        "| P (MPa) | " + " | ".join(f"{p.pressure:{spec}}" for p in path.points) + " |",
+        "|---|" + "---|" * len(path.points),
+        "| contact force (N) | " + " | ".join(f"{f:.4f}" for f in path.forces()) + " |",
+        "| where | " + " | ".join(", ".join(dict.fromkeys(c.where for c in p.contacts)) or "-" for p in path.points) + " |",
+        "",
+    ]
+    return lines + ([f"- {e.describe()}" for e in path.events] or ["- no event"]) + [""]
+
+
 def _ranges(seeds) -> str:
     """Consecutive seeds as ranges: ``11 to 18 and 20 to 31``."""
     runs: list[list[int]] = []
@@ -117,20 +129,23 @@ def spatial_section(d: Contact3DCases, fig: Path, t: Times = TIMES) -> list[str]
     lines += _contact_rows(d.tilted)
     lines += ["", f"![the finger against a tilted cylinder]({fig / FIGURE_3D})", ""]
     if d.path is not None:
-        forces = d.path.forces()
         lines += [
             "### A path through contact events",
             "",
-            "`esba.statics.contact.spatial_path.contact_path3d`: the sphere scene at 0 to 0.2 MPa, each point warm-started",
-            "from the previous one, a change of contact located by bisection on the pressure (to 1e-6 MPa):",
-            "",
-            "| P (MPa) | " + " | ".join(f"{p.pressure:.2f}" for p in d.path.points) + " |",
-            "|---|" + "---|" * len(d.path.points),
-            "| contact force (N) | " + " | ".join(f"{f:.4f}" for f in forces) + " |",
+            "`esba.statics.contact.spatial_path.contact_path3d` (`esba path --3d SCENE.toml --to P` with obstacles): the sphere scene",
+            "at 0 to 0.2 MPa, each point warm-started from the previous one, a change of where the obstacle touches (a touch, a",
+            "lift-off, a slide onto the tip or a joint or across one) located by bisection on the pressure (to 1e-6 MPa; two",
+            "changes within 1e-5 MPa of each other are one event):",
             "",
         ]
-        lines += [f"- {e.describe()}" for e in d.path.events] or ["- no event"]
-        lines += [""]
+        lines += _path_rows(d.path, ".2f")
+    if d.tip_path is not None:
+        lines += [
+            "A cylinder of tilted axis beside the tip (`esba.analysis.contact3d_cases.TIP_SLIDE_SCENE`), the pressure falling from",
+            "0.095 to 0.065 MPa: the contact slides from inside segment 3 onto the rounded tip, and lifts off it.",
+            "",
+        ]
+        lines += _path_rows(d.tip_path, ".3f")
     ok = sum(1 for r in d.random if r[2])
     lost = [r for r in d.random if not r[2]]
     lines += [

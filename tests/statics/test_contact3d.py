@@ -158,7 +158,7 @@ def test_a_3d_path_locates_the_touch_where_the_free_shape_first_meets_the_sphere
     from esba.statics.contact.spatial_path import contact_path3d
 
     path = contact_path3d(SPHERE_SCENE, np.linspace(0.0, 0.2, 11))
-    assert path.ok and [e.kind for e in path.events] == ["touch"]
+    assert path.ok and [e.kind for e in path.events] == ["touch", "slide", "slide"]  # then across joint 2 into segment 2
     e = path.events[0]
     assert e.bracket[1] - e.bracket[0] <= 1e-6
     from_rest = solve_contact3d(SPHERE_SCENE)  # the path's point at 0.14 MPa is the solve from rest
@@ -169,3 +169,25 @@ def test_a_3d_path_locates_the_touch_where_the_free_shape_first_meets_the_sphere
         assert bool(r.contacts) == touching
     below = solve_contact3d(SPHERE_SCENE, problem=problem, pressure=e.bracket[0])
     assert 0.0 <= below.gaps[0] <= 1e-4  # the least gap at the touch, mm
+
+
+def test_a_3d_path_locates_the_contact_sliding_onto_the_tip_and_lifting_off_it():
+    from esba.analysis.contact3d_cases import TIP_SLIDE_PRESSURES, TIP_SLIDE_SCENE
+    from esba.statics.contact.spatial import ContactProblem3D
+    from esba.statics.contact.spatial_path import contact_path3d
+
+    path = contact_path3d(TIP_SLIDE_SCENE, TIP_SLIDE_PRESSURES)
+    assert path.ok
+    assert [(e.kind, e.before, e.after) for e in path.events] == [("slide", ("inside segment 3",), ("tip",)), ("lift-off", ("tip",), ())]
+    slide, lift = path.events
+    assert slide.s == 1.0 and lift.s == 1.0
+    assert lift.bracket[1] - lift.bracket[0] <= 1e-6
+    # the slide passes through an instant where the contact is both inside segment 3 and at the tip: one event, both changes
+    # within 1e-5 MPa; either side of its bracket the contact is where the event says
+    assert slide.bracket[1] - slide.bracket[0] <= 1e-5
+    problem = ContactProblem3D(TIP_SLIDE_SCENE)
+    above = solve_contact3d(TIP_SLIDE_SCENE, problem=problem, pressure=slide.bracket[1] + 1e-5)
+    below = solve_contact3d(TIP_SLIDE_SCENE, problem=problem, pressure=slide.bracket[0] - 1e-5)
+    assert [c.where for c in above.contacts] == ["inside segment 3"] and [c.where for c in below.contacts] == ["tip"]
+    for r in (above, below):
+        _kkt_holds(r)
