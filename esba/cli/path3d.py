@@ -115,11 +115,10 @@ def _contact_path3d(args: argparse.Namespace, scene, out, plot) -> int:
     and slides located and where the contact branch is lost (esba.statics.contact.spatial_path)."""
     import numpy as np
 
-    from esba.infra import jsonsafe
-    from esba.infra.outputs import write_text
     from esba.model.scene import SceneError, check_pressure
     from esba.statics.contact.spatial_path import contact_path3d
 
+    from .contact import _finish, write_path_file
     from .scenes import _section_arg
 
     if args.param != "pressure":
@@ -135,25 +134,16 @@ def _contact_path3d(args: argparse.Namespace, scene, out, plot) -> int:
     data = path.to_dict(shapes=bool(args.json and args.points))
     data["scene"] = scene.describe()
     if out:
-        if str(out).endswith(".json"):
-            write_text(out, jsonsafe.dumps(path.to_dict(shapes=True), indent=2, sort_keys=True) + "\n")
-        else:
-            rows = ["pressure_mpa,total_force_n,contacts,tip_x_mm,tip_y_mm,tip_z_mm,ok"]
-            rows += [f"{p.pressure:.10g},{f:.10g},{len(p.contacts)},{p.tip[0]:.10g},{p.tip[1]:.10g},{p.tip[2]:.10g},{p.ok}" for p, f in zip(path.points, path.forces())]
-            write_text(out, "\n".join(rows) + "\n")
-        data["out"] = str(out.resolve())
+        data["out"] = write_path_file(out, path, "pressure_mpa,total_force_n,contacts,tip_x_mm,tip_y_mm,tip_z_mm,ok",
+                                      [f"{p.pressure:.10g},{f:.10g},{len(p.contacts)},{p.tip[0]:.10g},{p.tip[1]:.10g},{p.tip[2]:.10g},{p.ok}"
+                                       for p, f in zip(path.points, path.forces())])
     good = [p for p in path.points if p.ok]
     if plot and good:
         from esba.figures.contact3d import contact3d_figure
         from esba.figures.scenes import save_figure
 
         data["figure"] = str(save_figure(contact3d_figure(good[-1]), plot).resolve())
-    print_result(args, data, _contact_path3d_table)
-    bad = [p for p in path.points if not p.ok]
-    if bad:
-        print(f"esba: warning: {len(bad)} of {len(path.points)} points are not certified equilibria (first: P = {bad[0].pressure:g} MPa: {bad[0].message or bad[0].status})", file=sys.stderr)
-        return EXIT_FAILED
-    return EXIT_OK
+    return _finish(args, path, data, _contact_path3d_table)
 
 
 def cmd_equilibria3d(args: argparse.Namespace, scene) -> int:
