@@ -121,7 +121,7 @@ def test_complementarity_to_solver_tolerance_on_every_random_3d_scene(seed):
         assert not r.success and r.status == "Contact_Equilibrium_Lost"
         assert r.reached < (1.0, 1.0) and r.pressure < scene.pressure and "no equilibrium in contact found beyond" in r.message
     else:
-        assert r.ok and r.status == "Solve_Succeeded" and r.reached == (1.0, 1.0), r.message
+        assert r.ok and r.status in ("Solve_Succeeded", "Newton_Active_Set") and r.reached == (1.0, 1.0), r.message
         assert r.pressure == scene.pressure
 
 

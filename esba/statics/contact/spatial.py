@@ -24,7 +24,9 @@ from 0, then every load, ``options.ramp_steps`` legs each (1 unless given), each
 halved when the step fails or the shapes between its ends pass through a sphere or a cylinder, doubled
 after one that succeeds. While nothing touches, a step is the free damped Newton step, kept when the new
 shape stays clear of every obstacle (else it is halved, up to 6 times, to meet the obstacle closer); from
-there each step is the contact solve. A step still bad at :data:`MIN_STEP` of a leg ends the solve with
+there each step is the contact solve: first Newton on the KKT system of the last step's active set (kept
+when every KKT condition holds at the exact closest points: ``Newton_Active_Set``, the continuation of the
+contacts, which follows a branch up to its fold), else IPOPT and its passes. A step still bad at :data:`MIN_STEP` of a leg ends the solve with
 the last equilibrium, at its load (``reached``): ``Contact_Equilibrium_Lost`` when it was in contact (the
 contact branch ends at a fold: the contact slides off and the actuator jumps, which the solve does not
 follow; the message gives the least reduced-Hessian eigenvalue there).
@@ -445,6 +447,11 @@ def _stage(prob: ContactProblem3D, pv: np.ndarray, q0: np.ndarray, force0: np.nd
     """One step of the load history: (q, forces, sigma, interior, status, success, iterations, outer passes)."""
     opts = prob.options
     sigma, interior, _ = prob.closest(q0, pv)
+    if force0 is not None and np.any(force0 > opts.force_tol):  # first Newton on the last active set: its continuation, if every KKT condition holds
+        polished = _newton(prob, pv, q0, force0, sigma, interior, lb)
+        if polished[3]:
+            q, force, sigma = polished[:3]
+            return q, force, sigma, prob.closest(q, pv)[1], "Newton_Active_Set", True, 0, 0
     q, lam = q0, (None if force0 is None or not np.any(force0) else -force0)
     iterations, status, success = 0, "", False
     lbx = np.where(np.isfinite(lb), lb, -ca.inf)
@@ -570,7 +577,7 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
     iterations = outer = halvings = 0
     status, success = "", True
     here = (0.0, 0.0) if warm is None else (0.0, 1.0)
-    touch = 0
+    touch, touched = 0, warm is not None and bool(np.any(force > options.force_tol))
     for target in history:  # each leg of the history in adaptive steps: halved when a step fails, doubled when it succeeds
         origin, t, dt = here, 0.0, 1.0
         while success and t < 1.0:
@@ -591,6 +598,7 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
                         dt *= 0.5
                         continue
             qn, fn, sn, inn, status, success, it, out = _stage(prob, pv, q, force, lb)
+            touched = True
             iterations += it
             outer += out
             bad = not success or _crosses(prob, pv, q, qn)
@@ -605,7 +613,7 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
                 break
             q, force, sigma, interior, here = qn, fn, sn, inn, frac
             t, dt = t_try, 2.0 * dt
-    if success and not iterations:
+    if success and not touched:
         status = "Newton (free, clear of every obstacle)"
     last = values if success else at(here)  # a failed solve reports its last equilibrium, at that load
     pv = model.param_vector(last)
