@@ -191,3 +191,21 @@ def test_a_3d_path_locates_the_contact_sliding_onto_the_tip_and_lifting_off_it()
     assert [c.where for c in above.contacts] == ["inside segment 3"] and [c.where for c in below.contacts] == ["tip"]
     for r in (above, below):
         _kkt_holds(r)
+
+
+def test_a_3d_path_says_where_its_contact_branch_is_lost():
+    """Random scene 14 without its payload: the sphere pushes the finger sideways as the pressure rises, its
+    stiffness on the contact falls towards a fold, and the path says where it found the last equilibrium."""
+    from esba.statics.contact.spatial_path import contact_path3d
+
+    scene = random_scene(np.random.default_rng(14)).replace(payloads=())
+    pressures = np.linspace(0.06, scene.pressure, 6)
+    path = contact_path3d(scene, pressures)
+    last = path.points[-1]
+    assert [p.ok for p in path.points] == [True] * 5 + [False] and last.status == "Contact_Equilibrium_Lost"
+    assert [(e.kind, e.before) for e in path.events] == [("lost", ("inside segment 3",))]
+    e = path.events[0]
+    assert e.pressure == last.pressure < scene.pressure and e.bracket[1] - e.bracket[0] <= 2.0**-10 * (pressures[-1] - pressures[-2]) * 1.000001
+    k = last.kkt  # the last equilibrium is one, and nearly unstable
+    assert k.stationarity <= KKT_STATIONARITY and k.complementarity <= KKT_COMPLEMENTARITY and k.min_gap >= KKT_GAP
+    assert 0.0 < k.reduced_eigenvalues[0] < 0.1 * path.points[0].kkt.reduced_eigenvalues[0]
