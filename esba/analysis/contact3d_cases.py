@@ -51,7 +51,8 @@ class Contact3DCases:
     wall: tuple[float, float, float, float]                  # free tip z, wall z, force, max |q - q_dead|
     sphere: ContactEquilibrium3D
     tilted: ContactEquilibrium3D
-    random: list[tuple[int, str, bool, int, float, float, float, str, tuple, float]]  # seed, kind, ok, contacts, stationarity, complementarity, least gap, status, reached, least reduced eigenvalue
+    # seed, kind, ok, contacts, stationarity, complementarity, least gap, status, reached, least reduced eigenvalue
+    random: list[tuple[int, str, bool, int, float, float, float, str, tuple, float]]
     costs: list[tuple[str, float]]
     ratio: float
     path: object = None  # esba.statics.contact.spatial_path.ContactPath3D of the sphere scene, 0 to 0.2 MPa

@@ -165,7 +165,8 @@ def spatial_section(d: Contact3DCases, fig: Path, t: Times = TIMES) -> list[str]
         ]
     lines += [
         "",
-        "| seed | obstacle | ok | contacts | stationarity (N mm/rad) | complementarity (N mm) | least gap (mm) | least reduced eigenvalue (N mm/rad^2) | reached (pressure, loads) | status |",
+        "| seed | obstacle | ok | contacts | stationarity (N mm/rad) | complementarity (N mm) | least gap (mm) "
+        "| least reduced eigenvalue (N mm/rad^2) | reached (pressure, loads) | status |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for seed, kind, good, count, st, co, mg, status, reached, eig in d.random:

@@ -26,10 +26,11 @@ after one that succeeds. While nothing touches, a step is the free damped Newton
 shape stays clear of every obstacle (else it is halved, up to 6 times, to meet the obstacle closer); from
 there each step is the contact solve: first Newton on the KKT system of the last step's active set (kept
 when every KKT condition holds at the exact closest points: ``Newton_Active_Set``, the continuation of the
-contacts, which follows a branch up to its fold), else IPOPT and its passes. A step still bad at :data:`MIN_STEP` of a leg ends the solve with
-the last equilibrium, at its load (``reached``): ``Contact_Equilibrium_Lost`` when it was in contact (the
-contact branch ends at a fold: the contact slides off and the actuator jumps, which the solve does not
-follow; the message gives the least reduced-Hessian eigenvalue there).
+contacts, which follows a branch up to its fold), else IPOPT and its passes. A step still bad at
+:data:`MIN_STEP` of a leg ends the solve with the last equilibrium, at its load (``reached``):
+``Contact_Equilibrium_Lost`` when it was in contact (near a fold of the contact branch, where the contact
+slides off and the actuator jumps, which the solve does not follow; the message gives the least
+reduced-Hessian eigenvalue there, which falls towards 0 as the fold nears).
 
 The result lists each contact (where along the length, the point, the force vector and its size), the
 least gap of each obstacle elsewhere, and the KKT conditions with their numbers

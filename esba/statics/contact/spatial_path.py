@@ -94,7 +94,8 @@ def _places(r: ContactEquilibrium3D) -> dict[int, tuple]:
     return {k: tuple(v) for k, v in out.items()}
 
 
-def _changes(scene: Scene, problem: ContactProblem3D, k: int, a: ContactEquilibrium3D, b: ContactEquilibrium3D, target: tuple, tol: float) -> list[ContactEvent3D]:
+def _changes(scene: Scene, problem: ContactProblem3D, k: int, a: ContactEquilibrium3D, b: ContactEquilibrium3D, target: tuple,
+             tol: float) -> list[ContactEvent3D]:
     """The changes of where obstacle k touches between two points of a path, each located by bisection
     (the first change between the last located one and b, until the places are b's); changes within 10 tol
     of each other are one event (a contact crossing a joint touches both segments there for an instant)."""
