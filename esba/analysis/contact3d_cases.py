@@ -22,7 +22,7 @@ from esba.statics.contact import solve_contact
 from esba.statics.contact.spatial import ContactEquilibrium3D, ContactProblem3D, solve_contact3d
 from esba.statics.spatial import solve_scene3d
 
-__all__ = ["Contact3DCases", "contact3d_cases", "SPHERE_SCENE", "TILTED_SCENE", "WALL_PAYLOAD", "RANDOM_SEEDS"]
+__all__ = ["Contact3DCases", "contact3d_cases", "SPHERE_SCENE", "TILTED_SCENE", "TIP_SLIDE_SCENE", "TIP_SLIDE_PRESSURES", "WALL_PAYLOAD", "RANDOM_SEEDS"]
 
 #: A sphere inside the bend at 0.14 MPa, n = 3 (the example of esba.statics.contact.spatial).
 SPHERE_SCENE = Scene(pressure=0.14, obstacles=(Sphere(centre=(66.0, 52.0, 3.0), radius=10.0),))
@@ -31,10 +31,15 @@ SPHERE_SCENE = Scene(pressure=0.14, obstacles=(Sphere(centre=(66.0, 52.0, 3.0), 
 TILTED_SCENE = Scene(segments=8, pressure=0.2, obstacles=(Cylinder3D(centre=(70.0, 45.0, 0.0), axis=(0.0, 0.5, 1.0), radius=15.0),))
 #: The off-plane tip load of the wall case: 0.3 N straight out of the plane (Beta = 90 deg), at 90 deg target angle.
 WALL_PAYLOAD = Payload(0.3, 90.0, 1.0, 90.0)
+#: A cylinder of tilted axis beside the tip (the obstacle of random scene 30, rounded): as the pressure falls
+#: from 0.095 to 0.065 MPa the contact slides from inside segment 3 onto the rounded tip, then lifts off.
+TIP_SLIDE_SCENE = Scene(pressure=0.09, obstacles=(Cylinder3D(centre=(91.4, 51.3, 6.4), axis=(-0.934, -0.173, 0.312), radius=11.5),))
+#: The pressures of the path through that slide, MPa (falling).
+TIP_SLIDE_PRESSURES = tuple(float(p) for p in np.linspace(0.095, 0.065, 7))
 #: The pressures of the 3-D path (the sphere scene), MPa.
 PATH_PRESSURES = tuple(float(p) for p in np.linspace(0.0, 0.2, 11))
-#: The seeds of the random scenes (tests/statics/test_contact3d.py draws them the same way).
-RANDOM_SEEDS = tuple(range(11, 19))
+#: The seeds of the random scenes (tests/statics/test_contact3d.py solves the same ones).
+RANDOM_SEEDS = tuple(range(11, 19)) + tuple(range(20, 32))
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,10 +51,12 @@ class Contact3DCases:
     wall: tuple[float, float, float, float]                  # free tip z, wall z, force, max |q - q_dead|
     sphere: ContactEquilibrium3D
     tilted: ContactEquilibrium3D
-    random: list[tuple[int, str, bool, int, float, float, float, str]]  # seed, kind, ok, contacts, stationarity, complementarity, least gap, status
+    # seed, kind, ok, contacts, stationarity, complementarity, least gap, status, reached, least reduced eigenvalue
+    random: list[tuple[int, str, bool, int, float, float, float, str, tuple, float]]
     costs: list[tuple[str, float]]
     ratio: float
     path: object = None  # esba.statics.contact.spatial_path.ContactPath3D of the sphere scene, 0 to 0.2 MPa
+    tip_path: object = None  # the same of TIP_SLIDE_SCENE at TIP_SLIDE_PRESSURES: the contact slides onto the tip
 
 
 def random_scene(rng: np.random.Generator) -> Scene:
@@ -120,12 +127,14 @@ def contact3d_cases(progress: Callable[[str], None] | None = None) -> Contact3DC
         scene = random_scene(np.random.default_rng(seed))
         r = solve_contact3d(scene)
         k = r.kkt
-        rows.append((seed, scene.obstacles[0].kind, r.ok, len(r.contacts), k.stationarity, k.complementarity, k.min_gap, r.status))
+        rows.append((seed, scene.obstacles[0].kind, r.ok, len(r.contacts), k.stationarity, k.complementarity, k.min_gap, r.status, r.reached,
+                     float(k.reduced_eigenvalues[0]) if k.reduced_eigenvalues.size else float("nan")))
     say("random scenes")
     from esba.statics.contact.spatial_path import contact_path3d
 
     path = contact_path3d(SPHERE_SCENE, PATH_PRESSURES)
-    say("path")
+    tip_path = contact_path3d(TIP_SLIDE_SCENE, TIP_SLIDE_PRESSURES)
+    say("paths")
     problem = ContactProblem3D(SPHERE_SCENE)
     solve_contact3d(SPHERE_SCENE, problem=problem)  # built and warmed once: the medians are solves
     free_scene = SPHERE_SCENE.replace(obstacles=())
@@ -138,4 +147,4 @@ def contact3d_cases(progress: Callable[[str], None] | None = None) -> Contact3DC
          _median(lambda: solve_contact(Scene(pressure=0.1, obstacles=(HalfPlane(at=(135.0, 0.0)),))))),
     ]
     say("costs")
-    return Contact3DCases(restriction, out_of_reach, wall_case, sphere, tilted, rows, costs, costs[1][1] / free_s, path)
+    return Contact3DCases(restriction, out_of_reach, wall_case, sphere, tilted, rows, costs, costs[1][1] / free_s, path, tip_path)

@@ -71,6 +71,19 @@ def _path_table(title: str, d: dict, extra: str = "") -> str:
     return "\n".join(lines)
 
 
+def write_path_file(out, path, header: str, rows: list[str]) -> str:
+    """A contact path's file (``esba path`` with obstacles, planar or 3-D): JSON (every point with its
+    shape, every event) or CSV (``header`` and ``rows``); returns its absolute path."""
+    from esba.infra import jsonsafe
+    from esba.infra.outputs import write_text
+
+    if str(out).endswith(".json"):
+        write_text(out, jsonsafe.dumps(path.to_dict(shapes=True), indent=2, sort_keys=True) + "\n")
+    else:
+        write_text(out, "\n".join([header, *rows]) + "\n")
+    return str(out.resolve())
+
+
 def _finish(args: argparse.Namespace, path, data: dict, table) -> int:
     print_result(args, data, table)
     bad = [p for p in path.points if not p.ok]

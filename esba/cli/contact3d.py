@@ -30,7 +30,7 @@ def _table(d: dict) -> str:
         ("KKT", f"stationarity {k['stationarity_nmm']:.1e} N mm/rad, least gap {k['min_gap_mm']:.1e} mm, least force {k['min_force_n']:.1e} N, "
                 f"complementarity {k['complementarity_nmm']:.1e} N mm; reduced Hessian on {k['active']} active: {k['stability']} "
                 f"(least eigenvalue {min(k['reduced_eigenvalues'], default=float('nan')):.4g} N mm/rad^2)"),
-        ("solver", f"IPOPT {d['status']}; {d['iterations']} iterations, {d['outer_passes']} passes, {d['halvings']} halved steps, {d['solve_time_s']:.3f} s"),
+        ("solver", f"{d['status']}; {d['iterations']} IPOPT iterations, {d['outer_passes']} passes, {d['halvings']} halved steps, {d['solve_time_s']:.3f} s"),
     ]
     if d.get("message"):
         rows.append(("NOT OK", d["message"]))

@@ -140,11 +140,10 @@ def _contact_path(args: argparse.Namespace, scene, out, plot) -> int:
     located (esba.statics.contact.sweeps.contact_path)."""
     import numpy as np
 
-    from esba.infra import jsonsafe
-    from esba.infra.outputs import write_text
     from esba.statics.contact.sweeps import contact_path
 
     from .contact import _path_table as contact_table
+    from .contact import write_path_file
 
     if args.param != "pressure":
         raise UsageError(f"--param {args.param}: a scene with obstacles follows the pressure only (--param pressure); a prescribed tip is esba.statics.contact.sweeps.displacement_path")
@@ -153,13 +152,9 @@ def _contact_path(args: argparse.Namespace, scene, out, plot) -> int:
     data = path.to_dict(shapes=bool(args.json and args.points))
     data["scene"] = scene.describe()
     if out:
-        if str(out).endswith(".json"):
-            write_text(out, jsonsafe.dumps(path.to_dict(shapes=True), indent=2, sort_keys=True) + "\n")
-        else:
-            rows = ["pressure_mpa,total_force_n,contacts,tip_x_mm,tip_y_mm,total_angle_deg,ok"]
-            rows += [f"{p.pressure:.10g},{f:.10g},{len(p.contacts)},{p.tip[0]:.10g},{p.tip[1]:.10g},{p.total_angle_deg:.10g},{p.ok}" for p, f in zip(path.points, path.forces)]
-            write_text(out, "\n".join(rows) + "\n")
-        data["out"] = str(out.resolve())
+        data["out"] = write_path_file(out, path, "pressure_mpa,total_force_n,contacts,tip_x_mm,tip_y_mm,total_angle_deg,ok",
+                                      [f"{p.pressure:.10g},{f:.10g},{len(p.contacts)},{p.tip[0]:.10g},{p.tip[1]:.10g},{p.total_angle_deg:.10g},{p.ok}"
+                                       for p, f in zip(path.points, path.forces)])
     if plot:
         from esba.figures.contact import grasp_figure
         from esba.figures.scenes import save_figure

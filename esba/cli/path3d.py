@@ -46,7 +46,7 @@ def cmd_path3d(args: argparse.Namespace, scene, out, plot) -> int:
     from .scenes import _section_arg
 
     if scene.obstacles:
-        raise UsageError("--3d: a scene with obstacles has no 3-D path command yet; esba solve --3d solves it, esba.statics.contact.spatial_path.contact_path3d follows the pressure")
+        return _contact_path3d(args, scene, out, plot)
     if args.locate != "extended":
         raise UsageError(f"--locate {args.locate}: with --3d folds and branch points are located by their extended systems only (--locate extended)")
     section = _section_arg(args.section)
@@ -85,6 +85,65 @@ def cmd_path3d(args: argparse.Namespace, scene, out, plot) -> int:
         print(f"esba: the branch did not reach --to {args.to:g}: {main.stop_reason}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
+
+
+#: Points of a 3-D path with contact (``esba path --3d`` on a scene with obstacles).
+CONTACT_PATH_POINTS_3D = 31
+
+
+def _contact_path3d_table(d: dict) -> str:
+    lines = [f"3-D path with contact: {d['scene']}",
+             f"  {'P MPa':>8} {'force N':>9} {'contacts (s, force N)':<46} {'tip x, y, z mm':>26} {'KKT: stat.':>10} {'compl.':>8} {'min eig':>9}  status"]
+    for p in d["points"]:
+        where = "; ".join(f"{c['where']} s={c['s']:.3f} {c['force_n']:.3f}" for c in p["contacts"]) or "none"
+        kkt = p["kkt"]
+        eig = min(kkt["reduced_eigenvalues"]) if kkt["reduced_eigenvalues"] else float("nan")
+        force = sum(c["force_n"] for c in p["contacts"])
+        tip = ",".join(f"{v:>8.2f}" for v in p["tip_mm"])
+        lines.append(f"  {p['pressure_mpa']:>8.4f} {force:>9.4f} {where[:46]:<46} {tip:>26} {kkt['stationarity_nmm']:>10.1e} "
+                     f"{kkt['complementarity_nmm']:>8.1e} {eig:>9.4g}  {'ok' if p['ok'] else p['message'] or p['status']}")
+    lines += [f"event: {e['description']}" for e in d["events"]] or ["event: none"]
+    for key, what in (("out", "branch file"), ("figure", "figure")):
+        if d.get(key):
+            lines.append(f"{what}: wrote {d[key]}")
+    return "\n".join(lines)
+
+
+def _contact_path3d(args: argparse.Namespace, scene, out, plot) -> int:
+    """``esba path --3d`` on a scene with obstacles: the pressure from --from (default 0) to --to in 31
+    points, each a 3-D contact equilibrium warm-started from the previous one, with the touches, lift-offs
+    and slides located and where the contact branch is lost (esba.statics.contact.spatial_path)."""
+    import numpy as np
+
+    from esba.model.scene import SceneError, check_pressure
+    from esba.statics.contact.spatial_path import contact_path3d
+
+    from .contact import _finish, write_path_file
+    from .scenes import _section_arg
+
+    if args.param != "pressure":
+        raise UsageError(f"--param {args.param}: a scene with obstacles follows the pressure only (--param pressure)")
+    try:
+        start = 0.0 if args.start is None else check_pressure(args.start, "--from")
+        to = check_pressure(args.to, "--to")
+    except SceneError as exc:
+        raise UsageError(str(exc)) from None
+    section = _section_arg(args.section)
+    down = gravity_direction_arg(args, scene)
+    path = contact_path3d(scene, np.linspace(start, to, CONTACT_PATH_POINTS_3D), section, gravity_direction=down)
+    data = path.to_dict(shapes=bool(args.json and args.points))
+    data["scene"] = scene.describe()
+    if out:
+        data["out"] = write_path_file(out, path, "pressure_mpa,total_force_n,contacts,tip_x_mm,tip_y_mm,tip_z_mm,ok",
+                                      [f"{p.pressure:.10g},{f:.10g},{len(p.contacts)},{p.tip[0]:.10g},{p.tip[1]:.10g},{p.tip[2]:.10g},{p.ok}"
+                                       for p, f in zip(path.points, path.forces())])
+    good = [p for p in path.points if p.ok]
+    if plot and good:
+        from esba.figures.contact3d import contact3d_figure
+        from esba.figures.scenes import save_figure
+
+        data["figure"] = str(save_figure(contact3d_figure(good[-1]), plot).resolve())
+    return _finish(args, path, data, _contact_path3d_table)
 
 
 def cmd_equilibria3d(args: argparse.Namespace, scene) -> int:

@@ -235,6 +235,8 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         "from every equilibrium of the free actuator (a multistart, `esba/statics/contact/multistart.py`). In Python,",
         "`esba.statics.contact.sweeps.contact_path` follows the pressure or a prescribed tip coordinate. In 3-D, `esba solve",
         "--3d SCENE.toml` (`examples/finger_sphere3d.toml`) solves a scene with planar or 3-D obstacles (the section above).",
+        "`esba path --3d SCENE.toml --to P` follows the pressure with 3-D obstacles in 31 points and locates the touches,",
+        "lift-offs, slides (onto the tip, across a joint) and where the contact branch is lost.",
         "",
     ]
     return "\n".join(lines)

@@ -42,6 +42,29 @@ def _contact_rows(r) -> list[str]:
     return lines
 
 
+def _path_rows(path, spec: str) -> list[str]:
+    """A 3-D contact path's contact force against pressure and its events."""
+    lines = [
+        "| P (MPa) | " + " | ".join(f"{p.pressure:{spec}}" for p in path.points) + " |",
+        "|---|" + "---|" * len(path.points),
+        "| contact force (N) | " + " | ".join(f"{f:.4f}" for f in path.forces()) + " |",
+        "| where | " + " | ".join(", ".join(dict.fromkeys(c.where for c in p.contacts)) or "-" for p in path.points) + " |",
+        "",
+    ]
+    return lines + ([f"- {e.describe()}" for e in path.events] or ["- no event"]) + [""]
+
+
+def _ranges(seeds) -> str:
+    """Consecutive seeds as ranges: ``11 to 18 and 20 to 31``."""
+    runs: list[list[int]] = []
+    for v in seeds:
+        if runs and v == runs[-1][-1] + 1:
+            runs[-1].append(v)
+        else:
+            runs.append([v])
+    return " and ".join(f"{r[0]} to {r[-1]}" if len(r) > 1 else f"{r[0]}" for r in runs)
+
+
 def spatial_section(d: Contact3DCases, fig: Path, t: Times = TIMES) -> list[str]:
     """The lines of the section ``Contact in 3-D``."""
     lines = [
@@ -106,37 +129,49 @@ def spatial_section(d: Contact3DCases, fig: Path, t: Times = TIMES) -> list[str]
     lines += _contact_rows(d.tilted)
     lines += ["", f"![the finger against a tilted cylinder]({fig / FIGURE_3D})", ""]
     if d.path is not None:
-        forces = d.path.forces()
         lines += [
             "### A path through contact events",
             "",
-            "`esba.statics.contact.spatial_path.contact_path3d`: the sphere scene at 0 to 0.2 MPa, each point warm-started",
-            "from the previous one, a change of contact located by bisection on the pressure (to 1e-6 MPa):",
-            "",
-            "| P (MPa) | " + " | ".join(f"{p.pressure:.2f}" for p in d.path.points) + " |",
-            "|---|" + "---|" * len(d.path.points),
-            "| contact force (N) | " + " | ".join(f"{f:.4f}" for f in forces) + " |",
+            "`esba.statics.contact.spatial_path.contact_path3d` (`esba path --3d SCENE.toml --to P` with obstacles): the sphere scene",
+            "at 0 to 0.2 MPa, each point warm-started from the previous one, a change of where the obstacle touches (a touch, a",
+            "lift-off, a slide onto the tip or a joint or across one) located by bisection on the pressure (to 1e-6 MPa; two",
+            "changes within 1e-5 MPa of each other are one event):",
             "",
         ]
-        lines += [f"- {e.describe()}" for e in d.path.events] or ["- no event"]
-        lines += [""]
+        lines += _path_rows(d.path, ".2f")
+    if d.tip_path is not None:
+        lines += [
+            "A cylinder of tilted axis beside the tip (`esba.analysis.contact3d_cases.TIP_SLIDE_SCENE`), the pressure falling from",
+            "0.095 to 0.065 MPa: the contact slides from inside segment 3 onto the rounded tip, and lifts off it.",
+            "",
+        ]
+        lines += _path_rows(d.tip_path, ".3f")
     ok = sum(1 for r in d.random if r[2])
+    lost = [r for r in d.random if not r[2]]
     lines += [
         "### Random scenes",
         "",
-        f"Seeds {RANDOM_SEEDS[0]} to {RANDOM_SEEDS[-1]} of `esba.analysis.contact3d_cases.random_scene` (a random pressure and",
-        "off-plane payload, and a sphere, plane or tilted cylinder placed 1 to 6 mm into the free shape):",
-        f"{ok} of {len(d.random)} solved and stable on the constrained set. The others are a sphere near the tip that a load",
-        "near the tip pushes the finger around: the contact slides to the rounded end and off it, with force left (a jump",
-        "the solve does not locate: after 10 halved steps it says so, `Passed_Through_Obstacle`, or its closest points",
-        "keep moving, `Closest_Points_Not_Converged`); their KKT numbers are those of the last state, not an equilibrium.",
-        "",
-        "| seed | obstacle | ok | contacts | stationarity (N mm/rad) | complementarity (N mm) | least gap (mm) | status |",
-        "|---|---|---|---|---|---|---|---|",
+        f"Seeds {_ranges(RANDOM_SEEDS)} of `esba.analysis.contact3d_cases.random_scene` (a random pressure and",
+        "off-plane payload, and a sphere, plane or tilted cylinder placed 1 to 6 mm into the free shape; tests/statics/test_contact3d.py",
+        f"solves the same ones): {ok} of {len(d.random)} solved and stable on the constrained set at the scene's loads.",
     ]
-    for seed, kind, good, count, st, co, mg, status in d.random:
+    if lost:
+        lines += [
+            "The others find no equilibrium in contact beyond some load: a sphere near the tip that the pressure pushes the",
+            "finger around, the least reduced-Hessian eigenvalue falling as the contact slides sideways, until the branch ends",
+            "(a fold: the contact slides off and the finger jumps, which the solve does not follow). Its steps, halved down to",
+            "2^-10 of the history, fail there; it says so (`Contact_Equilibrium_Lost`) and returns its last equilibrium, at that",
+            "load (the table's numbers are that state's: a KKT point too).",
+        ]
+    lines += [
+        "",
+        "| seed | obstacle | ok | contacts | stationarity (N mm/rad) | complementarity (N mm) | least gap (mm) "
+        "| least reduced eigenvalue (N mm/rad^2) | reached (pressure, loads) | status |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for seed, kind, good, count, st, co, mg, status, reached, eig in d.random:
         lines.append(f"| {seed} | {kind} | {'yes' if good else 'NO'} | {count} | {floored(st, '.1e', STATIONARITY_FLOOR)} | {floored(co, '.1e', FLOOR)} "
-                     f"| {floored(mg, ' .1e', FLOOR)} | {status} |")
+                     f"| {floored(mg, ' .1e', FLOOR)} | {eig:.2f} | ({reached[0]:.4f}, {reached[1]:.4f}) | {status} |")
     lines += [
         "",
         "### What 3-D contact costs",
@@ -155,10 +190,9 @@ def spatial_section(d: Contact3DCases, fig: Path, t: Times = TIMES) -> list[str]
         "",
         "### Not done in 3-D",
         "",
-        "- Slides in the 3-D path (a contact moving from one segment to the next is not an event there, as it is in the",
-        "  planar `contact_path`), a path in a load or a prescribed displacement, and `esba path --3d`; a contact that",
-        "  slides off the rounded tip with force left is a jump, which the 3-D solve reports as `Passed_Through_Obstacle`",
-        "  rather than locating it.",
+        "- A path in a load or a prescribed displacement; the jump where a contact branch ends (a contact sliding off the",
+        "  rounded tip or off a sphere with force left): the 3-D solve stops at its last equilibrium and says so",
+        "  (`Contact_Equilibrium_Lost`) rather than following the jump to where the finger lands.",
         "- Friction, in 3-D as in the plane: Coulomb's cone is a second-order cone constraint per contact (IPOPT takes it",
         "  smoothed), and a sliding contact's work depends on its path, so the statics are no longer a minimum of energy:",
         "  an incremental (load-stepped) problem with the friction force's direction as unknowns. Not clean enough yet.",

@@ -54,3 +54,33 @@ def test_bad_3d_obstacles_in_a_scene_file_get_one_line_and_exit_2(tmp_path, caps
     code, out, err = run(capsys, "solve", "--3d", str(scene))
     assert code == EXIT_USAGE
     assert message in err and len(err.strip().splitlines()) == 1 and out == ""
+
+
+def test_path_3d_follows_the_pressure_with_obstacles_and_locates_the_touch_and_the_slides(tmp_path, capsys):
+    scene = tmp_path / "sphere.toml"
+    scene.write_text(SPHERE)
+    code, out, err = run(capsys, "path", "--3d", str(scene), "--to", "0.2", "--json", "--out", str(tmp_path / "path.csv"), "--no-plot")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    assert d["ok"] and len(d["points"]) == 31 and d["points"][-1]["pressure_mpa"] == 0.2
+    assert [e["kind"] for e in d["events"]] == ["touch", "slide", "slide"]
+    touch, into, out_of = d["events"]
+    assert touch["after"] == ["inside segment 3"] and abs(touch["pressure_mpa"] - 0.127721) < 1e-6
+    assert into["before"] == ["inside segment 3"] and into["after"] == ["inside segment 2", "inside segment 3"]  # across joint 2 (s = 2/3)
+    assert out_of["after"] == ["inside segment 2"] and abs(into["s"] - 2.0 / 3.0) < 1e-3
+    assert all(e["bracket_mpa"][1] - e["bracket_mpa"][0] <= 1e-6 for e in d["events"])
+    assert all(p["kkt"]["complementarity_nmm"] < 1e-9 for p in d["points"])
+    rows = (tmp_path / "path.csv").read_text().splitlines()
+    assert rows[0].startswith("pressure_mpa,total_force_n,contacts,tip_x_mm") and len(rows) == 32
+
+
+@pytest.mark.parametrize("flags, message", [
+    (("--to", "-1"), "--to=-1: expected a pressure >= 0 MPa"),
+    (("--to", "0.2", "--param", "payload"), "--param payload: a scene with obstacles follows the pressure only"),
+])
+def test_path_3d_with_obstacles_refuses_bad_input_in_one_line(tmp_path, capsys, flags, message):
+    scene = tmp_path / "sphere.toml"
+    scene.write_text(SPHERE)
+    code, out, err = run(capsys, "path", "--3d", str(scene), *flags, "--no-out", "--no-plot")
+    assert code == EXIT_USAGE
+    assert message in err and len(err.strip().splitlines()) == 1 and out == ""

@@ -13,14 +13,24 @@ the gaps at four fixed points of the segment (:data:`SAMPLES`), which keep a ste
 segment through an obstacle between its points. IPOPT solves
 min U(q) subject to every gap >= 0 at fixed sigma, the sigmas are moved to the exact minima, and again
 (outer passes); then Newton on the KKT system of the active set, with the interior contacts' sigmas
-among the unknowns (d gap / d sigma = 0 their equations), polishes the result to round-off.
+among the unknowns (d gap / d sigma = 0 their equations), polishes the result to round-off. A moving
+point that goes back and forth between two passes (a contact sliding along a segment that wraps the
+obstacle) is moved to the secant root of closest(sigma) - sigma, and the fixed points near a moving point
+that jumped stay constraints; Newton takes the force of a fixed point on a segment with an interior
+least gap as that point's.
 
 The load history is the free 3-D solve's (:func:`esba.statics.spatial.solve3d`): the pressure raised
-from 0, then every load, ``options.ramp_steps`` steps each (1 unless given). While nothing touches, a
-step is the free damped Newton step, kept when the new shape stays clear of every obstacle (else it is
-halved, up to 6 times, to meet the obstacle closer); from there each step is the contact solve, halved when it
-fails or when the shapes between its ends pass through a sphere or a cylinder (after 10 halvings the
-solve says ``Passed_Through_Obstacle``: a contact that slides off the tip with a force left is a jump).
+from 0, then every load, ``options.ramp_steps`` legs each (1 unless given), each leg in adaptive steps:
+halved when the step fails or the shapes between its ends pass through a sphere or a cylinder, doubled
+after one that succeeds. While nothing touches, a step is the free damped Newton step, kept when the new
+shape stays clear of every obstacle (else it is halved, up to 6 times, to meet the obstacle closer); from
+there each step is the contact solve: first Newton on the KKT system of the last step's active set (kept
+when every KKT condition holds at the exact closest points: ``Newton_Active_Set``, the continuation of the
+contacts, which follows a branch up to its fold), else IPOPT and its passes. A step still bad at
+:data:`MIN_STEP` of a leg ends the solve with the last equilibrium, at its load (``reached``):
+``Contact_Equilibrium_Lost`` when it was in contact (near a fold of the contact branch, where the contact
+slides off and the actuator jumps, which the solve does not follow; the message gives the least
+reduced-Hessian eigenvalue there, which falls towards 0 as the fold nears).
 
 The result lists each contact (where along the length, the point, the force vector and its size), the
 least gap of each obstacle elsewhere, and the KKT conditions with their numbers
@@ -77,11 +87,24 @@ SAMPLES = (0.2, 0.4, 0.6, 0.8)
 #: How close (a fraction of the segment) to its end a least gap counts as its joint's.
 END = 1e-6
 
+#: A fixed point of a segment within NEAR of its moving point is not a constraint (two constraints so near
+#: each other make the problem degenerate for IPOPT); within NEAR_KEPT once the moving point has jumped.
+NEAR, NEAR_KEPT = 0.1, 0.03
+
+#: How far (a fraction of the segment) a moving point may move between two passes before the fixed
+#: points near it are kept as constraints (:func:`_stage`).
+JUMP = 0.05
+
 #: The most times a solve halves a free step that would reach into an obstacle (to meet it closer).
 MAX_TOUCH = 6
 
-#: The most times a solve halves a step of its load history.
-MAX_HALVINGS = 10
+#: The status of a solve that finds no equilibrium in contact beyond some load (near a fold of the contact
+#: branch: the contact slides off and the actuator jumps); its result is the last equilibrium found.
+LOST = "Contact_Equilibrium_Lost"
+
+#: The least step of the load history (a fraction of one leg of it, 2^-10): a step that still fails, or
+#: passes through an obstacle, ends the solve.
+MIN_STEP = 2.0**-10
 
 
 def _size(kind: str) -> int:
@@ -224,6 +247,7 @@ class ContactEquilibrium3D:
     sides: tuple = ()
     message: str = ""
     model: str = ""
+    reached: tuple = (1.0, 1.0)  # how far along the history (pressure, loads) the state is: (1, 1) when it succeeded
 
     @property
     def theta(self) -> np.ndarray:
@@ -254,7 +278,7 @@ class ContactEquilibrium3D:
             "gaps_elsewhere_mm": list(self.gaps), "kkt": self.kkt.to_dict(),
             "obstacles": [{**o.to_dict(), "touches": s} for o, s in zip(self.obstacles, self.sides)],
             "status": self.status, "message": self.message, "iterations": self.iterations, "outer_passes": self.outer,
-            "halvings": self.halvings, "segments": self.n, "solve_time_s": self.solve_time_s, "model": self.model,
+            "halvings": self.halvings, "reached": list(self.reached), "segments": self.n, "solve_time_s": self.solve_time_s, "model": self.model,
         }
 
 
@@ -286,16 +310,18 @@ class ContactProblem3D:
         self.inflate = [side_inflate(s, r1) for s in self.sides]
         self.po = np.concatenate([np.concatenate([o.parameters(), off, [infl]]) for o, off, infl in zip(self.obstacles, self.offsets, self.inflate)])
 
-    def lower(self, sigma: np.ndarray, interior: np.ndarray) -> np.ndarray:
-        """The constraints' lower bounds: 0, but -inf for a fixed point within 0.1 of its segment's
-        moving point (two constraints so near each other make the problem degenerate for IPOPT)."""
+    def lower(self, sigma: np.ndarray, interior: np.ndarray, keep: np.ndarray | None = None) -> np.ndarray:
+        """The constraints' lower bounds: 0, but -inf for a fixed point within :data:`NEAR` of its segment's
+        moving point (two constraints so near each other make the problem degenerate for IPOPT), within
+        :data:`NEAR_KEPT` where ``keep`` says so (its moving point has jumped: see :func:`_stage`)."""
         lbg = np.zeros(self.m)
         n, S = self.n, len(SAMPLES)
         for k in range(self.K):
             for i in range(n):
                 if interior[k * n + i]:
+                    window = NEAR_KEPT if keep is not None and keep[k * n + i] else NEAR
                     for h, frac in enumerate(SAMPLES):
-                        if abs(frac - sigma[k * n + i]) < 0.1:
+                        if abs(frac - sigma[k * n + i]) < window:
                             lbg[k * self.stride + 2 * n + i * S + h] = -INF
         return lbg
 
@@ -370,6 +396,14 @@ def _newton(prob: ContactProblem3D, pv: np.ndarray, q: np.ndarray, force: np.nda
     opts, n, K = prob.options, prob.n, prob.K
     N, L = 3 * n, float(prob.values["L"])
     active = force > opts.force_tol
+    force = np.where(active, force, 0.0)
+    for j in np.flatnonzero(active):  # a fixed point's force on a segment with a least interior gap: that point's
+        k, local = divmod(j, prob.stride)
+        if local >= 2 * n:
+            i = (local - 2 * n) // len(SAMPLES)
+            if interior[k * n + i]:
+                force[k * prob.stride + n + i] += force[j]
+                force[j], active[j], active[k * prob.stride + n + i] = 0.0, False, True
     act_int = np.zeros(K * n, dtype=bool)
     for j in np.flatnonzero(active):
         k, local = divmod(j, prob.stride)
@@ -414,13 +448,20 @@ def _stage(prob: ContactProblem3D, pv: np.ndarray, q0: np.ndarray, force0: np.nd
     """One step of the load history: (q, forces, sigma, interior, status, success, iterations, outer passes)."""
     opts = prob.options
     sigma, interior, _ = prob.closest(q0, pv)
+    if force0 is not None and np.any(force0 > opts.force_tol):  # first Newton on the last active set: its continuation, if every KKT condition holds
+        polished = _newton(prob, pv, q0, force0, sigma, interior, lb)
+        if polished[3]:
+            q, force, sigma = polished[:3]
+            return q, force, sigma, prob.closest(q, pv)[1], "Newton_Active_Set", True, 0, 0
     q, lam = q0, (None if force0 is None or not np.any(force0) else -force0)
     iterations, status, success = 0, "", False
     lbx = np.where(np.isfinite(lb), lb, -ca.inf)
+    keep = np.zeros(prob.K * prob.n, dtype=bool)
+    prev_sigma, prev_step, prev_int = sigma, np.zeros_like(sigma), np.zeros_like(keep)
     for outer in range(1, opts.max_outer + 1):
         solver = prob.nlp.warm if lam is not None else prob.nlp.solver
         x0 = np.where(np.isfinite(lb), np.maximum(q, np.where(np.isfinite(lb), lb, 0.0) + 1e-9 * np.maximum(1.0, np.abs(np.where(np.isfinite(lb), lb, 0.0)))), q)
-        kw = {"x0": x0, "p": prob.P(pv, sigma), "lbx": lbx, "lbg": prob.lower(sigma, interior), "ubg": np.full(prob.m, INF)}
+        kw = {"x0": x0, "p": prob.P(pv, sigma), "lbx": lbx, "lbg": prob.lower(sigma, interior, keep), "ubg": np.full(prob.m, INF)}
         if lam is not None:
             kw["lam_g0"] = lam
         sol = solver(**kw)
@@ -445,7 +486,19 @@ def _stage(prob: ContactProblem3D, pv: np.ndarray, q0: np.ndarray, force0: np.nd
             sigma = np.where(inside, new, 0.5)
             force = _forces(prob, q, prob.P(pv, sigma), lam)
             return q, force, sigma, inside, status, True, iterations, outer
-        sigma, interior = new, inside
+        # a moving point that jumped along its segment: the fixed points near it stay constraints from now
+        # on (without them the segment sags between the old and the new point, and the passes cycle)
+        keep |= inside & interior & (np.abs(new - sigma) > JUMP)
+        # a moving point that goes back and forth (the closest point of the solution constrained at a lies
+        # beyond b, and that of b back before a): the fixed point of sigma -> closest(sigma) lies between,
+        # and the secant of closest(sigma) - sigma through the last two passes finds it
+        step = new - sigma
+        flip = inside & interior & prev_int & (step * prev_step < 0)
+        secant = sigma - step * (sigma - prev_sigma) / np.where(flip, step - prev_step, 1.0)
+        lo, hi = np.minimum(sigma, prev_sigma), np.maximum(sigma, prev_sigma)
+        nxt = np.where(flip, np.clip(secant, lo, hi), new)
+        prev_sigma, prev_step, prev_int = sigma, step, inside & interior
+        sigma, interior = nxt, inside
     return q, -lam, sigma, interior, "Closest_Points_Not_Converged", False, iterations, opts.max_outer
 
 
@@ -525,46 +578,59 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
     iterations = outer = halvings = 0
     status, success = "", True
     here = (0.0, 0.0) if warm is None else (0.0, 1.0)
-    todo = list(reversed(list(history)))
-    planned = set(todo)
-    newton_steps = touch = 0
-    while todo:
-        target = todo.pop()
-        v = at(target)
-        pv, lb = model.param_vector(v), _lb(prob, v)
-        if force is None or not np.any(force > options.force_tol):  # nothing touches yet: the free step, if it stays clear
-            qf, fine, _ = newton3d(model, v, q, lb=lb)
-            if fine:
-                sf, inf_, gf = prob.closest(qf, pv)
-                if float(np.min(gf)) >= -options.gap_tol and not _crosses(prob, pv, q, qf):
-                    q, force, sigma, interior, here = qf, np.zeros(prob.m), sf, inf_, target
-                    newton_steps += 1
-                    continue
-                if touch < MAX_TOUCH:  # it would reach into an obstacle: a smaller step, to meet it closer
-                    touch += 1
-                    todo += [target, (0.5 * (here[0] + target[0]), 0.5 * (here[1] + target[1]))]
-                    continue
-        qn, fn, sn, inn, status, success, it, out = _stage(prob, pv, q, force, lb)
-        iterations += it
-        outer += out
-        bad = not success or _crosses(prob, pv, q, qn)
-        if bad and halvings < MAX_HALVINGS:
-            halvings += 1
-            todo += [target, (0.5 * (here[0] + target[0]), 0.5 * (here[1] + target[1]))]
-            continue
-        if success and bad:
-            status, success = "Passed_Through_Obstacle", False
-        q, force, sigma, interior, here = qn, fn, sn, inn, target
-        if not success:
-            break
-        while todo and todo[-1] not in planned and not bad:  # touched: on to the history's next step (halved if it fails)
-            todo.pop()
-    if success and not iterations:
+    touch, touched = 0, warm is not None and bool(np.any(force > options.force_tol))
+    for target in history:  # each leg of the history in adaptive steps: halved when a step fails, doubled when it succeeds
+        origin, t, dt = here, 0.0, 1.0
+        while success and t < 1.0:
+            dt = min(dt, 1.0 - t)
+            t_try = 1.0 if 1.0 - (t + dt) < 1e-12 else t + dt
+            frac = tuple(a + t_try * (b - a) for a, b in zip(origin, target))
+            v = at(frac)
+            pv, lb = model.param_vector(v), _lb(prob, v)
+            if force is None or not np.any(force > options.force_tol):  # nothing touches yet: the free step, if it stays clear
+                qf, fine, _ = newton3d(model, v, q, lb=lb)
+                if fine:
+                    sf, inf_, gf = prob.closest(qf, pv)
+                    if float(np.min(gf)) >= -options.gap_tol and not _crosses(prob, pv, q, qf):
+                        q, force, sigma, interior, here, t, dt = qf, np.zeros(prob.m), sf, inf_, frac, t_try, 2.0 * dt
+                        continue
+                    if touch < MAX_TOUCH:  # it would reach into an obstacle: a smaller step, to meet it closer
+                        touch += 1
+                        dt *= 0.5
+                        continue
+            qn, fn, sn, inn, status, success, it, out = _stage(prob, pv, q, force, lb)
+            touched = True
+            iterations += it
+            outer += out
+            bad = not success or _crosses(prob, pv, q, qn)
+            if bad and dt > MIN_STEP:
+                halvings += 1
+                dt *= 0.5
+                success = True
+                continue
+            if bad:  # no equilibrium reached from the last one: the solve ends there, and says where
+                ended = status if not success else "Passed_Through_Obstacle"
+                status, success = (LOST if force is not None and np.any(force > options.force_tol) else ended), False
+                break
+            q, force, sigma, interior, here = qn, fn, sn, inn, frac
+            t, dt = t_try, 2.0 * dt
+    if success and not touched:
         status = "Newton (free, clear of every obstacle)"
-    pv = model.param_vector(values)
-    out = _result(prob, pv, pressure, q, force if force is not None else np.zeros(prob.m), sigma, interior, status, success,
-                  iterations, outer, halvings, time.perf_counter() - t0, _lb(prob, values))
-    return dataclasses.replace(out, values=values)
+    last = values if success else at(here)  # a failed solve reports its last equilibrium, at that load
+    pv = model.param_vector(last)
+    out = _result(prob, pv, float(last.get("P", 0.0)), q, force if force is not None else np.zeros(prob.m), sigma, interior, status, success,
+                  iterations, outer, halvings, time.perf_counter() - t0, _lb(prob, last))
+    if not success:
+        eig = out.kkt.reduced_eigenvalues
+        soft = f"; its least reduced-Hessian eigenvalue {eig[0]:.3g} N mm/rad^2" if eig.size else ""
+        where = f"beyond {here[0]:.4g} of the pressure and {here[1]:.4g} of the loads (P = {last.get('P', 0.0):.6g} MPa)"
+        if status == LOST:
+            why = (f"no equilibrium in contact found {where}: steps down to {MIN_STEP:.2g} of the history further end {ended} (near a fold of the "
+                   "contact branch, where the contact slides off and the actuator jumps, which the solve does not follow)")
+        else:
+            why = f"the contact solve did not converge ({status}) {where}"
+        out = dataclasses.replace(out, message=f"{why}; the state shown is the last equilibrium, at that load{soft}")
+    return dataclasses.replace(out, values=last, reached=(1.0, 1.0) if success else tuple(float(v) for v in here))
 
 
 def _result(prob: ContactProblem3D, pv, pressure, q, force, sigma, interior, status, success, iterations, outer, halvings, elapsed, lb) -> ContactEquilibrium3D:
