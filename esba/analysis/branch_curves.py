@@ -89,43 +89,8 @@ class _BranchSystem(CurveSystem):
 
     def __init__(self, plane: Plane, spans: tuple[float, float], opts: FoldOptions):
         n = plane.segments
-        super().__init__(plane, spans, opts, n, 2 * n)
+        super().__init__(plane, spans, opts, np.arange(n), np.arange(n, 3 * n))
         self.n = n
-
-    def full(self, state, vector):
-        return np.concatenate([state, np.zeros(2 * self.n)]), np.concatenate([np.zeros(self.n), vector])
-
-    def reduce(self, q, v):
-        return np.asarray(q)[: self.n], np.asarray(v)[self.n :]
-
-    def evaluate(self, u, anchor):
-        """(residual, Jacobian (3n+1) x (3n+2), terms) at u, or None outside the model's domain."""
-        theta, x, y, w = self.split(u)
-        w0 = anchor[self.m + 2 :]
-        q, v = self.full(theta, w)
-        if not self.plane.along_x(y).defined(q, x):
-            return None
-        self.evaluations += 1
-        g, h, gx, gy, hv, hvt, hvx, hvy = terms = self.plane.terms(q, x, y, v)
-        n = self.n
-        res = np.concatenate([g[:n], hv[n:], [w0 @ w - 1.0]])
-        if not np.all(np.isfinite(res)):
-            return None
-        jac = np.zeros((3 * n + 1, 3 * n + 2))
-        jac[:n, :n] = h[:n, :n]
-        jac[:n, n] = gx[:n] * self.sx
-        jac[:n, n + 1] = gy[:n] * self.sy
-        jac[n : 3 * n, :n] = hvt[n:, :n]
-        jac[n : 3 * n, n] = hvx[n:] * self.sx
-        jac[n : 3 * n, n + 1] = hvy[n:] * self.sy
-        jac[n : 3 * n, n + 2 :] = h[n:, n:]
-        jac[3 * n, n + 2 :] = w0
-        return res, jac, terms
-
-    def converged(self, res, terms) -> bool:
-        n = self.n
-        hscale = max(1.0, float(np.max(np.abs(terms[1]))))
-        return float(np.max(np.abs(res[:n]))) <= self.opts.tol and float(np.max(np.abs(res[n : 3 * n]))) <= 1e-12 * hscale and abs(res[-1]) <= 1e-13
 
     def tests(self, node: Node) -> np.ndarray:
         """(smallest eigenvalue of H_tt / its size, det(H_tt / size) mu_x, det(H_tt / size) mu_y) (w unit)."""
@@ -141,7 +106,7 @@ class _BranchSystem(CurveSystem):
         rates = []
         for g_l, hv_l in ((gx, hvx), (gy, hvy)):
             dtheta = -np.linalg.solve(htt, g_l[:n])
-            # hv_l, hvt are linear in the node's v = (0, w |w|): w . (dH_ss/dl w + d(H_ss w)/dtheta . dtheta/dl)
+            # hv_l, hvt are linear in the node's v = (0, |w| w): w . (dH_ss/dl w + d(H_ss w)/dtheta . dtheta/dl)
             rates.append(det * float(w @ (hv_l[n:] + hvt[n:, :n] @ dtheta)) / size_w)
         return np.array([float(eig[0]), *rates])
 
@@ -178,22 +143,12 @@ def seed_branch_points(plane: Plane, box, lines: int = 5) -> list[tuple[np.ndarr
     return out
 
 
-def branch_point_curves(
-    plane: Plane,
-    xrange: tuple[float, float],
-    yrange: tuple[float, float],
-    options: FoldOptions | None = None,
-    lines: int = 5,
-    seeds: Sequence[tuple[np.ndarray, float, float, np.ndarray]] | None = None,
-) -> list[BranchCurve]:
+def branch_point_curves(plane: Plane, xrange, yrange, options: FoldOptions | None = None, lines: int = 5, seeds=None) -> list[BranchCurve]:
     """Every branch-point curve of the in-plane state in the box that ``lines`` x-paths and y-paths
     cross (or through ``seeds``, (q, x, y, v) of the 3-D model), for a 3-D plane whose loads lie in
     the bending plane (:func:`check_symmetric`)."""
-    box = _box(plane, xrange, yrange)
-    check_symmetric(plane, box)
-    seeds = seed_branch_points(plane, box, lines) if seeds is None else list(seeds)
-    opts = options or FoldOptions()
-    return trace_curves(lambda spans: _BranchSystem(plane, spans, opts), box, seeds, KINDS_BP)  # type: ignore[return-value]
+    check_symmetric(plane, _box(plane, xrange, yrange))
+    return trace_curves(plane, xrange, yrange, _BranchSystem, seed_branch_points, KINDS_BP, options, lines, seeds)  # type: ignore[return-value]
 
 
 def branch_points_at(plane: Plane, curves: Sequence[BranchCurve], box, *, x: float | None = None, y: float | None = None,

@@ -451,21 +451,27 @@ class FoldOptions:
 
 
 class CurveSystem:
-    """An extended system of one plane whose solutions form a curve, in the scaled unknowns
-    u = (state, x / sx, y / sy, vector) (an :class:`esba.paths.extended.ExtendedSystem`): what fold
-    curves and the 3-D branch-point curves (:mod:`esba.analysis.branch_curves`) share.
+    """An extended system of one plane whose solutions form a curve: the equilibrium in the state
+    unknowns q[S] (the others held at 0) and a null vector of the Hessian's block on the indices K,
 
-    ``m`` is the number of state unknowns in u, ``k`` of the vector's; :meth:`full` turns them into
-    the model's state and critical vector, :meth:`reduce` back. A subclass gives :meth:`evaluate`,
-    :meth:`converged`, :meth:`tests` and its curve type (``curve``, a :class:`Curve`).
+        g[S](q; x, y) = 0,   H[K, K](q; x, y) w = 0,   w0 . w = 1   (w0 the anchor's w),
+
+    in the scaled unknowns u = (q[S], x / sx, y / sy, w) (an :class:`esba.paths.extended.ExtendedSystem`;
+    |S| + |K| + 1 equations in |S| + |K| + 2 unknowns). A fold curve has S = K = every index; the
+    3-D branch-point curves (:mod:`esba.analysis.branch_curves`) S = theta and K = (psi, tau).
+    The terms come from :meth:`Plane.terms` with v = w on K (0 elsewhere). A subclass gives the test
+    functions (:meth:`tests`) and its curve type (``curve``, a :class:`Curve`).
     """
 
     curve: type = Curve
     what = "curve"
 
-    def __init__(self, plane: Plane, spans: tuple[float, float], opts: FoldOptions, m: int, k: int):
+    def __init__(self, plane: Plane, spans: tuple[float, float], opts: FoldOptions, state: np.ndarray | None = None, vector: np.ndarray | None = None):
         self.plane, self.opts = plane, opts
-        self.m, self.k = m, k
+        everything = np.arange(plane.n)
+        self.si = everything if state is None else np.asarray(state)
+        self.vi = everything if vector is None else np.asarray(vector)
+        self.m, self.k = len(self.si), len(self.vi)
         self.sx, self.sy = spans
         self.evaluations = 0
 
@@ -478,16 +484,46 @@ class CurveSystem:
 
     def full(self, state: np.ndarray, vector: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The model's state and critical vector of the unknowns' parts."""
-        return state, vector
+        q, v = np.zeros(self.plane.n), np.zeros(self.plane.n)
+        q[self.si], v[self.vi] = state, vector
+        return q, v
 
     def reduce(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The unknowns' parts of a model state and critical vector."""
-        return q, v
+        return np.asarray(q)[self.si], np.asarray(v)[self.vi]
 
     def anchor(self, u: np.ndarray) -> np.ndarray:
         u = u.copy()
         u[self.m + 2 :] /= np.linalg.norm(u[self.m + 2 :])
         return u
+
+    def evaluate(self, u, anchor):
+        """(residual, Jacobian, terms) at u, or None outside the model's domain."""
+        state, x, y, w = self.split(u)
+        q, v = self.full(state, w)
+        if not self.plane.along_x(y).defined(q, x):
+            return None
+        self.evaluations += 1
+        g, h, gx, gy, hv, hvt, hvx, hvy = terms = self.plane.terms(q, x, y, v)
+        m, k, si, vi = self.m, self.k, self.si, self.vi
+        res = np.concatenate([g[si], hv[vi], [anchor[m + 2 :] @ w - 1.0]])
+        if not np.all(np.isfinite(res)):
+            return None
+        jac = np.zeros((m + k + 1, m + k + 2))
+        jac[:m, :m] = h[np.ix_(si, si)]
+        jac[:m, m] = gx[si] * self.sx
+        jac[:m, m + 1] = gy[si] * self.sy
+        jac[m : m + k, :m] = hvt[np.ix_(vi, si)]
+        jac[m : m + k, m] = hvx[vi] * self.sx
+        jac[m : m + k, m + 1] = hvy[vi] * self.sy
+        jac[m : m + k, m + 2 :] = h[np.ix_(vi, vi)]
+        jac[m + k, m + 2 :] = anchor[m + 2 :]
+        return res, jac, terms
+
+    def converged(self, res, terms) -> bool:
+        m, k = self.m, self.k
+        hscale = max(1.0, float(np.max(np.abs(terms[1]))))
+        return float(np.max(np.abs(res[:m]))) <= self.opts.tol and float(np.max(np.abs(res[m : m + k]))) <= 1e-12 * hscale and abs(res[-1]) <= 1e-13
 
     def acceptable(self, res, terms) -> bool:
         return float(np.max(np.abs(res[: self.m]))) <= 1e3 * self.opts.tol
@@ -512,44 +548,10 @@ class _FoldSystem(CurveSystem):
     curve = FoldCurve
     what = "fold curve"
 
-    def __init__(self, plane: Plane, spans: tuple[float, float], opts: FoldOptions):
-        super().__init__(plane, spans, opts, plane.n, plane.n)
-        self.n = plane.n
-
-    def evaluate(self, u, anchor):
-        """(residual, Jacobian (2n+1) x (2n+2), terms) at u, or None outside the model's domain."""
-        theta, x, y, v = self.split(u)
-        v0 = anchor[self.n + 2 :]
-        if not self.plane.along_x(y).defined(theta, x):
-            return None
-        self.evaluations += 1
-        g, h, gx, gy, hv, hvt, hvx, hvy = terms = self.plane.terms(theta, x, y, v)
-        n = self.n
-        res = np.concatenate([g, hv, [v0 @ v - 1.0]])
-        if not np.all(np.isfinite(res)):
-            return None
-        jac = np.zeros((2 * n + 1, 2 * n + 2))
-        jac[:n, :n] = h
-        jac[:n, n] = gx * self.sx
-        jac[:n, n + 1] = gy * self.sy
-        jac[n : 2 * n, :n] = hvt
-        jac[n : 2 * n, n] = hvx * self.sx
-        jac[n : 2 * n, n + 1] = hvy * self.sy
-        jac[n : 2 * n, n + 2 :] = h
-        jac[2 * n, n + 2 :] = v0
-        return res, jac, terms
-
-    def converged(self, res, terms) -> bool:
-        n = self.n
-        hscale = max(1.0, float(np.max(np.abs(terms[1]))))
-        return float(np.max(np.abs(res[:n]))) <= self.opts.tol and float(np.max(np.abs(res[n : 2 * n]))) <= 1e-12 * hscale and abs(res[-1]) <= 1e-13
-
-    # -- what a point says ----------------------------------------------------------------------
-
     def tests(self, node: Node) -> np.ndarray:
         """(c, v . dg/dx, v . dg/dy): the cusp test and the two branch-point tests (v unit)."""
         _, _, gx, gy, _, hvt, _, _ = node.data
-        v = node.u[self.n + 2 :]
+        v = node.u[self.m + 2 :]
         v = v / np.linalg.norm(v)
         return np.array([float(v @ hvt @ v), float(v @ gx), float(v @ gy)])
 
@@ -716,12 +718,17 @@ def _box(plane: Plane, xrange, yrange):
     return box
 
 
-def trace_curves(system: Callable[[tuple[float, float]], CurveSystem], box, seeds, kinds: Sequence[str]) -> list[Curve]:
-    """Every curve of ``system(spans)`` through the seeds (theta, x, y, v) in ``box``: each seed already
-    on a traced curve is skipped; each curve runs both ways until it leaves the box (by a margin),
-    closes, or joins a traced curve; a curve wholly outside the box is not kept."""
+def trace_curves(plane: Plane, xrange, yrange, system: type, seeder: Callable, kinds: Sequence[str], options: FoldOptions | None = None,
+                 lines: int = 5, seeds: Sequence[tuple[np.ndarray, float, float, np.ndarray]] | None = None) -> list[Curve]:
+    """Every curve of ``system`` (a :class:`CurveSystem` type, ``system(plane, spans, options)``) in the
+    box through the seeds (theta, x, y, v; by default ``seeder(plane, box, lines)``), its special
+    points named by ``kinds``: each seed already on a traced curve is skipped; each curve runs both
+    ways until it leaves the box (by a margin), closes, or joins a traced curve; a curve wholly
+    outside the box is not kept."""
+    box = _box(plane, xrange, yrange)
+    seeds = seeder(plane, box, lines) if seeds is None else list(seeds)
     spans = (box[0][1] - box[0][0], box[1][1] - box[1][0])
-    fs = system(spans)
+    fs = system(plane, spans, options or FoldOptions())
     curves: list[Curve] = []
     for theta, x, y, v in seeds:
         state, vector = fs.reduce(np.asarray(theta, dtype=float), np.asarray(v, dtype=float))
@@ -750,10 +757,7 @@ def fold_curves(
     Each seed already on a traced curve is skipped; each curve runs both ways until it leaves the
     box (by a margin), closes, or joins a traced curve.
     """
-    box = _box(plane, xrange, yrange)
-    seeds = seed_folds(plane, box, lines) if seeds is None else list(seeds)
-    opts = options or FoldOptions()
-    return trace_curves(lambda spans: _FoldSystem(plane, spans, opts), box, seeds, KINDS)  # type: ignore[return-value]
+    return trace_curves(plane, xrange, yrange, _FoldSystem, seed_folds, KINDS, options, lines, seeds)  # type: ignore[return-value]
 
 
 def fold_summary(curves: Sequence[Curve]) -> dict[str, Any]:
