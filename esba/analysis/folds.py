@@ -760,10 +760,10 @@ def fold_curves(
     return trace_curves(plane, xrange, yrange, _FoldSystem, seed_folds, KINDS, options, lines, seeds)  # type: ignore[return-value]
 
 
-def fold_summary(curves: Sequence[Curve]) -> dict[str, Any]:
-    """How many curves, points and special points of each kind."""
+def fold_summary(curves: Sequence[Curve], kinds: Sequence[str] = KINDS) -> dict[str, Any]:
+    """How many curves, points and special points of each kind (``kinds``, and any other found)."""
     special = [p for c in curves for p in c.special]
-    kinds = list(dict.fromkeys(list(KINDS) + [p.kind for p in special]))
+    kinds = list(dict.fromkeys(list(kinds) + [p.kind for p in special]))
     return {
         "curves": len(curves),
         "points": int(sum(len(c) for c in curves)),
