@@ -140,3 +140,26 @@ def test_loads_off_the_plane_and_planar_planes_are_refused_in_one_line():
     with pytest.raises(PathError, match="the planar model's") as exc:
         branch_point_curves(Plane.from_scene(SCENE, "pressure", "payload"), *BOX)
     assert "\n" not in str(exc.value)
+
+
+def test_where_the_branch_point_curve_meets_the_in_plane_fold_curve():
+    """With a softer torsion (GJ = 1e4) the sideways branch points reach the bistable window: where the
+    branch-point curve meets the in-plane fold curve the 3-D Hessian has two zero eigenvalues, one
+    in-plane and one sideways, and the fold curve traced on its own passes through the point."""
+    from esba.analysis.folds import fold_curves, folds_at
+
+    plane = Plane.from_scene3d(Scene(pressure=0.0, payloads=(Payload(2.0, 90.0),)), "pressure", "payload", {"EI_side": 4e5, "GJ": 1e4})
+    box = ((0.1, 0.3), (0.5, 4.0))
+    curves = branch_point_curves(plane, *box)
+    meets = [p for c in curves for p in c.special if p.kind == "meets an in-plane fold"]
+    assert len(meets) == 2 and all(p.status == "converged" and p.label == "FBP" for p in meets)
+    folds = fold_curves(plane, *box)
+    n = plane.segments
+    model = plane.px.model
+    for p in meets:
+        h = model.hessian(p.theta, plane.values(p.x, p.y))
+        scale = np.abs(h).max()
+        assert abs(np.linalg.eigvalsh(h[:n, :n])[0]) < 1e-9 * scale and abs(np.linalg.eigvalsh(h[n:, n:])[0]) < 1e-9 * scale
+        assert min(abs(f - p.x) for f in folds_at(plane, folds, box, y=p.y)) < 1e-8 * p.x
+    # between the two meetings the in-plane state on the curve is unstable in the plane (past a fold)
+    assert not all(c.stable.all() for c in curves)
