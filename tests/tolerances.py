@@ -82,3 +82,12 @@ EXPORT_FLOAT_PRESSURE_ATOL = 1e-6
 #: near a constraint boundary is ~0.01 mm in r2, and K changes by ~13 N/m per mm there
 ENVELOPE_PSO_MM = 0.02
 ENVELOPE_PSO_REL = 5e-3
+
+#: a 3-D capability for loads in the bending plane against the planar one (issue 28): the same
+#: equations on psi = tau = 0, solved to round-off by the same engine (measured ~1e-15)
+REDUCES_TO_PLANAR = 1e-10
+#: a special point continued in two parameters (its extended system at the line's value) against
+#: the same point located on a one-parameter path by another method (the path engine's extended
+#: system; maps3d's ramp with Newton on the extended system by central differences, linear near the
+#: end): both converge far below it (measured ~1e-12 relative)
+PATHS_AGREE_REL = 1e-6

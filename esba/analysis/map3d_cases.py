@@ -7,7 +7,9 @@
   brute force (:func:`esba.analysis.maps3d.check_grid3d`);
 * the pressure paths under horizontal tip payloads in 3-D: their folds, which for a section stiff
   out of the plane are the planar ones (to round-off), and, with the eccentric section, the branch
-  points at which the in-plane state flips sideways first.
+  points at which the in-plane state flips sideways first;
+* the curves of those branch points in (pressure, payload), and the fold curve into which a payload
+  tilted out of the plane unfolds them (:func:`esba.analysis.maps3d.curves3d`).
 """
 
 from __future__ import annotations
@@ -17,9 +19,9 @@ from typing import Callable
 
 from esba.model.scene import Payload, Scene
 
-from .maps3d import GridCheck3D, Plane3D, StabilityMap3D, check_grid3d, path_points, principal, stability_map3d
+from .maps3d import Curves3D, GridCheck3D, Plane3D, StabilityMap3D, check_grid3d, curves3d, path_points, principal, stability_map3d
 
-__all__ = ["GRIPPER", "STIFF_SECTION", "PATH_PAYLOADS", "Map3DCases", "map3d_cases"]
+__all__ = ["GRIPPER", "STIFF_SECTION", "PATH_PAYLOADS", "Map3DCases", "map3d_cases", "CURVES_COMMAND", "TILTED_COMMAND", "CURVES_TILT"]
 
 #: The gripper map: the scene, its ranges, raster and check grid.
 GRIPPER_SCENE = Scene(pressure=0.0, payloads=(Payload(0.5, 90.0),))
@@ -30,6 +32,13 @@ STIFF_SECTION = {"EI_side": 4e5, "GJ": 1e5}
 #: Payloads (N) of the pressure paths (those of docs/maps.md's first map, and lighter ones).
 PATH_PAYLOADS = (0.5, 1.0, 2.0, 2.5, 3.0)
 PATH_RANGE = (0.05, 0.3)
+#: The fold and branch-point curves: the horizontal payload in the plane (eccentric section), and
+#: tilted out of the plane by CURVES_TILT degrees; the boxes and the commands that print them.
+CURVES_BOX = ((0.05, 0.3), (0.2, 3.0))
+CURVES_TILT = 15.0
+TILTED_BOX = ((0.05, 0.3), (0.0, 3.0))
+CURVES_COMMAND = "esba map --3d --x pressure:0.05:0.3 --y payload:0.2:3 --pressure 0 --payload 1 --fold-curves"
+TILTED_COMMAND = "esba map --3d --x pressure:0.05:0.3 --y payload:0:3 --pressure 0 --payload 1 --payload-out-of-plane 15 --fold-curves"
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,6 +51,8 @@ class Map3DCases:
     stiff: dict[float, list[tuple[str, float, str]]]
     eccentric: dict[float, list[tuple[str, float, str]]]
     section: dict[str, float]
+    curves: Curves3D | None = None  # in the plane, eccentric section (CURVES_BOX)
+    tilted: Curves3D | None = None  # tilted by CURVES_TILT (TILTED_BOX)
 
 
 def _paths(plane: Plane3D) -> dict[float, list[tuple[str, float, str]]]:
@@ -69,4 +80,8 @@ def map3d_cases(progress: Callable[[str], None] | None = None) -> Map3DCases:
     loaded = Scene(pressure=0.0, payloads=(Payload(1.0, 90.0),))
     stiff = _paths(Plane3D.from_scene(loaded, "pressure", "payload", STIFF_SECTION))
     ecc_plane = Plane3D.from_scene(loaded, "pressure", "payload")
-    return Map3DCases(smap, check, stiff, _paths(ecc_plane), dict(ecc_plane.section))
+    say("3-D: fold and branch-point curves")
+    curves = curves3d(ecc_plane, *CURVES_BOX)
+    tilted_scene = Scene(pressure=0.0, payloads=(Payload(1.0, 90.0, out_of_plane_deg=CURVES_TILT),))
+    tilted = curves3d(Plane3D.from_scene(tilted_scene, "pressure", "payload"), *TILTED_BOX)
+    return Map3DCases(smap, check, stiff, _paths(ecc_plane), dict(ecc_plane.section), curves, tilted)

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping
 
 import numpy as np
@@ -51,7 +51,7 @@ from esba.model.scene import Scene
 
 __all__ = [
     "AXES3D", "CLASSES", "REGIONS", "Map3DError", "Plane3D", "Outcome", "principal", "Boundary", "StabilityMap3D",
-    "stability_map3d", "GridCheck3D", "check_grid3d", "map3d_table", "DEFAULT_MAX_TWIST_DEG",
+    "stability_map3d", "GridCheck3D", "check_grid3d", "map3d_table", "DEFAULT_MAX_TWIST_DEG", "Curves3D", "curves3d", "curves_plane",
 ]
 
 #: The parameters of a 3-D map: (unit, what it is). A payload's direction "around" the actuator turns
@@ -350,6 +350,76 @@ def classify(plane: Plane3D, out: Outcome, load: float) -> int:
 
 
 # ---------------------------------------------------------------------------------------------
+# fold curves and branch-point curves in the map's plane
+
+
+@dataclass(frozen=True, eq=False)
+class Curves3D:
+    """The fold curves (:func:`esba.analysis.folds.fold_curves`) and, for loads in the bending plane,
+    the branch-point curves of the in-plane state (:func:`esba.analysis.branch_curves.branch_point_curves`)
+    of a map's plane, continued in its two parameters; ``notes`` say what was not traced and why."""
+
+    folds: tuple[Any, ...]
+    branch_points: tuple[Any, ...]
+    notes: tuple[str, ...]
+    seconds: float
+
+    def to_dict(self, points: bool = False) -> dict[str, Any]:
+        from esba.analysis.branch_curves import KINDS_BP
+        from esba.analysis.folds import fold_summary
+
+        return {
+            "fold_curves": [c.to_dict(points) for c in self.folds],
+            "branch_point_curves": [c.to_dict(points) for c in self.branch_points],
+            "fold_summary": fold_summary(self.folds),
+            "branch_point_summary": fold_summary(self.branch_points, KINDS_BP),
+            "notes": list(self.notes),
+            "seconds": self.seconds,
+        }
+
+
+def curves_plane(plane: Plane3D, xrange, yrange):
+    """The :class:`esba.analysis.folds.Plane` of a map's two parameters in the 3-D model, refused in
+    one line (:class:`Map3DError`) for an axis that is not one model parameter (around) or a box
+    wider than the path engine follows."""
+    from esba.analysis.folds import Plane, check_box
+    from esba.paths.problem import PathError
+
+    for flag, name in (("--x", plane.x), ("--y", plane.y)):
+        if name not in _PARAM:
+            raise Map3DError(f"{flag} {name}: {name} turns two angles of the payload at once: its fold curves are not traced; map omega or beta instead")
+    try:
+        folds_plane = Plane.from_scene3d(plane.scene, plane.x, plane.y, plane.section)
+        check_box(folds_plane, (tuple(xrange), tuple(yrange)))
+    except PathError as exc:
+        raise Map3DError(str(exc)) from None
+    return folds_plane
+
+
+def curves3d(plane: Plane3D, xrange, yrange, lines: int = 5) -> Curves3D:
+    """The fold curves and (loads in the plane) branch-point curves of the map's plane over the box,
+    seeded on ``lines`` paths each way (:class:`Curves3D`)."""
+    from esba.analysis.branch_curves import branch_point_curves, check_symmetric
+    from esba.analysis.folds import fold_curves
+    from esba.paths.problem import PathError
+
+    t0 = time.perf_counter()
+    folds_plane = curves_plane(plane, xrange, yrange)
+    box = (tuple(map(float, xrange)), tuple(map(float, yrange)))
+    folds = fold_curves(folds_plane, *box, lines=max(lines, 2))
+    notes = []
+    try:
+        check_symmetric(folds_plane, box)
+        branches = branch_point_curves(folds_plane, *box, lines=max(lines, 2))
+    except PathError:
+        branches = []
+        notes.append("the payload leaves the bending plane: its branch points unfold into folds (the fold curves); no branch-point curves")
+    # named as the map's axes (the path problems name a payload's parameters by its number: payload1)
+    named = [tuple(replace(c, names=plane.names) for c in cs) for cs in (folds, branches)]
+    return Curves3D(named[0], named[1], tuple(notes), time.perf_counter() - t0)
+
+
+# ---------------------------------------------------------------------------------------------
 # the map
 
 
@@ -388,6 +458,7 @@ class StabilityMap3D:
     seconds: dict[str, float]
     paths: tuple[PathPoint, ...] = ()
     notes: tuple[str, ...] = ()
+    curves: Curves3D | None = None
 
     def path_kinds(self) -> dict[str, int]:
         out: dict[str, int] = {}
@@ -434,6 +505,8 @@ class StabilityMap3D:
             "notes": list(self.notes),
             "seconds": self.seconds,
         }
+        if self.curves is not None:
+            d["curves"] = self.curves.to_dict(points=raster)
         if raster:
             d["raster"] = {"x": self.grid_x.tolist(), "y": self.grid_y.tolist(), "classes": self.classes.tolist(),
                            "critical_n": [[v if math.isfinite(v) else None for v in row] for row in self.critical.tolist()]}
@@ -593,9 +666,10 @@ def path_points(plane: Plane3D, xrange, yrange, lines: int = 11, axes: tuple[str
 
 
 def stability_map3d(plane: Plane3D, xrange, yrange, *, resolution: int = 21, locate: bool = True, lines: int = 11,
-                    progress: Callable[[str], None] | None = None) -> StabilityMap3D:
+                    progress: Callable[[str], None] | None = None, curves: bool = False) -> StabilityMap3D:
     """The 3-D map of ``plane`` over xrange x yrange on a ``resolution`` x ``resolution`` raster, with
-    its boundaries located between raster points (``locate``)."""
+    its boundaries located between raster points (``locate``), and with ``curves`` its fold and
+    branch-point curves continued in the two parameters (:func:`curves3d`)."""
     say = progress or (lambda msg: None)
     xrange = (float(xrange[0]), float(xrange[1]))
     yrange = (float(yrange[0]), float(yrange[1]))
@@ -607,6 +681,8 @@ def stability_map3d(plane: Plane3D, xrange, yrange, *, resolution: int = 21, loc
     gy = np.linspace(*yrange, resolution)
     if "payload" not in plane.names and plane.base["F1"] <= 0:
         raise Map3DError("payload: the scene's payload is 0 N; give --payload F (or map the payload)")
+    if curves:
+        curves_plane(plane, xrange, yrange)  # refused before the raster
     ev = _Evaluator(plane, xrange, yrange, gy if plane.y == "payload" else (gx if plane.x == "payload" else ()))
     t0 = time.perf_counter()
     say(f"principal states on the {resolution} x {resolution} raster")
@@ -642,7 +718,12 @@ def stability_map3d(plane: Plane3D, xrange, yrange, *, resolution: int = 21, loc
         say(f"paths along {lines} lines each way")
         points, notes = path_points(plane, xrange, yrange, lines)
         seconds["paths"] = time.perf_counter() - t0
-    return StabilityMap3D(plane, xrange, yrange, gx, gy, classes, critical, tuple(boundaries), seconds, tuple(points), tuple(notes))
+    traced = None
+    if curves:
+        say("fold and branch-point curves")
+        traced = curves3d(plane, xrange, yrange, lines or 5)
+        seconds["curves"] = traced.seconds
+    return StabilityMap3D(plane, xrange, yrange, gx, gy, classes, critical, tuple(boundaries), seconds, tuple(points), tuple(notes), traced)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -755,6 +836,22 @@ def check_grid3d(smap: StabilityMap3D, k: int, near: float = 0.02) -> GridCheck3
 # text
 
 
+def _curve_lines(c: dict, nx: str, ny: str, ux: str, uy: str) -> list[str]:
+    """The text of a map's fold and branch-point curves (:meth:`Curves3D.to_dict`)."""
+    out = []
+    for key, what in (("fold_curves", "fold curves"), ("branch_point_curves", "branch-point curves")):
+        out.append(f"{what} (continued in {nx} and {ny}): {len(c[key])}")
+        for curve in c[key]:
+            out.append(f"  curve {curve['index']}: {curve['points']} points, {nx} {curve['x_range'][0]:.6g}..{curve['x_range'][1]:.6g}{ux}, "
+                       f"{ny} {curve['y_range'][0]:.6g}..{curve['y_range'][1]:.6g}{uy}; {curve['stop_reason']}")
+            for p in curve["special_points"]:
+                out.append(f"    {p['kind']:<40} {nx} = {p[nx]:.10g}{ux}, {ny} = {p[ny]:.10g}{uy}, total angle {p['total_angle_deg']:.3f} deg, "
+                           f"twist {p['twist_deg']:.3f} deg ({p['status']})")
+    for note in c["notes"]:
+        out.append(f"  note: {note}")
+    return out
+
+
 def map3d_table(d: dict) -> str:
     """The text ``esba map --3d`` prints for :meth:`StabilityMap3D.to_dict` (with ``scene`` and the check)."""
     x, y = d["x"], d["y"]
@@ -783,6 +880,8 @@ def map3d_table(d: dict) -> str:
                      f"total angle {b['total_angle_deg']:.3f} deg, twist {b['twist_deg']:.3f} deg")
     if len(d["boundaries"]) > 40:
         lines.append(f"  ... {len(d['boundaries']) - 40} more (--out FILE lists them)")
+    if d.get("curves"):
+        lines += _curve_lines(d["curves"], x["parameter"], y["parameter"], u(x), u(y))
     if d.get("check_grid"):
         g = d["check_grid"]
         lines.append(f"check against brute force on a {g['k']} x {g['k']} grid: {g['k'] ** 2 - g['mismatches'] - g['near_mismatches']} cells agree, "

@@ -53,7 +53,8 @@ def _map_write_doc(args: argparse.Namespace) -> int:
 
     write_page(args, "map", PAGE, MapsSettings, (("--x", args.x), ("--y", args.y), ("--out", args.out), ("--plot", args.plot),
                                                 ("--check-grid", args.check_grid), ("SCENE.toml", args.scene),
-                                                ("--3d", args.three_d or None), ("--section", args.section), ("--max-twist", args.max_twist)))
+                                                ("--3d", args.three_d or None), ("--section", args.section), ("--max-twist", args.max_twist),
+                                                ("--fold-curves", args.fold_curves or None)))
     return EXIT_OK
 
 
@@ -68,6 +69,8 @@ def _cmd_map(args: argparse.Namespace) -> int:
     for flag, v in (("--section", args.section), ("--max-twist", args.max_twist)):
         if v is not None:
             raise UsageError(f"{flag} is for the 3-D map: give --3d")
+    if args.fold_curves:
+        raise UsageError("--fold-curves is for the 3-D map: give --3d (the planar map always traces its fold curves)")
     for flag, v in (("--x", args.x), ("--y", args.y)):
         if v is not None and v[0] in _MAP3D_ONLY:
             raise UsageError(f"{flag} {v[0]}:{v[1]:g}:{v[2]:g}: {v[0]} is a parameter of the 3-D map only: give --3d")

@@ -30,6 +30,13 @@ def _csv(d: dict) -> str:
         rows.append(f"path,{p['kind']},{p[nx]!r},{p[ny]!r},{p['along']},{p['direction']},{p['total_angle_deg']!r},{p['twist_deg']!r}")
     for b in d["boundaries"]:
         rows.append(f"boundary,{b['kind']},{b[nx]!r},{b[ny]!r},{b['along']},,{b['total_angle_deg']!r},{b['twist_deg']!r}")
+    for key, source in (("fold_curves", "fold curve"), ("branch_point_curves", "branch-point curve")):
+        for c in d.get("curves", {}).get(key, []):
+            kind = "fold" if key == "fold_curves" else "branch point"
+            for p in c.get("curve", []):
+                rows.append(f"{source} {c['index']},{kind},{p[nx]!r},{p[ny]!r},,,{p['total_angle_deg']!r},{p['twist_deg']!r}")
+            for p in c["special_points"]:
+                rows.append(f"{source} {c['index']},{p['kind']},{p[nx]!r},{p[ny]!r},,,{p['total_angle_deg']!r},{p['twist_deg']!r}")
     return "\n".join(rows) + "\n"
 
 
@@ -58,12 +65,17 @@ def cmd_map3d(args: argparse.Namespace) -> int:
         plane = Plane3D.from_scene(scene, xname, yname, section, DEFAULT_MAX_TWIST_DEG if args.max_twist is None else args.max_twist)
         plane.check_range("--x", xname, x0, x1)
         plane.check_range("--y", yname, y0, y1)
+        if args.fold_curves:
+            from esba.analysis.maps3d import curves_plane
+
+            curves_plane(plane, (x0, x1), (y0, y1))
     except (Map3DError, SpatialError) as exc:
         raise UsageError(str(exc)) from None
     say = (lambda msg: None) if args.json else (lambda msg: print(f"  {msg}", file=sys.stderr))
     try:
         smap = stability_map3d(plane, (x0, x1), (y0, y1), resolution=args.resolution or DEFAULT_RESOLUTION_3D,
-                               lines=DEFAULT_LINES_3D if args.history_lines is None else args.history_lines, progress=say)
+                               lines=DEFAULT_LINES_3D if args.history_lines is None else args.history_lines, progress=say,
+                               curves=args.fold_curves)
         checked = check_grid3d(smap, args.check_grid) if args.check_grid else None
     except Map3DError as exc:
         raise UsageError(str(exc)) from None
@@ -75,7 +87,8 @@ def cmd_map3d(args: argparse.Namespace) -> int:
     if checked is not None:
         data["check_grid"] = checked.to_dict()
     if out:
-        text = json.dumps(smap.to_dict(raster=True), indent=1, allow_nan=False) if str(out).endswith(".json") else _csv(data)
+        full = smap.to_dict(raster=True)
+        text = json.dumps(full, indent=1, allow_nan=False) if str(out).endswith(".json") else _csv(full)
         data["out"] = str(outputs.write_text(out, text).resolve())
     if plot:
         from esba.figures.maps3d import map3d_figure, save_figure
@@ -97,4 +110,7 @@ def add_map3d_flags(p: argparse.ArgumentParser) -> None:
                    help="the 3-D map: over two of pressure, payload, omega, beta, around, at, where the finger stays in its plane, "
                         "flips sideways (branch point, sideways fold, twist beyond --max-twist) or snaps (fold) as its payload is raised (docs/maps.md)")
     p.add_argument("--section", action="append", metavar="NAME=VALUE", help="with --3d: section stiffness EI_side=..., GJ=... (N*mm^2; default the eccentric section's)")
+    p.add_argument("--fold-curves", action="store_true",
+                   help="with --3d: also continue the fold curves in the two parameters and, for a payload in the bending plane, the "
+                        "curves of the branch points where the in-plane state flips sideways (not with around)")
     p.add_argument("--max-twist", type=float_arg, metavar="DEG", help="with --3d: the twist bound |sum tau| beyond which the finger counts as flipped (default 10)")

@@ -1,5 +1,6 @@
 """3-D stability maps: the raster's classes (in plane, twisted, flips, snaps), the located region
-boundaries, and where paths along the axes lose stability (folds, sideways folds, branch points).
+boundaries, where paths along the axes lose stability (folds, sideways folds, branch points), and
+the fold and branch-point curves continued in the two parameters.
 
 Presentation only: the map is :class:`esba.analysis.maps3d.StabilityMap3D`.
 """
@@ -27,7 +28,8 @@ def _label(name: str, unit: str) -> str:
 
 
 def map3d_figure(smap: StabilityMap3D, title: str | None = None) -> Figure:
-    """The map's classes as shaded cells, its boundaries and its path points."""
+    """The map's classes as shaded cells, its boundaries and its path points; its fold curves (solid)
+    and branch-point curves (dashed) with their special points (stars, labelled) when traced."""
     fig = new_figure(6.4, 4.8)
     ax = fig.add_subplot(111)
     cmap = ListedColormap(CLASS_COLOURS)
@@ -45,6 +47,13 @@ def map3d_figure(smap: StabilityMap3D, title: str | None = None) -> Figure:
                 seen.add(key)
                 label = base + (" (path)" if pts is smap.paths else " (boundary)")
             ax.plot([p.x], [p.y], marker=marker, color=colour, ms=4 if pts is smap.paths else 2.5, ls="none", label=label)
+    if smap.curves is not None:
+        for curves, colour, style, what in ((smap.curves.folds, "k", "-", "fold curve"), (smap.curves.branch_points, "#d62728", "--", "branch-point curve")):
+            for i, c in enumerate(curves):
+                ax.plot(c.xs, c.ys, color=colour, ls=style, lw=1.0, label=what if i == 0 else None)
+                for p in c.special:
+                    ax.plot([p.x], [p.y], marker="*", color=colour, ms=7, ls="none")
+                    ax.annotate(p.label, (p.x, p.y), textcoords="offset points", xytext=(4, 4), fontsize=7, color=colour)
     ux, uy = smap.plane.units
     ax.set_xlabel(_label(smap.plane.x, ux))
     ax.set_ylabel(_label(smap.plane.y, uy))

@@ -8,6 +8,7 @@ from :func:`esba.design.envelope.design_plane`; nothing here traces a curve.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -375,6 +376,48 @@ def _spatial_lines(c: Map3DCases, fig: Path, times: Times) -> list[str]:
            "it is sideways-unstable" if unstable else "none of these payloads is sideways-unstable")
         + ("; under " + ", ".join(f"{f:g}" for f in stable) + " N it is stable" if stable else "")
         + ". Whether the real finger flips depends on the torsional stiffness the paper does not give.",
+        "",
+    ]
+    return lines + _curve_lines(c)
+
+
+def _curve_lines(c: Map3DCases) -> list[str]:
+    """The 3-D fold and branch-point curves: their special points, and what a tilted payload does to them."""
+    if c.curves is None or c.tilted is None:
+        return []
+    from esba.analysis.map3d_cases import CURVES_COMMAND, CURVES_TILT, TILTED_COMMAND
+
+    def rows(curves) -> list[str]:
+        def deg(part) -> str:  # no "-0.000" from a round-off twist
+            return f"{round(math.degrees(float(np.sum(part))), 3) + 0.0:.3f}"
+
+        return [f"| {p.kind} | {p.x:.10g} | {p.y:.10g} | {deg(p.theta[: p.segments])} | {deg(p.theta[2 * p.segments:])} | {p.status} |"
+                for k in curves for p in k.special]
+
+    lines = [
+        "### Fold and branch-point curves in 3-D",
+        "",
+        "The folds and branch points of the paths above, continued in pressure and payload together (`esba.analysis.folds` on",
+        "the 3-D model, `esba.analysis.branch_curves`): a fold curve solves g = 0, H v = 0; a branch-point curve of the",
+        "in-plane state solves the in-plane equilibrium with a null vector of the Hessian's sideways-twist block",
+        "(g_theta = 0, H_ss w = 0), both continued by pseudo-arclength with their codimension-two points located on them.",
+        f"`{CURVES_COMMAND}` prints them for the horizontal payload in the plane (eccentric section):",
+        "",
+        "| point | pressure (MPa) | payload (N) | total angle (deg) | twist (deg) | status |",
+        "|---|---|---|---|---|---|",
+        *rows(c.curves.folds),
+        *rows(c.curves.branch_points),
+        "",
+        "The fold curve is the planar one (its cusp that of the first map); in this box, below the branch-point curve's lowest",
+        "payload no pressure path flips the finger sideways, and left of its lowest pressure no payload path does.",
+        "",
+        f"Tilted {CURVES_TILT:g} deg out of the plane (`{TILTED_COMMAND}`) the payload twists the finger and the plane is no longer a",
+        "symmetry: the branch points unfold, and at low pressure the twisted state folds (a sideways fold, the loading and unloading",
+        f"folds of a pressure path) on {len(c.tilted.folds)} fold curve{'s' if len(c.tilted.folds) != 1 else ''}:",
+        "",
+        "| point | pressure (MPa) | payload (N) | total angle (deg) | twist (deg) | status |",
+        "|---|---|---|---|---|---|",
+        *rows(c.tilted.folds),
         "",
     ]
     return lines

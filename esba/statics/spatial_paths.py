@@ -344,7 +344,10 @@ class _Critical:
     def __call__(self, z: np.ndarray) -> np.ndarray:
         N = self.N
         q, lam, v0, t = z[:N], float(z[N]), z[N + 1: 2 * N + 1], z[2 * N + 1: 3 * N + 2]
-        _, h, _ = self.prob.ghl(q, lam)
+        npar = len(self.prob.p0)
+        p0, dp = z[3 * N + 2: 3 * N + 2 + npar], z[3 * N + 2 + npar: 3 * N + 2 + 2 * npar]  # the call's, not the problem's:
+        p = p0 + lam * dp  # problems that differ only in p0 (esba.analysis.folds.Plane's lines) share this kernel
+        _, h, _ = self.prob.ghl_p(q, p, dp)
         w, V = np.linalg.eigh(h)
         a = np.abs(w)
         near = np.flatnonzero(a <= a.min() + 1e-9 * (a.max() + 1e-300))
@@ -352,8 +355,7 @@ class _Critical:
         v = V[:, k]
         if float(v @ v0) < 0:
             v = -v
-        prob = self.prob
-        _, slope = _kernel(prob.model, "slope").run(np.concatenate([q, prob.params(lam), prob.dp, v, t]))
+        _, slope = _kernel(self.prob.model, "slope").run(np.concatenate([q, p, dp, v, t]))
         return np.concatenate([v, [float(w[k]), float(slope)]])
 
     run = __call__

@@ -110,3 +110,26 @@ def test_natural_continuation_is_refused_for_a_3d_problem_in_one_line():
     problem = SpatialPathProblem.from_values(model, rod_values(EI=1.0, F=0.0), "payload")
     with pytest.raises(PathError, match=r"Natural\(\) continuation is the planar model's"):
         continuation(problem, np.zeros(9), 0.0, to=1.0, algorithm=Natural())
+
+
+def test_the_dense_critical_kernel_takes_the_parameters_of_its_call():
+    """The kernels live in the problem's registry, which problems that differ only in p0 share (a
+    dataclasses.replace: esba.analysis.folds.Plane's lines); the critical kernel (segments > 4) must
+    evaluate at the call's p0 and dp, as the compiled one does."""
+    from dataclasses import replace
+
+    from esba.statics.spatial_paths import _Critical
+
+    problem = SpatialPathProblem.from_scene(Scene(pressure=0.15, payloads=(Payload(1.0, 90.0),)), "pressure")
+    other = replace(problem, p0=problem.p0 + 0.5 * (np.array(problem.model.parameters) == "F1"))  # the pressure path under 1.5 N
+    assert other.registry is problem.registry
+    n = problem.segments
+    q = np.concatenate([np.full(n, 0.4), np.full(n, 0.01), np.full(n, 0.02)])
+    v0, t = np.ones(3 * n), np.ones(3 * n + 1)
+    for prob in (problem, other):
+        z = np.concatenate([q, [0.15], v0, t, prob.p0, prob.dp])
+        mine = _Critical(prob)(z)
+        shared = _Critical(problem)(z)  # built for the first problem, called with the other's parameters
+        assert np.allclose(shared, mine, rtol=1e-12, atol=1e-12)
+        w = np.linalg.eigvalsh(prob.ghl(q, 0.15)[1])
+        assert mine[3 * n] == pytest.approx(w[np.argmin(np.abs(w))], rel=1e-10)
