@@ -7,7 +7,10 @@ energy, a warm 3-D solve at n = 30 (90 unknowns; :func:`esba.statics.spatial.war
 one call of a compiled four-step Newton Function a point, checked) beside the arclength tracer's
 (:class:`esba.statics.spatial_paths.SpatialPathProblem` on the planar engine's
 :func:`esba.paths.continuation.trace`: pseudo-arclength steps, stability by the Hessian's pivots,
-folds and branch points watched) over the same pressures.
+folds and branch points watched) over the same pressures. The compiled limit of the same generated
+3-D model is one call of the 3-D C export's equilibrium (:mod:`esba.export.spatial`: its load ramp of
+Newton steps on the model's gradient and Hessian, built ``-O2`` as a shared library), on the same
+scene, with its largest difference from esba's state; where no C compiler is found it says so.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from .timing import median_time
+from .timing import median_time, per_call
 
 __all__ = ["spatial_benchmark", "GENERATION_NS_3D"]
 
@@ -66,6 +69,7 @@ def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = 
 
     tn = median_time(naive, repeat)
     naive_err = float(np.abs(naive_q[:3] - planar.theta).max())
+    compiled = _compiled3d(values, solve3d(m3, values).q, repeat)
     say("solve n = 3")
     m30 = load_model3d(30)
     q30 = solve3d(m30, values, certify=False).q
@@ -97,11 +101,37 @@ def spatial_benchmark(repeat: int = 3, progress: Callable[[str], None] | None = 
     return {
         "generation": gen,
         "solve3d_ms": t3 * 1e3, "planar_ms": tp * 1e3, "naive_ms": tn * 1e3, "naive_error": naive_err,
+        **compiled,
         "warm30_ms": tw * 1e3,
         "point_us": tt / len(pressures) * 1e6, "points": len(pressures),
         "arc_point_us": ta / len(branch) * 1e6, "arc_points": len(branch), "arc_stopped": branch.stopped,
         "load_average": _load_average(), "cpus": os.cpu_count() or 0,
     }
+
+
+def _compiled3d(values: dict, q: np.ndarray, repeat: int) -> dict:
+    """The compiled limit: the 3-D C export's equilibrium at n = 3 on ``values`` (ms a call, the
+    largest difference from esba's state ``q`` in rad, its status), or why there is none."""
+    import tempfile
+    from pathlib import Path
+
+    from esba.export import build
+    from esba.export.binding3d import Library3D, loads3d
+    from esba.export.spatial import ExportSpec3D, export_c3d
+
+    cc = build.compiler()
+    if cc is None:
+        return {"compiled_ms": None, "compiled_note": "no C compiler ($CC, gcc, cc) was found"}
+    spec = ExportSpec3D(3)
+    with tempfile.TemporaryDirectory(prefix="esba-bench-3d-") as tmp:
+        export = export_c3d(spec, Path(tmp) / "n3")
+        lib = Library3D(build.compile_shared(export.source, out=Path(tmp) / "n3.so", cc=cc, opt="-O2"), spec)
+        params = {"M": 0.0, **values}
+        payload = (values["F1"], values["Omega1"], values.get("Beta1", 0.0), values["s1"])
+        loads = loads3d(values["P"], [payload], g=0.0)  # the 3-D model of the benchmark has no gravity
+        result = lib.equilibrium(params, loads)
+        seconds = per_call(lambda: lib.equilibrium(params, loads), calls=200, repeat=max(repeat, 5))
+    return {"compiled_ms": seconds * 1e3, "compiled_error": float(np.abs(result.q - q).max()), "compiled_status": result.status_name}
 
 
 def _load_average() -> float | None:

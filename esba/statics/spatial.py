@@ -1,9 +1,16 @@
 """Equilibria of the spatial model: a load-ramped Newton method, certified by IPOPT.
 
 The history is the planar solver's (:func:`esba.statics.equilibrium.solve`): the unloaded state at
-the pressure, then every load (payloads, moments, weight) raised from 0 to its value in steps, each
-a damped Newton solve on the gradient from the previous state; the last state is handed to IPOPT
-(exact Hessian) as the certificate. The result says whether it is stable (the 3n x 3n Hessian
+the pressure, then every load (payloads, moments, weight) raised from 0 to its value in steps; the
+last state is handed to IPOPT (exact Hessian) as the certificate. Up to
+:data:`COMPILE_MAX_SEGMENTS` segments the history is first tried as the planar solver's fast path
+does: one call of a compiled natural ramp (:func:`ramp_kernel`: the pressure from 0, then the loads,
+each in :data:`esba.solvers.newton.STEPS` steps of a tangent predictor and Newton corrections on the
+model's gradient and Hessian, factored by an unrolled dense LDL^T), accepted only by the engine's
+one rule (:class:`esba.solvers.newton.Acceptance`: stationary at the end, every Hessian met positive
+definite, every step's Newton iteration contracting, no corrector jumping) and inside the model's
+domain at every step. Otherwise, and beyond that size, each step is a damped Newton solve on the
+gradient from the previous state. The result says whether it is stable (the 3n x 3n Hessian
 positive definite), and its smallest eigenvalue and its mode.
 """
 
@@ -19,8 +26,18 @@ import numpy as np
 from esba.infra.threads import single_threaded
 from esba.model.generated import domain_lower_bound
 from esba.model.spatial import Model3D
+from esba.solvers.dense import ldl_solve_sx, ldl_sx
+from esba.solvers.minimise import WARM_MU_INIT
+from esba.solvers.native import HOT_RUNS, Kernel, packed
+from esba.solvers.newton import ACCEPTANCE, FINAL, NEWTON, STEPS, natural_expression
 
-__all__ = ["Equilibrium3D", "newton3d", "solve3d", "load_names"]
+__all__ = ["Equilibrium3D", "newton3d", "solve3d", "load_names", "ramp_kernel", "newton_kernel", "newton_steps", "COMPILE_MAX_SEGMENTS"]
+
+#: Up to this segment count the 3-D kernels (a solve's ramp, a path's g, H and corrector) are
+#: dense SX Functions compiled to C once hot (a second of gcc at n = 3, cached); beyond it the
+#: unrolled O((3n)^3) factorisation does not pay, and gcc's time grows fast with the 3n x 3n Hessian
+#: (minutes at n = 8 on a busy machine) for a gain that a trace of tens of points never repays.
+COMPILE_MAX_SEGMENTS = 4
 
 #: Gradient norm (N*mm per rad, relative to the largest term) below which Newton stops.
 NEWTON_TOL = 1e-12
@@ -120,18 +137,100 @@ def newton3d(model: Model3D, values: Mapping[str, float], q0, *, max_iter: int =
     return q, float(np.abs(g).max()) <= NEWTON_TOL * scale, float(np.abs(g).max())
 
 
-def _ipopt(model: Model3D, values, q0, lb) -> tuple[np.ndarray, str]:
-    solver = model.registry.get("ipopt")
+def _ipopt(model: Model3D, values, q0, lb, warm: bool = False) -> tuple[np.ndarray, str]:
+    """IPOPT on the energy from ``q0`` within the bounds ``lb``: (its point, its return status).
+
+    ``warm``: ``q0`` is an equilibrium already (Newton's), so IPOPT starts with the barrier and the
+    bound multipliers near zero (:data:`esba.solvers.minimise.WARM_MU_INIT`, as the planar solver's
+    warm certificate): it accepts a minimiser after evaluating its optimality conditions there (one
+    iteration) instead of leaving it along the central path and coming back (six)."""
+    key = "ipopt_warm" if warm else "ipopt"
+    solver = model.registry.get(key)
     if solver is None:
         q = ca.SX.sym("q", model.size)
         ps = ca.SX.sym("p", len(model.parameters))
         f = model.functions["energy"](q, *ca.vertsplit(ps))[0]
-        solver = ca.nlpsol("esba3d", "ipopt", {"x": q, "p": ps, "f": f},
-                           {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": 1e-12, "ipopt.sb": "yes"})
-        model.registry["ipopt"] = solver
+        opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": 1e-12, "ipopt.sb": "yes"}
+        if warm:
+            opts.update({"ipopt.mu_init": WARM_MU_INIT, "ipopt.bound_mult_init_method": "mu-based"})
+        solver = ca.nlpsol("esba3d", "ipopt", {"x": q, "p": ps, "f": f}, opts)
+        model.registry[key] = solver
     lbx = np.where(np.isfinite(lb), lb, -ca.inf)
     res = solver(x0=q0, p=model.param_vector(values), lbx=lbx)
     return np.asarray(res["x"]).ravel(), str(solver.stats()["return_status"])
+
+
+def _parts3d(model: Model3D) -> tuple[ca.Function, ca.Function]:
+    """The 3-D model's :func:`esba.solvers.newton.parts_function` and ``correction_function``
+    (the same outputs; H factored by the unrolled dense LDL^T of :mod:`esba.solvers.dense`)."""
+    N, npar = model.size, len(model.parameters)
+    q, p, dp = ca.SX.sym("q", N), ca.SX.sym("p", npar), ca.SX.sym("dp", npar)
+    args = ca.vertsplit(p) if npar else []
+    g = model["gradient"](q, *args)
+    h = model["hessian"](q, *args)
+    h = 0.5 * (h + h.T)
+    L, d = ldl_sx(h, N)
+    piv = ca.vertcat(*d)
+    rel = ca.mmin(piv) / (ca.mmax(ca.fabs(piv)) + 1e-300)
+    step = ldl_solve_sx(L, d, g, N)
+    gl = ca.jtimes(g, p, dp)
+    parts = ca.Function("esba3d_parts", [q, p, dp], [g, step, ldl_solve_sx(L, d, gl, N), rel, piv, gl], {"cse": True})
+    correction = ca.Function("esba3d_correction", [q, p], [g, step, rel], {"cse": True})
+    return parts, correction
+
+
+def ramp_kernel(model: Model3D) -> Kernel:
+    """A solve's load history as one :class:`esba.solvers.native.Kernel`, input
+    [q0, p0, dp_pressure, dp_loads], output [q, g, smallest relative pivot, worst contraction, largest
+    jump, |g| after the pressure ramp, the least domain margin of the states met]: the natural ramp of
+    the pressure from p0 (no pressure, no loads), then of the loads, each by
+    :func:`esba.solvers.newton.natural_expression`; compiled to C once hot, up to
+    :data:`COMPILE_MAX_SEGMENTS` segments."""
+    key = ("ramp3d", STEPS, NEWTON, FINAL)
+    found = model.registry.get(key)
+    if found is None:
+        N, npar = model.size, len(model.parameters)
+        parts, correction = _parts3d(model)
+        q0, p0, dpp, dpl = (ca.MX.sym(k, m) for k, m in (("q0", N), ("p0", npar), ("dpp", npar), ("dpl", npar)))
+        qa, ga, lowa, worsta, statesa, jumpa = natural_expression(parts, q0, p0, dpp, 1.0, STEPS, NEWTON, FINAL, correction)
+        qb, gb, lowb, worstb, statesb, jumpb = natural_expression(parts, qa, p0 + dpp, dpl, 1.0, STEPS, NEWTON, FINAL, correction)
+        lb = ca.MX.sym("lb", N)
+        states = ca.horzcat(statesa, statesb)
+        margin = ca.mmin(states - ca.repmat(lb, 1, states.size2()))
+        fun = ca.Function("esba3d_ramp", [q0, p0, dpp, dpl, lb],
+                          [qb, gb, ca.fmin(lowa, lowb), ca.fmax(worsta, worstb), ca.fmax(jumpa, jumpb), ca.mmax(ca.fabs(ga)), margin])
+        mode = "auto" if model.n <= COMPILE_MAX_SEGMENTS else "never"
+        found = Kernel(packed(fun, "esba3d_ramp_packed"), mode, model.n, HOT_RUNS)
+        model.registry[key] = found
+    return found
+
+
+def _fast_ramp(model: Model3D, values: Mapping[str, float], loads: list[str], lb: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """The load history by :func:`ramp_kernel`: (q, |gradient|) when the engine's rule accepts it
+    (see the module), else None."""
+    names = list(model.parameters)
+    full = model.param_vector(values)
+    p0 = full.copy()
+    dpp, dpl = np.zeros_like(full), np.zeros_like(full)
+    if "P" in names:
+        i = names.index("P")
+        p0[i], dpp[i] = 0.0, full[i]
+    for k in loads:
+        i = names.index(k)
+        p0[i], dpl[i] = 0.0, full[i]
+    N = model.size
+    low_bound = np.where(np.isfinite(lb), lb, -1e300)
+    with np.errstate(invalid="ignore", over="ignore"):
+        out = ramp_kernel(model)(np.concatenate([np.zeros(N), p0, dpp, dpl, low_bound]))
+    q, g = out[:N], out[N : 2 * N]
+    low, worst, jump, g_pressure, margin = out[2 * N : 2 * N + 5]
+    gn = float(np.abs(g).max())
+    finite = bool(np.all(np.isfinite(out)))
+    if not finite or ACCEPTANCE.why_not(gn, float(low), float(worst), finite, float(jump)) or g_pressure > ACCEPTANCE.tol:
+        return None
+    if not (margin > 0 and np.all(q > lb)):
+        return None
+    return q, gn
 
 
 @single_threaded
@@ -143,7 +242,13 @@ def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int 
     values = dict(values)
     lb = _bounds(model, values)
     notes: list[str] = []
-    if q0 is None:
+    fast = None
+    if q0 is None and steps == STEPS and model.n <= COMPILE_MAX_SEGMENTS:
+        fast = _fast_ramp(model, values, load_names(model), lb)
+    if fast is not None:
+        q, gn = fast
+        converged = True
+    elif q0 is None:
         q = np.zeros(model.size)
         loads = load_names(model)
         ok = True
@@ -167,10 +272,11 @@ def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int 
             notes.append("a Newton step of the load history did not converge")
     else:
         q = np.array(q0, dtype=float)
-    q, converged, gn = newton3d(model, values, q, lb=lb)
+    if fast is None:
+        q, converged, gn = newton3d(model, values, q, lb=lb)
     status = "not run"
     if certify:
-        qi, status = _ipopt(model, values, q, lb)
+        qi, status = _ipopt(model, values, q, lb, warm=converged)
         if status == "Solve_Succeeded" and np.abs(qi - q).max() > 1e-8:
             notes.append(f"IPOPT moved the Newton solution by {np.abs(qi - q).max():.2e} rad")
         if status != "Solve_Succeeded":
@@ -407,38 +513,81 @@ def load_for_twist(model: Model3D, values: Mapping[str, float], load: str, q0, *
 
 
 def newton_kernel(model: Model3D, iterations: int = 3) -> ca.Function:
-    """One CasADi Function (q, p) -> (q after ``iterations`` full Newton steps, |gradient| there):
-    a warm solve in one call from Python (MX, the steps by a QR solve; no line search, so
+    """One CasADi Function (q, p) -> (q after ``iterations`` full Newton steps, |gradient| there), for any n:
+    a warm solve in one call from Python (MX, the steps by CasADi's sparse LDL^T of the symmetrised
+    Hessian; no line search, so
     :func:`warm3d` and :func:`follow3d` check the result and fall back to :func:`newton3d`)."""
     key = ("newton_kernel", iterations)
     found = model.registry.get(key)
     if found is None:
-        q = ca.MX.sym("q", model.size)
-        ps = ca.MX.sym("p", len(model.parameters))
-        args = ca.vertsplit(ps) if len(model.parameters) else []
+        N, npar = model.size, len(model.parameters)
+        qs, pss = ca.SX.sym("q", N), ca.SX.sym("p", npar)
+        sargs = ca.vertsplit(pss) if npar else []
+        hs = model.functions["hessian"](qs, *sargs)
+        # the gradient and the symmetrised Hessian in one SX Function: their common subexpressions once
+        gh = ca.Function("esba3d_gh", [qs, pss], [model.functions["gradient"](qs, *sargs), 0.5 * (hs + hs.T)], {"cse": True})
+        q, ps = ca.MX.sym("q", N), ca.MX.sym("p", npar)
         x = q
         for _ in range(iterations):
-            x = x - ca.solve(model.functions["hessian"](x, *args), model.functions["gradient"](x, *args), "qr")
-        g = model.functions["gradient"](x, *args)
+            g, h = gh(x, ps)
+            x = x - ca.solve(h, g, "ldl")
+        g = model.functions["gradient"](x, *(ca.vertsplit(ps) if npar else []))
         found = ca.Function("esba3d_newton", [q, ps], [x, ca.mmax(ca.fabs(g))])
         model.registry[key] = found
     return found
 
 
-def _kernel_step(model: Model3D, kernel: ca.Function, p: np.ndarray, q: np.ndarray, lb: np.ndarray) -> np.ndarray | None:
-    x, gn = kernel(q, p)
-    x = np.asarray(x).ravel()
-    if np.all(np.isfinite(x)) and np.all(x > lb) and float(gn) <= 1e-9 * max(1.0, float(np.abs(x).max())):
+def newton_steps(model: Model3D, iterations: int = 3):
+    """(q, p) -> (q after ``iterations`` full Newton steps, |gradient| there), as NumPy: up to
+    :data:`COMPILE_MAX_SEGMENTS` segments an SX Function of the dense unrolled LDL^T (a
+    :class:`esba.solvers.native.Kernel`, compiled to C once hot), beyond it :func:`newton_kernel`."""
+    if model.n > COMPILE_MAX_SEGMENTS:
+        fun = newton_kernel(model, iterations)
+        return lambda q, p: _mx_call(fun, q, p)
+    key = ("newton_steps", iterations)
+    kernel = model.registry.get(key)
+    if kernel is None:
+        N, npar = model.size, len(model.parameters)
+        q, ps = ca.SX.sym("q", N), ca.SX.sym("p", npar)
+        args = ca.vertsplit(ps) if npar else []
+        x = q
+        for _ in range(iterations):
+            h = model["hessian"](x, *args)
+            L, d = ldl_sx(0.5 * (h + h.T), N)
+            x = x - ldl_solve_sx(L, d, model["gradient"](x, *args), N)
+        g = model["gradient"](x, *args)
+        fun = ca.Function("esba3d_newton_steps", [q, ps], [x, ca.mmax(ca.fabs(g))], {"cse": True})
+        kernel = Kernel(packed(fun, "esba3d_newton_steps_packed"), "auto", model.n, HOT_RUNS)
+        model.registry[key] = kernel
+    N = model.size
+
+    def call(q, p):
+        out = kernel(np.concatenate([np.asarray(q, dtype=float).ravel(), np.asarray(p, dtype=float).ravel()]))
+        return out[:N], float(out[N])
+
+    return call
+
+
+def _mx_call(fun: ca.Function, q, p):
+    x, gn = fun(q, p)
+    return np.asarray(x).ravel(), float(gn)
+
+
+def _kernel_step(model: Model3D, step, p: np.ndarray, q: np.ndarray, lb: np.ndarray) -> np.ndarray | None:
+    """``step(q, p)`` (:func:`newton_steps`) accepted when its end is finite, inside the domain and stationary; else None."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        x, gn = step(q, p)
+    if np.all(np.isfinite(x)) and np.all(x > lb) and gn <= 1e-9 * max(1.0, float(np.abs(x).max())):
         return x
     return None
 
 
 @single_threaded
 def warm3d(model: Model3D, values: Mapping[str, float], q0) -> np.ndarray:
-    """The equilibrium near ``q0`` at ``values``: one call of :func:`newton_kernel`, checked, else
+    """The equilibrium near ``q0`` at ``values``: one call of :func:`newton_steps`, checked, else
     the damped :func:`newton3d` (a warm solve: no load history, no certificate)."""
     lb = _bounds(model, values)
-    x = _kernel_step(model, newton_kernel(model), model.param_vector(values), np.asarray(q0, dtype=float), lb)
+    x = _kernel_step(model, newton_steps(model), model.param_vector(values), np.asarray(q0, dtype=float), lb)
     if x is None:
         x, ok, _ = newton3d(model, values, q0, lb=lb)
         if not ok:
@@ -449,10 +598,10 @@ def warm3d(model: Model3D, values: Mapping[str, float], q0) -> np.ndarray:
 @single_threaded
 def follow3d(model: Model3D, values: Mapping[str, float], parameter: str, path, q0) -> np.ndarray:
     """The equilibria along ``path`` (values of ``parameter``) from ``q0``: natural continuation, one
-    call of :func:`newton_kernel` a point (checked: the gradient at the end and the domain), the
+    call of :func:`newton_steps` a point (checked: the gradient at the end and the domain), the
     damped :func:`newton3d` where that check fails. Returns the states, shape (len(path), 3n)."""
     vals = dict(values)
-    kernel = newton_kernel(model)
+    kernel = newton_steps(model)
     index = list(model.parameters).index(parameter)
     p = model.param_vector(vals)
     lb = _bounds(model, vals)

@@ -39,10 +39,11 @@ import numpy as np
 from esba.model.generated import domain_lower_bound
 from esba.model.spatial import Model3D
 from esba.paths.problem import OPEN_END_INSET, PathError
+from esba.solvers.dense import ldl_solve_sx, ldl_sx
 from esba.solvers.native import HOT_RUNS, Kernel, packed
 from esba.solvers.newton import bordered_layout
 
-from .spatial import SpatialError, _ipopt, load_names
+from .spatial import COMPILE_MAX_SEGMENTS, SpatialError, _ipopt, load_names
 
 __all__ = ["SpatialPathProblem", "PARAMETERS_3D"]
 
@@ -97,10 +98,6 @@ def _symbols(model: Model3D):
     return q, p, dp, model["gradient"](q, *args), model["hessian"](q, *args)
 
 
-#: Up to this segment count the 3-D path's g, H and dg/dlambda run compiled (C, a second of gcc at
-#: n = 3, cached); beyond it CasADi's interpreter runs them: gcc's time grows fast with the 3n x 3n
-#: Hessian (minutes at n = 8 on a busy machine) for a gain that a trace of tens of points never repays.
-COMPILE_MAX_SEGMENTS = 4
 
 
 def _kernel(model: Model3D, which: str) -> Kernel:
@@ -135,40 +132,6 @@ def _kernel(model: Model3D, which: str) -> Kernel:
         found = Kernel(packed(fun, f"{fun.name()}_packed"), mode, model.n, HOT_RUNS if mode == "auto" else 0)
         model.registry[key] = found
     return found
-
-
-def _ldl(h, N: int):
-    """LDL^T of a symmetric SX matrix without pivoting, unrolled: (L, d). Its pivots d have the
-    eigenvalues' signs (Sylvester's law) wherever the factorisation exists."""
-    L = [[None] * N for _ in range(N)]
-    d = [None] * N
-    for j in range(N):
-        dj = h[j, j]
-        for k in range(j):
-            dj = dj - L[j][k] * L[j][k] * d[k]
-        d[j] = dj
-        for i in range(j + 1, N):
-            v = h[i, j]
-            for k in range(j):
-                v = v - L[i][k] * L[j][k] * d[k]
-            L[i][j] = v / dj
-    return L, d
-
-
-def _ldl_solve(L, d, b, N: int):
-    y = [None] * N
-    for i in range(N):
-        v = b[i]
-        for k in range(i):
-            v = v - L[i][k] * y[k]
-        y[i] = v
-    x = [None] * N
-    for i in reversed(range(N)):
-        v = y[i] / d[i]
-        for k in range(i + 1, N):
-            v = v - L[k][i] * x[k]
-        x[i] = v
-    return ca.vertcat(*x)
 
 
 def _bordered_sx(problem: SpatialPathProblem) -> ca.Function:
@@ -210,21 +173,21 @@ def _bordered_sx(problem: SpatialPathProblem) -> ca.Function:
 
     q, p, g, h = terms(x0)
     gl = g_lambda(q, p)
-    Lf, d = _ldl(h, N)
+    Lf, d = ldl_sx(h, N)
     ct, cl = c[:N], c[N]
     r_c = ca.dot(c, x0) - c0
-    y = _ldl_solve(Lf, d, g, N)
-    zz = _ldl_solve(Lf, d, gl, N)
+    y = ldl_solve_sx(Lf, d, g, N)
+    zz = ldl_solve_sx(Lf, d, gl, N)
     dlam = (ca.dot(ct, y) - r_c) / (cl - ca.dot(ct, zz))
     dx = ca.vertcat(-y - zz * dlam, dlam)
     x1 = x0 + dx
     q1, p1, g1, h1 = terms(x1)
     gl1 = g_lambda(q1, p1)
-    L1, d1 = _ldl(h1, N)
+    L1, d1 = ldl_sx(h1, N)
     piv = ca.vertcat(*d1)
     scale = ca.mmax(ca.fabs(piv)) + 1e-300
     morse = ca.sum1(piv < -crit * scale)
-    u = -_ldl_solve(L1, d1, gl1, N)
+    u = -ldl_solve_sx(L1, d1, gl1, N)
     out = ca.vertcat(x1, ca.mmax(ca.fabs(g)), ca.mmax(ca.fabs(g1)), ca.fabs(r_c), ca.fabs(ca.dot(c, x1) - c0), ca.mmax(ca.fabs(dx)),
                      margin(q, p), margin(q1, p1), morse, ca.mmin(piv) / scale, ca.mmin(ca.fabs(piv)) / scale, scale, u, 1.0)
     return ca.Function("esba3d_bordered", [zin], [out], ["z"], ["out"], {"cse": True})
@@ -240,10 +203,10 @@ def _critical_sx(problem: SpatialPathProblem, iterations: int = 10) -> ca.Functi
     p = p0 + lam * dp
     h = model["hessian"](q, *ca.vertsplit(p))
     h = 0.5 * (h + h.T)
-    Lf, d = _ldl(h, N)
+    Lf, d = ldl_sx(h, N)
     v = v0 / ca.norm_2(v0)
     for _ in range(iterations):
-        w = _ldl_solve(Lf, d, v, N)
+        w = ldl_solve_sx(Lf, d, v, N)
         v = w / ca.norm_2(w)
     vf = ca.SX.sym("vf", N)
     mu_of = ca.dot(vf, ca.mtimes(h, vf))
