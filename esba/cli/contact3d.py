@@ -8,7 +8,7 @@ import sys
 
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
-__all__ = ["cmd_solve_contact3d"]
+__all__ = ["cmd_solve_contact3d", "cmd_equilibria_contact3d"]
 
 
 def _table(d: dict) -> str:
@@ -55,5 +55,33 @@ def cmd_solve_contact3d(args: argparse.Namespace, scene, section: dict, down, fi
     print_result(args, data, _table)
     if not result.ok:
         print(f"esba: solve not ok: {result.message or result.status}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _equilibria_table(d: dict) -> str:
+    lines = [f"scene: {d['scene']}", f"pressure: {d['pressure_mpa']:.7f} MPa; section EI_side {d['section_nmm2'].get('EI_side', float('nan')):.6g}, "
+             f"GJ {d['section_nmm2'].get('GJ', float('nan')):.6g} N mm^2",
+             f"method: {d['method']} ({d['free_equilibria']} free equilibria, {d['dropped']} dropped: no contact equilibrium reached from them)",
+             f"  {'#':>2}  {'stability':<9} {'bend':>8} {'side':>7} {'twist':>8} {'tip x, y, z mm':>26} {'energy N mm':>12}  contacts (where, force N)"]
+    for k, s in enumerate(d["states"], start=1):
+        bend, side, twist = sum(s["theta_deg"]), sum(s["psi_deg"]), sum(s["tau_deg"])
+        tip = ",".join(f"{v:>8.2f}" for v in s["tip_mm"])
+        where = "; ".join(f"{c['where']} {c['force_n']:.4f}" for c in s["contacts"]) or "none"
+        lines.append(f"  {k:>2}  {s['kkt']['stability']:<9} {bend:>8.2f} {side:>7.2f} {twist:>8.2f} {tip:>26} {s['energy_nmm']:>12.4f}  {where}")
+    lines.append("  (bend, side, twist: the sums of theta, psi and tau in degrees)")
+    return "\n".join(lines)
+
+
+def cmd_equilibria_contact3d(args: argparse.Namespace, scene, section: dict, down) -> int:
+    """``esba equilibria --3d`` on a scene with obstacles: esba.statics.contact.multistart.contact_equilibria3d."""
+    from esba.statics.contact.multistart import contact_equilibria3d
+
+    result = contact_equilibria3d(scene, section, gravity_direction=down, starts=args.starts)
+    data = result.to_dict()
+    data["scene"] = scene.describe()
+    print_result(args, data, _equilibria_table)
+    if not result.states:
+        print("esba: failed: no contact equilibrium found from the free 3-D equilibria", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK

@@ -22,8 +22,6 @@ def _cmd_equilibria(args: argparse.Namespace) -> int:
 
         if args.plot is not None or args.max_bend is not None:
             raise UsageError("--plot and --max-bend are not used with --3d (the 3-D search has no figure yet; its domain: docs/3d.md)")
-        if scene.obstacles:
-            raise UsageError("--3d: a scene with obstacles has no 3-D search yet; esba solve --3d solves it from rest (contact in 3-D)")
         return cmd_equilibria3d(args, scene)
     from .path3d import planar_only_flags
 

@@ -147,7 +147,8 @@ def _contact_path3d(args: argparse.Namespace, scene, out, plot) -> int:
 
 
 def cmd_equilibria3d(args: argparse.Namespace, scene) -> int:
-    """``esba equilibria --3d``: every 3-D equilibrium the search finds, certified and classified."""
+    """``esba equilibria --3d``: every 3-D equilibrium the search finds, certified and classified; with
+    obstacles, the contact equilibria reached from each (:func:`esba.cli.contact3d.cmd_equilibria_contact3d`)."""
     from esba.statics.spatial import SpatialError
     from esba.statics.spatial_search import search3d, search3d_table
 
@@ -155,6 +156,15 @@ def cmd_equilibria3d(args: argparse.Namespace, scene) -> int:
 
     section = _section_arg(args.section)
     down = gravity_direction_arg(args, scene)
+    if scene.obstacles:
+        if args.no_check:
+            raise UsageError("--no-check tunes the free search's completeness check; with obstacles the free 3-D search runs without it")
+        from .contact3d import cmd_equilibria_contact3d
+
+        try:
+            return cmd_equilibria_contact3d(args, scene, section, down)
+        except SpatialError as exc:
+            raise UsageError(str(exc)) from None
     try:
         result = search3d(scene, section, gravity_direction=down, starts=args.starts, check=not args.no_check)
     except SpatialError as exc:

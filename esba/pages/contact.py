@@ -236,7 +236,10 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         "`esba.statics.contact.sweeps.contact_path` follows the pressure or a prescribed tip coordinate. In 3-D, `esba solve",
         "--3d SCENE.toml` (`examples/finger_sphere3d.toml`) solves a scene with planar or 3-D obstacles (the section above).",
         "`esba path --3d SCENE.toml --to P` follows the pressure with 3-D obstacles in 31 points and locates the touches,",
-        "lift-offs, slides (onto the tip, across a joint) and where the contact branch is lost.",
+        "lift-offs, slides (onto the tip, across a joint) and where the contact branch is lost. `esba equilibria --3d",
+        "SCENE.toml` solves the 3-D contact problem from the load history's state and from every free 3-D equilibrium",
+        "(`esba.statics.contact.multistart.contact_equilibria3d`: a state that lay through a sphere may come out on its far",
+        "side, a constrained equilibrium all the same), each with its contacts and its stability on the constrained set.",
         "",
     ]
     return "\n".join(lines)

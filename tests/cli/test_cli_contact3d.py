@@ -84,3 +84,18 @@ def test_path_3d_with_obstacles_refuses_bad_input_in_one_line(tmp_path, capsys, 
     code, out, err = run(capsys, "path", "--3d", str(scene), *flags, "--no-out", "--no-plot")
     assert code == EXIT_USAGE
     assert message in err and len(err.strip().splitlines()) == 1 and out == ""
+
+
+def test_equilibria_3d_with_obstacles_lists_each_contact_equilibrium(tmp_path, capsys):
+    scene = tmp_path / "sphere.toml"
+    scene.write_text(SPHERE)
+    code, out, err = run(capsys, "equilibria", "--3d", str(scene), "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    assert d["three_d"] and d["free_equilibria"] >= 1 and d["states"]
+    first = d["states"][0]
+    assert first["kkt"]["stability"] == "stable" and [c["where"] for c in first["contacts"]] == ["inside segment 3"]
+    code, out, err = run(capsys, "equilibria", "--3d", str(scene))
+    assert code == EXIT_OK and "inside segment 3" in out and "bend, side, twist" in out
+    code, out, err = run(capsys, "equilibria", "--3d", str(scene), "--no-check")
+    assert code == EXIT_USAGE and err.count("\n") == 1 and "--no-check" in err

@@ -10,7 +10,7 @@ import pytest
 from esba.analysis.contact3d_cases import random_scene
 from esba.model.contact import Cylinder, HalfPlane, ObstacleError
 from esba.model.contact.spatial import Cylinder3D, Plane, Sphere, segment_points, symbolic_line
-from esba.model.scene import Payload, Scene, SceneError, scene_from_dict
+from esba.model.scene import MAIN_JOB, Payload, Scene, SceneError, scene_from_dict
 from esba.model.spatial import centreline3d
 from esba.statics.contact import solve_contact
 from esba.statics.contact.spatial import solve_contact3d
@@ -209,3 +209,36 @@ def test_a_3d_path_says_where_its_contact_branch_is_lost():
     k = last.kkt  # the last equilibrium is one, and nearly unstable
     assert k.stationarity <= KKT_STATIONARITY and k.complementarity <= KKT_COMPLEMENTARITY and k.min_gap >= KKT_GAP
     assert 0.0 < k.reduced_eigenvalues[0] < 0.1 * path.points[0].kkt.reduced_eigenvalues[0]
+
+
+#: Table 2's 2 N payload at a pressure between its folds: with the eccentric section the in-plane
+#: states are sideways-unstable and two mirror states, flipped and twisted, are stable
+FLIPPED = MAIN_JOB.replace(pressure=0.168)
+
+
+def test_3d_contact_equilibria_out_of_reach_are_the_free_3d_equilibria():
+    from esba.statics.contact.multistart import contact_equilibria3d
+    from esba.statics.spatial_search import search3d
+
+    free = search3d(FLIPPED, check=False)
+    r = contact_equilibria3d(FLIPPED.replace(obstacles=(Sphere(centre=(150.0, 0.0, 100.0), radius=8.0),)))
+    assert r.free_states == len(free.states) and r.dropped == 0 and len(r.states) == len(free.states)
+    for s in r.states:
+        assert s.contacts == () and s.success
+        assert min(np.max(np.abs(s.q - f.q)) for f in free.states) <= 1e-8
+    assert sorted(s.kkt.stability == "stable" for s in r.states) == sorted(f.stable for f in free.states)
+
+
+def test_3d_contact_equilibria_push_a_flipped_state_out_of_a_sphere_and_keep_its_mirror_free():
+    from esba.statics.contact.multistart import contact_equilibria3d
+
+    r = contact_equilibria3d(FLIPPED.replace(obstacles=(Sphere(centre=(74.54, -39.04, 70.0), radius=8.0),)))
+    stable = [s for s in r.states if s.kkt.stability == "stable"]
+    assert len(stable) == 2
+    touching = [s for s in stable if s.contacts]
+    clear = [s for s in stable if not s.contacts]
+    assert len(touching) == 1 and len(clear) == 1
+    _kkt_holds(touching[0])
+    assert touching[0].tip[2] > 0 > clear[0].tip[2]  # the state flipped towards the sphere rests on it
+    assert all(s.kkt.complementarity <= KKT_COMPLEMENTARITY and s.kkt.min_gap >= KKT_GAP for s in r.states)
+    assert [s.energy for s in r.states] == sorted(s.energy for s in r.states)
