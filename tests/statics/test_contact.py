@@ -72,6 +72,21 @@ def test_complementarity_on_random_scenes(seed):
         assert c.force >= 0 and abs(c.gap) <= 1e-7
 
 
+@pytest.mark.parametrize("n", [2, 3, 4, 5, 6, 7, 8])
+def test_the_readme_cylinder_is_solved_at_every_segment_count(n):
+    # the closest point on the touching segment used to cycle between passes (at n = 5 and 7, 0.3 MPa):
+    # the state constrained near the joint dipped into the cylinder half-way along the segment, and back
+    scene = Scene(segments=n, pressure=0.3, obstacles=(Cylinder(centre=(70.0, 45.0), radius=15.0),))
+    r = solve_contact(scene)
+    assert r.ok, r.message
+    k = r.kkt
+    assert k.stationarity <= KKT_STATIONARITY and k.complementarity <= KKT_COMPLEMENTARITY
+    assert k.min_force >= KKT_FORCE and k.min_gap >= KKT_GAP
+    q = surface_points(r.theta, 135.0, 0.0, np.tile(np.linspace(0, 1, 401), (n, 1)))
+    assert float(np.min(scene.obstacles[0].distance(q))) >= KKT_GAP
+    assert len(r.contacts) == 1 and 7.4 < r.contacts[0].force < 9.1
+
+
 def test_a_cylinder_out_of_reach_gives_the_free_solution():
     scene = Scene(segments=3, pressure=0.12, obstacles=(Cylinder(centre=(60.0, -150.0), radius=10.0),))
     r = solve_contact(scene)

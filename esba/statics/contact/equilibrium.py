@@ -369,6 +369,7 @@ class ContactProblem:
         sigma, _ = _closest(self.scene, theta0, self.offsets)
         theta, lam = theta0, lam_g0
         iterations, status, success = 0, "", False
+        prev_sigma, prev_step = sigma.copy(), np.zeros_like(sigma)
         for outer in range(1, opts.max_outer + 1):
             solver = self.nlp.warm_solver if lam is not None else self.nlp.solver
             x0 = np.maximum(theta, lbx + 1e-9 * np.maximum(1.0, np.abs(lbx)))
@@ -398,8 +399,24 @@ class ContactProblem:
             polished = _newton(self, pv, theta, forces, sigma, lbx, steps=20)
             if polished[3]:
                 return (*polished[:3], status, success, iterations, outer)
-            sigma = new
+            sigma, prev_sigma, prev_step = next_fractions(sigma, new, prev_sigma, prev_step, near), sigma, new - sigma
         return theta, lam, sigma, "Closest_Points_Not_Converged", False, iterations, opts.max_outer
+
+
+def next_fractions(sigma: np.ndarray, new: np.ndarray, prev_sigma: np.ndarray, prev_step: np.ndarray, near: np.ndarray) -> np.ndarray:
+    """The closest-point fractions of the next outer pass: ``new``, except for a point near contact
+    that turned back (its move against the last one): the closest point of the state constrained at
+    one fraction lies beyond the other and back, so the fixed point of sigma -> closest(sigma) lies
+    between them, and the secant of closest(sigma) - sigma through the last two passes finds it
+    (without it the passes cycle; the 3-D contact solve, :mod:`esba.statics.contact.spatial`, takes it too)."""
+    step = new - sigma
+    flip = near & (step * prev_step < 0)
+    if not flip.any():
+        return new
+    with np.errstate(divide="ignore", invalid="ignore"):
+        secant = sigma - step * (sigma - prev_sigma) / np.where(flip, step - prev_step, 1.0)
+    lo, hi = np.minimum(sigma, prev_sigma), np.maximum(sigma, prev_sigma)
+    return np.where(flip & np.isfinite(secant), np.clip(secant, lo, hi), new)
 
 
 def _envelope_curvature(prob: ContactProblem, theta: np.ndarray, p: np.ndarray, force: np.ndarray, active: np.ndarray) -> np.ndarray:

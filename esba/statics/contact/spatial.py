@@ -66,7 +66,7 @@ from esba.model.scene import Scene, SceneError
 from esba.model.spatial import Model3D, centreline3d, load_model3d
 from esba.model.stability import stability_verdict
 
-from .equilibrium import KKT, ContactOptions, ContactOptionsError
+from .equilibrium import KKT, ContactOptions, ContactOptionsError, next_fractions
 
 __all__ = ["Contact3D", "ContactEquilibrium3D", "ContactProblem3D", "solve_contact3d", "DEFAULT_CONTACT_3D"]
 
@@ -493,10 +493,7 @@ def _stage(prob: ContactProblem3D, pv: np.ndarray, q0: np.ndarray, force0: np.nd
         # beyond b, and that of b back before a): the fixed point of sigma -> closest(sigma) lies between,
         # and the secant of closest(sigma) - sigma through the last two passes finds it
         step = new - sigma
-        flip = inside & interior & prev_int & (step * prev_step < 0)
-        secant = sigma - step * (sigma - prev_sigma) / np.where(flip, step - prev_step, 1.0)
-        lo, hi = np.minimum(sigma, prev_sigma), np.maximum(sigma, prev_sigma)
-        nxt = np.where(flip, np.clip(secant, lo, hi), new)
+        nxt = next_fractions(sigma, new, prev_sigma, prev_step, inside & interior & prev_int)
         prev_sigma, prev_step, prev_int = sigma, step, inside & interior
         sigma, interior = nxt, inside
     return q, -lam, sigma, interior, "Closest_Points_Not_Converged", False, iterations, opts.max_outer
