@@ -14,7 +14,8 @@ The planar machinery (:mod:`esba.calibration.uncertainty`) on the 3-D model (:mo
   sideways buckling point; ``beyond_linear_range`` when 3 sigma reaches one, by the planar rules.
 - **Monte Carlo** (:func:`monte_carlo3d`): the planar Monte Carlo's samples, drawn up front from one
   seeded generator (:func:`esba.calibration.uncertainty.draw_samples`), each solved on its own along
-  its load history (:func:`esba.statics.spatial.solve3d`: inflate, then raise the loads; no warm
+  its load history (:func:`esba.statics.spatial.solve3d`: inflate, then raise the loads, and past a
+  sideways branch point down to the stable state below, as the nominal solve; no warm
   start from another sample), in chunks through :func:`esba.calibration.uncertainty.run_samples`.
   A sample's answer depends on its parameters alone, so any chunking, any order and any runner
   (in this process or on Dask, :mod:`esba.studies.monte_carlo`) give the same numbers, bit for bit.
@@ -200,7 +201,7 @@ def solve_samples3d(base: Scene, section: Mapping[str, float], gravity_direction
         except SceneError:
             continue
         effects, vals = scene_values3d(scene, sec, gravity_direction)
-        eq = solve3d(load_model3d(n, effects, scene.variant), vals, certify=False)
+        eq = solve3d(load_model3d(n, effects, scene.variant), vals, certify=False, descend=True)
         pressure[i] = vals["P"]
         code[i] = SAMPLE_OK if eq.ok else SAMPLE_NOT_OK
         if eq.ok:

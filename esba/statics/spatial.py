@@ -31,7 +31,7 @@ from esba.solvers.minimise import WARM_MU_INIT
 from esba.solvers.native import HOT_RUNS, Kernel, packed
 from esba.solvers.newton import ACCEPTANCE, FINAL, NEWTON, STEPS, natural_expression
 
-__all__ = ["Equilibrium3D", "newton3d", "solve3d", "load_names", "ramp_kernel", "newton_kernel", "newton_steps", "COMPILE_MAX_SEGMENTS"]
+__all__ = ["Equilibrium3D", "newton3d", "solve3d", "descend3d", "load_names", "ramp_kernel", "newton_kernel", "newton_steps", "COMPILE_MAX_SEGMENTS"]
 
 #: Up to this segment count the 3-D kernels (a solve's ramp, a path's g, H and corrector) are
 #: dense SX Functions compiled to C once hot (a second of gcc at n = 3, cached); beyond it the
@@ -234,10 +234,15 @@ def _fast_ramp(model: Model3D, values: Mapping[str, float], loads: list[str], lb
 
 
 @single_threaded
-def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int = 4, certify: bool = True) -> Equilibrium3D:
+def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int = 4, certify: bool = True,
+            descend: bool = False) -> Equilibrium3D:
     """The equilibrium of ``model`` at ``values`` along the load history (see the module's doc).
 
     ``q0``: a warm start, solved at the full load directly (no history).
+    ``descend``: where the load history ends on an unstable state (it passed a sideways branch point,
+    where the in-plane state stays an equilibrium by symmetry but stops being a minimum, or a fold),
+    go on as the loaded actuator would: down the unstable mode to the stable state below it
+    (:func:`descend3d`), and say so in ``notes``. Without it the unstable state is returned, marked.
     """
     values = dict(values)
     lb = _bounds(model, values)
@@ -283,8 +288,59 @@ def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int 
             notes.append(f"IPOPT: {status}")
     h = model.hessian(q, values)
     w, V = np.linalg.eigh(h)
+    if descend and q0 is None and converged and not w[0] > 0:
+        below = descend3d(model, values, q, lb)
+        if below is not None:
+            q, why = below
+            notes.append(why)
+            gn = float(np.abs(model.gradient(q, values)).max())
+            if certify:
+                qi, status = _ipopt(model, values, q, lb, warm=True)
+                if status == "Solve_Succeeded" and np.abs(qi - q).max() > 1e-8:
+                    notes.append(f"IPOPT moved the Newton solution by {np.abs(qi - q).max():.2e} rad")
+                if status != "Solve_Succeeded":
+                    notes.append(f"IPOPT: {status}")
+            w, V = np.linalg.eigh(model.hessian(q, values))
     tip, rot, _ = model.pose(q, values["L"])
     return Equilibrium3D(q, model.n, converged, bool(w[0] > 0), float(w[0]), V[:, 0], gn, status, tip, rot, notes)
+
+
+#: How far (rad, the largest joint rotation) :func:`descend3d` first steps off an unstable state along
+#: each of its unstable modes, both ways.
+DESCENT_STEP = 0.05
+
+
+def descend3d(model: Model3D, values: Mapping[str, float], q: np.ndarray, lb: np.ndarray | None = None) -> tuple[np.ndarray, str] | None:
+    """The stable state below the unstable equilibrium ``q``: damped Newton (:func:`newton3d`, which
+    goes down in energy) from ``q`` moved by :data:`DESCENT_STEP` along each unstable mode of the
+    Hessian, both ways; the stable state of least energy, with a note saying what was done, or None
+    when none is found. Of two mirror states (equal energy: loads in the bending plane, where the
+    sideways bend and twist can go either way) it takes the one along the mode's sign with its largest
+    component positive, so the same scene always gives the same state."""
+    lb = _bounds(model, values) if lb is None else lb
+    w, V = np.linalg.eigh(model.hessian(q, values))
+    unstable = np.flatnonzero(w < 0)
+    if unstable.size == 0:
+        return None
+    u0 = model.energy(q, values)
+    found: list[tuple[float, int, np.ndarray]] = []
+    for order, (k, sign) in enumerate((k, sign) for k in unstable[:2] for sign in (1.0, -1.0)):
+        v = V[:, k] * (1.0 if V[np.argmax(np.abs(V[:, k])), k] > 0 else -1.0)
+        start = q + sign * DESCENT_STEP * v / float(np.abs(v).max())
+        if not np.all(start > lb):
+            continue
+        x, ok, _ = newton3d(model, values, start, lb=lb)
+        if ok and np.linalg.eigvalsh(model.hessian(x, values))[0] > 0:
+            found.append((model.energy(x, values), order, x))
+    if not found:
+        return None
+    least = min(u for u, _, _ in found)
+    ties = [f for f in found if f[0] - least <= 1e-9 * max(1.0, abs(least))]
+    u, _, x = min(ties, key=lambda f: f[1])
+    mirror = any(np.abs(f[2] - x).max() > 1e-6 for f in ties)
+    return x, (f"the load history ends on an unstable state (least eigenvalue {w[0]:.4g}: past a sideways branch point or a fold, "
+               f"energy {u0:.6g} N mm); the solve went on down its unstable mode to the stable state below it (energy {u:.6g} N mm)"
+               + ("; it is one of two mirror states of equal energy (the other bends and twists the other way)" if mirror else ""))
 
 
 def fold3d(model: Model3D, values: Mapping[str, float], parameter: str, q0, *, max_iter: int = 80, tol: float = 1e-11) -> tuple[float, np.ndarray, np.ndarray]:
@@ -404,14 +460,16 @@ def scene_values3d(scene, section: Mapping[str, float] | None = None, gravity_di
     return effects, values
 
 
-def solve_scene3d(scene, section: Mapping[str, float] | None = None, *, gravity_direction=(1.0, 0.0, 0.0), steps: int = 4) -> Equilibrium3D:
+def solve_scene3d(scene, section: Mapping[str, float] | None = None, *, gravity_direction=(1.0, 0.0, 0.0), steps: int = 4,
+                  descend: bool = True) -> Equilibrium3D:
     """The 3-D equilibrium of ``scene`` (its payloads may point out of the bending plane; its weight
-    along ``gravity_direction``)."""
+    along ``gravity_direction``) that its load history reaches: past a sideways branch point or a fold,
+    the stable state below the unstable one (``descend``, :func:`solve3d`)."""
     from esba.model.spatial import load_model3d
 
     effects, values = scene_values3d(scene, section, gravity_direction)
     model = load_model3d(scene.segments, effects, scene.variant)
-    return solve3d(model, values, steps=steps)
+    return solve3d(model, values, steps=steps, descend=descend)
 
 
 def tip_jacobian(model: Model3D, q, L: float, step: float = 1e-7) -> np.ndarray:

@@ -188,7 +188,7 @@ def solve_points3d(plan: Sweep3DPlan, start: int, stop: int) -> list[dict[str, A
             continue
         effects, values = scene_values3d(scene, section)
         model = load_model3d(n, effects, scene.variant)
-        eq = solve3d(model, values, certify=False)
+        eq = solve3d(model, values, certify=False, descend=True)
         status = "ok" if eq.ok else "not ok"
         why = "" if eq.ok else ("not converged" if not eq.converged else "unstable: the 3n x 3n Hessian is not positive definite")
         q = np.degrees(eq.q)

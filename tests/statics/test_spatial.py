@@ -141,3 +141,21 @@ def test_equilibria_in_3d_find_the_mirror_pair_the_soft_finger_swings_to():
     assert len(planar) == 1 and planar[0].morse_index > 0 and planar[0].energy > low[0].energy
     with pytest.raises(SpatialError, match="only for loads in the bending plane"):
         equilibria3d(MAIN_JOB.replace(payloads=(MAIN_JOB.payloads[0].__class__(2.0, 90.0, 1.0, 10.0),)), {"EI_side": 1.0, "GJ": 1.0})
+
+
+def test_the_load_history_goes_on_past_a_sideways_branch_point_to_a_stable_flipped_state():
+    # Table 2 on the eccentric section: the in-plane state is past its sideways branch point (0.72 N)
+    from esba.model.scene import MAIN_JOB
+    from esba.statics.equilibrium import solve
+    from esba.statics.spatial import solve_scene3d
+
+    scene = MAIN_JOB.replace(pressure=solve(MAIN_JOB).pressure)
+    held = solve_scene3d(scene, descend=False)
+    assert held.converged and not held.stable and np.abs(held.q[scene.segments:]).max() == 0.0
+    r = solve_scene3d(scene)
+    assert r.converged and r.stable and r.ipopt_status == "Solve_Succeeded" and r.gradient_norm < 1e-8
+    assert any("down its unstable mode" in note and "mirror" in note for note in r.notes)
+    twist = np.degrees(np.sum(r.tau))
+    assert abs(twist) > 100.0 and abs(np.degrees(np.sum(r.theta)) - 95.1) < 0.1
+    again = solve_scene3d(scene)
+    assert np.array_equal(again.q, r.q)  # the same mirror state every time
