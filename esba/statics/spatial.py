@@ -17,6 +17,7 @@ positive definite), and its smallest eigenvalue and its mode.
 from __future__ import annotations
 
 import dataclasses
+import re
 from dataclasses import dataclass, field
 from typing import Mapping
 
@@ -245,6 +246,7 @@ def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int 
     (:func:`descend3d`), and say so in ``notes``. Without it the unstable state is returned, marked.
     """
     values = dict(values)
+    _check_loads(model, values)
     lb = _bounds(model, values)
     notes: list[str] = []
     fast = None
@@ -303,6 +305,25 @@ def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int 
             w, V = np.linalg.eigh(model.hessian(q, values))
     tip, rot, _ = model.pose(q, values["L"])
     return Equilibrium3D(q, model.n, converged, bool(w[0] > 0), float(w[0]), V[:, 0], gn, status, tip, rot, notes)
+
+
+#: A load's magnitude in a parameter dict: a payload's force, a joint moment's or a couple's component.
+_LOAD_KEY = re.compile(r"^(F|mx|my|mz|cx|cy|cz)\d+$")
+
+
+def _check_loads(model: Model3D, values: Mapping[str, float]) -> None:
+    """Refuse, in one line, a nonzero load in ``values`` that ``model`` does not carry (it would be
+    dropped without a word: a moment given to a model generated without one, a second payload)."""
+    for k, v in values.items():
+        if k not in model.parameters and _LOAD_KEY.match(str(k)):
+            try:
+                zero = float(v) == 0.0
+            except (TypeError, ValueError):
+                zero = False
+            if not zero:
+                carried = [p for p in model.parameters if _LOAD_KEY.match(p)] or ["none"]
+                raise SpatialError(f"{k}={v!r}: a load that model {model.path.name} does not carry (its loads: {', '.join(carried)}); "
+                                   "generate a model with it (esba.model.spatial.load_model3d with its effects)")
 
 
 #: How far (rad, the largest joint rotation) :func:`descend3d` first steps off an unstable state along

@@ -145,8 +145,6 @@ def test_equilibria_in_3d_find_the_mirror_pair_the_soft_finger_swings_to():
 
 def test_the_load_history_goes_on_past_a_sideways_branch_point_to_a_stable_flipped_state():
     # Table 2 on the eccentric section: the in-plane state is past its sideways branch point (0.72 N)
-    from esba.model.scene import MAIN_JOB
-    from esba.statics.equilibrium import solve
     from esba.statics.spatial import solve_scene3d
 
     scene = MAIN_JOB.replace(pressure=solve(MAIN_JOB).pressure)
@@ -159,3 +157,16 @@ def test_the_load_history_goes_on_past_a_sideways_branch_point_to_a_stable_flipp
     assert abs(twist) > 100.0 and abs(np.degrees(np.sum(r.theta)) - 95.1) < 0.1
     again = solve_scene3d(scene)
     assert np.array_equal(again.q, r.q)  # the same mirror state every time
+
+
+def test_a_load_the_model_does_not_carry_is_refused_in_one_line():
+    from esba.statics.spatial import SpatialError
+
+    model = load_model3d(3)
+    values = {**MAIN_JOB.parameters(0.12), "EI_side": 4e5, "GJ": 1e6, "Beta1": 0.0}
+    with pytest.raises(SpatialError, match=r"^mz1=5\.0: a load that model .* does not carry \(its loads: F1\)") as info:
+        solve3d(model, {**values, "mz1": 5.0})
+    assert "\n" not in str(info.value)
+    with pytest.raises(SpatialError, match="F2=1.0"):
+        solve3d(model, {**values, "F2": 1.0})
+    assert solve3d(model, {**values, "mz1": 0.0}).stable  # a zero load is no load
