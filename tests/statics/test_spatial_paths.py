@@ -133,3 +133,21 @@ def test_the_dense_critical_kernel_takes_the_parameters_of_its_call():
         assert np.allclose(shared, mine, rtol=1e-12, atol=1e-12)
         w = np.linalg.eigvalsh(prob.ghl(q, 0.15)[1])
         assert mine[3 * n] == pytest.approx(w[np.argmin(np.abs(w))], rel=1e-10)
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_the_column_buckles_in_3d_at_the_planar_load_and_in_the_plane(n):
+    # issue 26: the planar column's buckling load reproduced by the 3-D model (a section stiff sideways)
+    from esba.paths.problem import PathProblem
+
+    f_cr = 3.23742997 if n == 3 else None
+    scene = Scene(pressure=0.0, payloads=(Payload(1.0, 180.0),), segments=n)
+    planar = PathProblem.from_scene(scene, "payload")
+    (p_bp,) = trace(planar, np.zeros(n), 1.0, to=6.0).branch_points
+    spatial = SpatialPathProblem.from_scene(scene, "payload", {"EI_side": 4e5, "GJ": 1e6})
+    (s_bp,) = trace(spatial, np.zeros(3 * n), 1.0, to=6.0).branch_points
+    assert p_bp.status == s_bp.status == "converged"
+    assert abs(s_bp.lam - p_bp.lam) <= 1e-10 * p_bp.lam
+    assert np.abs(s_bp.eigenvector[n:]).max() < 1e-8  # the buckling mode lies in the bending plane
+    if f_cr is not None:
+        assert abs(s_bp.lam - f_cr) < 1e-7
