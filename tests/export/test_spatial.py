@@ -330,3 +330,18 @@ def test_batch3d_check_is_the_models_gradient_and_hessian():
     assert np.array_equal(stable[:-1], smallest > 0)
     assert np.allclose(gn[:-1], grad, rtol=1e-12, atol=1e-10)
     assert gn[-1] == np.inf and not stable[-1]
+
+
+@pytest.mark.parametrize("pressure, force, omega_deg, at", [(0.12387387453222129, 2.0, 90.0, 1.0), (0.2, 1.0, 45.0, 0.7), (0.05, 0.5, 200.0, 1.0)])
+def test_in_plane_loads_give_the_planar_equilibrium(build, pressure, force, omega_deg, at):
+    # issue 28: the 3-D export reduces to today's planar answer for in-plane loads, to 1e-10 (a stiff section)
+    from esba.model.scene import Payload, Scene
+    from esba.statics.equilibrium import solve
+
+    _, lib = build(3)
+    planar = solve(Scene(pressure=pressure, payloads=(Payload(force, omega_deg, at),)))
+    assert planar.ok
+    r = lib.equilibrium({**TABLE1, "EI_side": 4e5, "GJ": 1e6}, loads3d(pressure, [(force, math.radians(omega_deg), 0.0, at)]))
+    assert r.status_name == "ok"
+    assert np.abs(r.q[:3] - planar.theta).max() <= 1e-10
+    assert np.abs(r.q[3:]).max() == 0.0  # no sideways bend, no twist
