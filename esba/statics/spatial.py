@@ -281,13 +281,7 @@ def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int 
         q = np.array(q0, dtype=float)
     if fast is None:
         q, converged, gn = newton3d(model, values, q, lb=lb)
-    status = "not run"
-    if certify:
-        qi, status = _ipopt(model, values, q, lb, warm=converged)
-        if status == "Solve_Succeeded" and np.abs(qi - q).max() > 1e-8:
-            notes.append(f"IPOPT moved the Newton solution by {np.abs(qi - q).max():.2e} rad")
-        if status != "Solve_Succeeded":
-            notes.append(f"IPOPT: {status}")
+    status = _certify(model, values, q, lb, converged, notes) if certify else "not run"
     h = model.hessian(q, values)
     w, V = np.linalg.eigh(h)
     if descend and q0 is None and converged and not w[0] > 0:
@@ -297,14 +291,20 @@ def solve3d(model: Model3D, values: Mapping[str, float], *, q0=None, steps: int 
             notes.append(why)
             gn = float(np.abs(model.gradient(q, values)).max())
             if certify:
-                qi, status = _ipopt(model, values, q, lb, warm=True)
-                if status == "Solve_Succeeded" and np.abs(qi - q).max() > 1e-8:
-                    notes.append(f"IPOPT moved the Newton solution by {np.abs(qi - q).max():.2e} rad")
-                if status != "Solve_Succeeded":
-                    notes.append(f"IPOPT: {status}")
+                status = _certify(model, values, q, lb, True, notes)
             w, V = np.linalg.eigh(model.hessian(q, values))
     tip, rot, _ = model.pose(q, values["L"])
     return Equilibrium3D(q, model.n, converged, bool(w[0] > 0), float(w[0]), V[:, 0], gn, status, tip, rot, notes)
+
+
+def _certify(model: Model3D, values, q, lb, warm: bool, notes: list[str]) -> str:
+    """IPOPT's certificate of the minimiser ``q`` (its return status); what it says against ``q`` goes to ``notes``."""
+    qi, status = _ipopt(model, values, q, lb, warm=warm)
+    if status == "Solve_Succeeded" and np.abs(qi - q).max() > 1e-8:
+        notes.append(f"IPOPT moved the Newton solution by {np.abs(qi - q).max():.2e} rad")
+    if status != "Solve_Succeeded":
+        notes.append(f"IPOPT: {status}")
+    return status
 
 
 #: A load's magnitude in a parameter dict: a payload's force, a joint moment's or a couple's component.
