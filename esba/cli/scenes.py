@@ -23,6 +23,7 @@ from .arguments import (
     scene_from_args,
 )
 from .cluster import add_cluster_flags, chunk_arg, on_cluster, study_stopped
+from .path3d import gravity_direction_arg, planar_only_flags
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
 
 #: Where ``esba solve`` writes its figure when no scene file is given and no --plot.
@@ -49,45 +50,14 @@ def _section_arg(items: list[str] | None) -> dict[str, float]:
         raise UsageError(f"--section: {exc}") from None
 
 
-def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
-    """``esba solve --3d``: the spatial model (docs/3d.md), its sensitivities and uncertainty (first
-    order and Monte Carlo, in this process or on Dask, streamed to a resumable sample file)."""
+def _solved3d(scene, section: dict[str, float], down) -> tuple:
+    """The 3-D equilibrium of ``scene`` (:func:`esba.statics.spatial.solve_scene3d`), its model, its
+    parameter values and the JSON that ``esba solve --3d`` and ``esba stiffness --3d`` share."""
     import numpy as np
 
     from esba.model.spatial import load_model3d
-    from esba.statics.spatial import SpatialError, check_direction, check_section, scene_values3d, solve_scene3d, tip_compliance
+    from esba.statics.spatial import scene_values3d, solve_scene3d
 
-    refuse(args, ["history"], "with --3d (the 3-D solve has none yet)")
-    section = _section_arg(args.section)
-    if scene.obstacles:
-        refuse(args, ["monte_carlo", "sigma", "sensitivities"], "with obstacles in 3-D (contact has no uncertainty yet)")
-    try:
-        full_section = check_section(section, scene)
-    except SpatialError as exc:
-        raise UsageError(f"--section: {exc}") from None
-    sigmas, mc_options, chunked = _uncertainty_args(args, scene, full_section)
-    down = (1.0, 0.0, 0.0)
-    if args.gravity_direction is not None:
-        try:
-            parts = [float(v) for v in args.gravity_direction.split(",")]
-        except ValueError:
-            raise UsageError(f"--gravity-direction {args.gravity_direction!r}: expected X,Y,Z, three numbers of the base frame") from None
-        try:
-            down = tuple(check_direction("--gravity-direction", parts))
-        except SpatialError as exc:
-            raise UsageError(str(exc)) from None
-        if not scene.gravity:
-            raise UsageError("--gravity-direction turns the weight: give --gravity (or gravity = true in the scene file)")
-    if args.no_plot and args.plot is not None:
-        raise UsageError("--plot and --no-plot: give one of the two")
-    figure = outputs.figure_file(args.plot, "--plot", "esba-solve3d.png") if args.plot is not None else None  # checked first
-    page = outputs.check_file(args.html, "--html", (".html",)) if args.html is not None else None
-    if scene.obstacles:  # contact in 3-D (esba/cli/contact3d.py)
-        if page is not None:
-            raise UsageError("--html: not for a scene with obstacles yet; --plot FILE draws it")
-        from .contact3d import cmd_solve_contact3d
-
-        return cmd_solve_contact3d(args, scene, section, down, figure)
     result = solve_scene3d(scene, section, gravity_direction=down)
     effects, values = scene_values3d(scene, section, down)
     model = load_model3d(scene.segments, effects, scene.variant)
@@ -106,9 +76,42 @@ def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
         "section_from": "given" if len(section) == 2 else ("the eccentric section (esba section)" if not section else "given in part, the rest from the eccentric section (esba section)"),
         "notes": result.notes,
     }
+    return result, model, values, data
+
+
+def _cmd_solve3d(args: argparse.Namespace, scene) -> int:
+    """``esba solve --3d``: the spatial model (docs/3d.md), its sensitivities and uncertainty (first
+    order and Monte Carlo, in this process or on Dask, streamed to a resumable sample file)."""
+    import numpy as np
+
+    from esba.statics.spatial import SpatialError, check_section
+
+    refuse(args, ["history"], "with --3d (the 3-D solve has none yet)")
+    section = _section_arg(args.section)
+    if scene.obstacles:
+        refuse(args, ["monte_carlo", "sigma", "sensitivities"], "with obstacles in 3-D (contact has no uncertainty yet)")
+    try:
+        full_section = check_section(section, scene)
+    except SpatialError as exc:
+        raise UsageError(f"--section: {exc}") from None
+    sigmas, mc_options, chunked = _uncertainty_args(args, scene, full_section)
+    down = gravity_direction_arg(args, scene)
+    if args.no_plot and args.plot is not None:
+        raise UsageError("--plot and --no-plot: give one of the two")
+    figure = outputs.figure_file(args.plot, "--plot", "esba-solve3d.png") if args.plot is not None else None  # checked first
+    page = outputs.check_file(args.html, "--html", (".html",)) if args.html is not None else None
+    if scene.obstacles:  # contact in 3-D (esba/cli/contact3d.py)
+        if page is not None:
+            raise UsageError("--html: not for a scene with obstacles yet; --plot FILE draws it")
+        from .contact3d import cmd_solve_contact3d
+
+        return cmd_solve_contact3d(args, scene, section, down, figure)
+    result, model, values, data = _solved3d(scene, section, down)
     if result.stable:
-        C, _ = tip_compliance(model, values, result.q)
-        data["tip_compliance"] = C.tolist()
+        from esba.analysis.stiffness3d import tip_stiffness3d
+
+        tip = tip_stiffness3d(model, values, result).to_dict()
+        data.update({key: tip[key] for key in ("tip_compliance", "tip_stiffness")}, tip_matrices={key: tip[key] for key in ("order", "units")})
     if args.sensitivities:
         from esba.analysis.sensitivity3d import sensitivities3d
 
@@ -411,16 +414,43 @@ def add_solve(sub) -> None:
     p.set_defaults(func=_cmd_solve)
 
 
+def _cmd_stiffness3d(args: argparse.Namespace, scene) -> int:
+    """``esba stiffness --3d``: the tip's 6 x 6 stiffness and compliance at the 3-D state the scene's
+    loads reach (:mod:`esba.analysis.stiffness3d`)."""
+    from esba.analysis.stiffness3d import stiffness3d_table, tip_stiffness3d
+    from esba.model.scene import Payload
+
+    if scene.obstacles:
+        raise UsageError(f"{args.scene}: a scene with obstacles has no free tip stiffness; esba stiffness --3d is for a free actuator")
+    if args.payload is not None:
+        if len(args.payload) > 1:
+            raise UsageError(f"--payload given {len(args.payload)} times: with --3d it is the one tip payload of the state (N); put several in a scene file")
+        scene = scene.replace(payloads=(Payload(args.payload[0], 90.0 if args.payload_angle is None else args.payload_angle),))
+    elif args.payload_angle is not None:
+        raise UsageError("--payload-angle with --3d turns the tip payload of --payload N: give --payload too (or set angle_deg in the scene file)")
+    section = _section_arg(args.section)
+    down = gravity_direction_arg(args, scene)
+    result, model, values, data = _solved3d(scene, section, down)
+    data.update(tip_stiffness3d(model, values, result).to_dict())
+    print_result(args, data, stiffness3d_table)
+    if not data["stable"] or not result.converged:
+        print(f"esba: stiffness not ok: {data['reason'] or 'the 3-D solve did not converge'}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
 def _cmd_stiffness(args: argparse.Namespace) -> int:
-    from esba.analysis.stiffness import stiffness_table
-    from esba.analysis.stiffness import PAPER_FORCES, secant_stiffness
+    from esba.analysis.stiffness import PAPER_FORCES, secant_stiffness, stiffness_table
     from esba.model.scene import SceneError
     from esba.statics.equilibrium import EquilibriumError
 
     scene = scene_from_args(args, payloads=False)
+    if args.three_d or scene.needs_3d:
+        return _cmd_stiffness3d(args, scene)
+    planar_only_flags(args, scene, "esba stiffness")
     forces = tuple(args.payload) if args.payload else PAPER_FORCES
     try:
-        result = secant_stiffness(scene, forces, angle_deg=args.payload_angle)
+        result = secant_stiffness(scene, forces, angle_deg=90.0 if args.payload_angle is None else args.payload_angle)
     except SceneError as exc:
         raise UsageError(str(exc)) from None
     except EquilibriumError as exc:
@@ -436,10 +466,15 @@ def _cmd_stiffness(args: argparse.Namespace) -> int:
 
 
 def add_stiffness(sub) -> None:
-    p = sub.add_parser("stiffness", help="secant stiffness of the tip (Section 4.4.3) and its tangent matrix")
+    p = sub.add_parser("stiffness", help="secant stiffness of the tip (Section 4.4.3) and its tangent matrix; with --3d the tip's 6 x 6 stiffness and compliance")
     add_scene_flags(p, payloads=False)
-    p.add_argument("--payload", type=float_arg, action="append", metavar="N", help="tip payload in N (repeatable; default 0.5, 1, 2)")
-    p.add_argument("--payload-angle", type=float_arg, default=90.0, metavar="DEG", help="direction Omega of the payload (default 90, horizontal)")
+    p.add_argument("--payload", type=float_arg, action="append", metavar="N",
+                   help="tip payload in N (repeatable; default 0.5, 1, 2); with --3d once: the tip payload of the state (replaces the scene's)")
+    p.add_argument("--payload-angle", type=float_arg, default=None, metavar="DEG", help="direction Omega of the payload (default 90, horizontal)")
+    p.add_argument("--3d", dest="three_d", action="store_true",
+                   help="the 3-D model's 6 x 6 tip stiffness and compliance at the state the scene's loads reach (chosen by itself for a scene that needs it; docs/3d.md)")
+    p.add_argument("--section", action="append", metavar="NAME=VALUE", help="with --3d: section stiffness EI_side=..., GJ=... (N*mm^2; repeatable; default the eccentric section's)")
+    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (default 1,0,0: down, the paper's)")
     p.set_defaults(func=_cmd_stiffness)
 
 

@@ -208,3 +208,56 @@ def test_bad_moments_are_refused_in_one_line(capsys, args, message):
     code, out, err = run(capsys, *args)
     assert code == EXIT_USAGE and out == ""
     assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_stiffness_3d_is_the_inverse_of_the_compliance_and_its_plane_block_the_planar_stiffness(capsys):
+    from esba.analysis.stiffness import tangent_stiffness
+
+    code, out, err = run(capsys, "stiffness", "--3d", *SECTION, "--json")
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    K, C = np.array(d["tip_stiffness"]), np.array(d["tip_compliance"])
+    assert d["stable"] and d["coordinates"] == ["x", "y", "z", "rot_x", "rot_y", "rot_z"]
+    assert np.abs(K @ C - np.eye(6)).max() < 1e-9 and np.allclose(K, K.T, rtol=0, atol=1e-12 * np.abs(K).max())
+    plane = [0, 1, 5]  # x, y and the rotation about z: the bending plane's coordinates, decoupled from the others here
+    assert np.all(K[np.ix_(plane, [2, 3, 4])] == 0)
+    Kp = K[np.ix_(plane, plane)]
+    free_rotation = Kp[:2, :2] - np.outer(Kp[:2, 2], Kp[2, :2]) / Kp[2, 2]  # planar K_tip leaves the tip free to turn
+    planar = tangent_stiffness(solve(MAIN_JOB))  # the same state: Table 2's, loaded (N/m, m/N)
+    assert np.allclose(free_rotation * 1000, planar.matrix, rtol=1e-6, atol=0)
+    assert np.allclose(C[:2, :2] / 1000, planar.compliance, rtol=1e-6, atol=0)
+
+
+def test_solve_3d_json_carries_the_tip_stiffness_beside_the_compliance(capsys):
+    code, out, err = run(capsys, "solve", "--3d", "--no-plot", "--json")  # the eccentric section: the flipped stable state
+    assert code == EXIT_OK, err
+    d = json.loads(out)
+    K, C = np.array(d["tip_stiffness"]), np.array(d["tip_compliance"])
+    assert d["stable"] and np.abs(K @ C - np.eye(6)).max() < 1e-9 and np.linalg.eigvalsh(K)[0] > 0
+    assert "rotation about x, y, z" in d["tip_matrices"]["order"]
+
+
+def test_an_unstable_3d_state_has_no_tip_stiffness_and_says_so():
+    from esba.analysis.stiffness3d import tip_stiffness3d
+    from esba.statics.spatial import scene_values3d, solve3d
+
+    effects, values = scene_values3d(MAIN_JOB)  # the eccentric section: Table 2's in-plane state is a saddle
+    model = load_model3d(MAIN_JOB.segments, effects, MAIN_JOB.variant)
+    saddle = solve3d(model, values, descend=False)
+    t = tip_stiffness3d(model, values, saddle)
+    assert not t.stable and t.stiffness is None and t.compliance is None and "not stable" in t.reason
+    assert t.to_dict()["tip_stiffness"] is None
+
+
+@pytest.mark.parametrize("args, message", [
+    (["stiffness", "--3d", "--payload", "1", "--payload", "2"], "--payload given 2 times: with --3d it is the one tip payload"),
+    (["stiffness", "--3d", "--payload-angle", "30"], "--payload-angle with --3d turns the tip payload of --payload N"),
+    (["stiffness", "--section", "GJ=1"], "--section is for the 3-D model: give --3d"),
+    (["stiffness", "--gravity-direction", "0,0,1"], "--gravity-direction is for the 3-D model: give --3d"),
+    (["stiffness", "--3d", "--gravity", "--gravity-direction", "0,0,0"], "a zero vector has no direction"),
+    (["stiffness", "--3d", "--section", "GJ=-1"], "GJ='-1': expected a finite number > 0"),
+])
+def test_bad_stiffness_3d_input_is_refused_in_one_line(capsys, args, message):
+    code, _, err = run(capsys, *args)
+    assert code == EXIT_USAGE
+    assert message in err and len(err.strip().splitlines()) == 1, err
