@@ -134,7 +134,7 @@ class Plane3D:
         if not (math.isfinite(t) and 0.0 < t < 180.0):
             raise Map3DError(f"--max-twist {max_twist_deg!r}: expected an angle in (0, 180) degrees")
         sec = check_section(section, scene)
-        effects, values = scene_values3d(scene, sec)
+        effects, values = scene_values3d(scene, sec, scene.down())
         model = load_model3d(scene.segments, effects, scene.variant)
         return cls(scene, x, y, dict(sec), math.radians(t), model, dict(values))
 

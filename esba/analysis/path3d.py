@@ -230,7 +230,7 @@ class PathAnalysis3D:
 
 
 def analyse3d(scene, parameter: str, to: float, *, start: float | None = None, options: PathOptions | None = None, section: Mapping[str, float] | None = None,
-              gravity_direction=(1.0, 0.0, 0.0), switch: bool = True, loading: bool = True) -> PathAnalysis3D:
+              gravity_direction=None, switch: bool = True, loading: bool = True) -> PathAnalysis3D:
     """Trace ``scene``'s 3-D branch in ``parameter`` from ``start`` (default: the scene's value) to ``to``.
 
     Raises

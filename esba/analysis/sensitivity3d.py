@@ -249,7 +249,7 @@ class Sensitivities3D(ParameterColumns, Report):
 
 
 def sensitivities3d(scene: Scene, section: Mapping[str, float], result, parameters: Sequence[str] | None = None,
-                    options: SensitivityOptions | None = None, *, gravity_direction=(1.0, 0.0, 0.0)) -> Sensitivities3D:
+                    options: SensitivityOptions | None = None, *, gravity_direction=None) -> Sensitivities3D:
     """dq/dp and d(tip, total angles)/dp at a 3-D equilibrium ``result``
     (:class:`esba.statics.spatial.Equilibrium3D` of ``scene`` with the complete ``section``)."""
     from esba.model.spatial import load_model3d
@@ -258,7 +258,7 @@ def sensitivities3d(scene: Scene, section: Mapping[str, float], result, paramete
     options = SensitivityOptions() if options is None else options
     if not isinstance(result, Equilibrium3D):
         raise SensitivityError(f"result={checks.quote(result)}: expected an Equilibrium3D (from esba.statics.spatial.solve_scene3d)")
-    down = tuple(check_direction("gravity direction", gravity_direction))
+    down = tuple(check_direction("gravity direction", scene.down(gravity_direction)))
     effects, _ = scene_values3d(scene, section, down)
     model = load_model3d(scene.segments, effects, scene.variant)
     names = parameter_names3d(scene)

@@ -87,7 +87,7 @@ def _problem(rows, base: Scene, free: tuple[str, ...], start: dict):
     for k, (pose, payload) in enumerate(rows):
         where = pose.label or f"row {k + 1}"
         sc = _scene_row(base, pose, payload, where)
-        effects, values = scene_values3d(sc, start)
+        effects, values = scene_values3d(sc, start, sc.down())
         if payloads and payload is None:  # a row without payload in a file with payloads: the same model, F = 0
             values.update(F1=0.0, Omega1=0.0, Beta1=0.0, s1=1.0)
             effects = Effects3D.from_planar(sc.replace(payloads=(Payload(0.0),)).effects)

@@ -138,7 +138,7 @@ def _setup(base: Scene, free: tuple[str, ...], section) -> tuple[Any, Any, dict]
     from esba.model.spatial import load_model3d
     from esba.statics.spatial import scene_values3d
 
-    effects, values = scene_values3d(base.replace(pressure=base.pressure if base.pressure is not None else 0.0), section)
+    effects, values = scene_values3d(base.replace(pressure=base.pressure if base.pressure is not None else 0.0), section, base.down())
     if any(_kind(f) in ("mx", "my", "mz") for f in free):
         from dataclasses import replace as dc_replace
 
@@ -157,7 +157,7 @@ def _rows(poses: Sequence[Pose3D], base: Scene, values: dict, section) -> list[R
             sc = pose.scene(base)
         except SceneError as exc:
             raise Sensing3DError(f"{pose.label or f'pose {k + 1}'}: {exc}") from None
-        _, v = scene_values3d(sc, section)
+        _, v = scene_values3d(sc, section, sc.down())
         row_values = dict(values)
         row_values.update({key: v[key] for key in ("P",) if key in v})
         for m in pose.measured:
@@ -553,10 +553,10 @@ def predict3d(base: Scene, section: dict | None, pressure: float, kinds: Sequenc
 
     scene = base.replace(pressure=pressure)
     section = check_section(section, scene)
-    effects, values = scene_values3d(scene, section)
+    effects, values = scene_values3d(scene, section, scene.down())
     model = load_model3d(scene.segments, effects, scene.variant)
     if q is None:
-        eq = solve_scene3d(scene, section)
+        eq = solve_scene3d(scene, section, gravity_direction=scene.down())
         q = eq.q
     y = np.asarray(measure_function(model, tuple(kinds))(q, values["L"])[0]).ravel()
     out, i = [], 0

@@ -139,7 +139,7 @@ class Propagation3D(Propagation):
 
 
 def propagate3d(scene: Scene, section: Mapping[str, float], result, sigmas: Sequence[Sigma], options: SensitivityOptions | None = None,
-                *, gravity_direction=(1.0, 0.0, 0.0)) -> Propagation3D:
+                *, gravity_direction=None) -> Propagation3D:
     """First-order uncertainty of the tip, the joint angles and the total angles of a 3-D equilibrium.
 
     Parameters
@@ -247,7 +247,7 @@ def monte_carlo3d(
     options: MonteCarloOptions | None = None,
     *,
     section: Mapping[str, float] | None = None,
-    gravity_direction=(1.0, 0.0, 0.0),
+    gravity_direction=None,
     chunks: Sequence[int] | None = None,
     execute: Callable | None = None,
     solved: dict[str, np.ndarray] | None = None,
@@ -268,7 +268,7 @@ def monte_carlo3d(
         raise UncertaintyError("batch: a 3-D Monte Carlo solves each sample along its own load history (esba.statics.spatial.solve3d); give batch=None")
     try:
         section = check_section(section, scene)
-        down = tuple(float(x) for x in check_direction("gravity direction", gravity_direction))
+        down = tuple(float(x) for x in check_direction("gravity direction", scene.down(gravity_direction)))
     except SpatialError as exc:
         raise UncertaintyError(str(exc)) from None
     names = tuple(s.name for s in sigmas)

@@ -102,5 +102,5 @@ def add_equilibria(sub) -> None:
     p.add_argument("--no-plot", action="store_true", help="write no figure")
     p.add_argument("--3d", dest="three_d", action="store_true", help="search the 3-D model's equilibria: sideways and twisted states too (chosen by itself when a payload points out of the plane; docs/3d.md)")
     p.add_argument("--section", action="append", metavar="NAME=VALUE", help="with --3d: section stiffness EI_side=..., GJ=... (N*mm^2; repeatable; default the eccentric section's)")
-    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (default 1,0,0: down, the paper's)")
+    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (overrides the scene file's gravity_direction; default 1,0,0: down, the paper's)")
     p.set_defaults(func=_cmd_equilibria)

@@ -193,5 +193,5 @@ def add_path(sub) -> None:
     p.add_argument("--write-doc", metavar="FILE", help="run the path cases of docs/paths.md (Table 1: bistable ranges, buckling for n = 1..8) and write the page and its figures (several seconds)")
     p.add_argument("--3d", dest="three_d", action="store_true", help="trace the 3-D model (chosen by itself when a payload points out of the plane; --param pressure, payload, omega, beta, at or load; docs/3d.md)")
     p.add_argument("--section", action="append", metavar="NAME=VALUE", help="with --3d: section stiffness EI_side=..., GJ=... (N*mm^2; repeatable; default the eccentric section's)")
-    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (default 1,0,0: down, the paper's)")
+    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (overrides the scene file's gravity_direction; default 1,0,0: down, the paper's)")
     p.set_defaults(func=_cmd_path)

@@ -10,9 +10,10 @@ from .results import EXIT_FAILED, EXIT_OK, print_result
 
 
 def gravity_direction_arg(args: argparse.Namespace, scene) -> tuple[float, float, float]:
-    """``--gravity-direction X,Y,Z`` checked (one line naming it), (1, 0, 0) when not given."""
+    """``--gravity-direction X,Y,Z`` checked (one line naming it); when not given, the scene's
+    (its file's ``gravity_direction``, default (1, 0, 0): down)."""
     if getattr(args, "gravity_direction", None) is None:
-        return (1.0, 0.0, 0.0)
+        return scene.down()
     from esba.statics.spatial import SpatialError, check_direction
 
     try:

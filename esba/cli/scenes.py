@@ -388,7 +388,7 @@ def add_solve(sub) -> None:
     p.add_argument("--no-continuation", action="store_true", help="one solve at the full load, no load ramp")
     p.add_argument("--3d", dest="three_d", action="store_true", help="solve with the 3-D model (chosen by itself when a payload points out of the plane; docs/3d.md)")
     p.add_argument("--section", action="append", metavar="NAME=VALUE", help="3-D section stiffness: EI_side=..., GJ=... (N*mm^2; repeatable)")
-    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (default 1,0,0: down, the paper's)")
+    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (overrides the scene file's gravity_direction; default 1,0,0: down, the paper's)")
     p.add_argument("--html", metavar="FILE.html", help="with --3d: also write a view of the deformed actuator that turns with the mouse (one offline HTML file)")
     p.add_argument(
         "--history",
@@ -474,7 +474,7 @@ def add_stiffness(sub) -> None:
     p.add_argument("--3d", dest="three_d", action="store_true",
                    help="the 3-D model's 6 x 6 tip stiffness and compliance at the state the scene's loads reach (chosen by itself for a scene that needs it; docs/3d.md)")
     p.add_argument("--section", action="append", metavar="NAME=VALUE", help="with --3d: section stiffness EI_side=..., GJ=... (N*mm^2; repeatable; default the eccentric section's)")
-    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (default 1,0,0: down, the paper's)")
+    p.add_argument("--gravity-direction", metavar="X,Y,Z", help="with --3d and --gravity: the direction of gravity in the base frame (overrides the scene file's gravity_direction; default 1,0,0: down, the paper's)")
     p.set_defaults(func=_cmd_stiffness)
 
 

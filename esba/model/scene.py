@@ -32,6 +32,8 @@ A scene file is TOML; every key is optional::
     target_angle_deg = 90.0   # the pressure that bends the unloaded actuator this far ...
     # pressure = 0.12         # ... or a pressure in MPa (give one of the two)
     g = 9.81                  # m/s^2
+    # gravity_direction = [1.0, 0.0, 0.0]  # with gravity: its direction in the base frame (default
+                              # down, the paper's); any other needs the 3-D model
 
     [[payloads]]              # repeat for more payloads
     force = 2.0               # N
@@ -81,7 +83,7 @@ from .contact.kinds import obstacle_from_dict
 from .contact.obstacles import MAX_OBSTACLES, Obstacle, ObstacleError
 from .generated import Model, load_model
 
-__all__ = ["Actuator", "ACTUATOR_RULES", "check_actuator_field", "actuator_rule", "Payload", "Moment", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "MAX_PRESSURE", "MAX_PAYLOAD"]
+__all__ = ["Actuator", "ACTUATOR_RULES", "check_actuator_field", "actuator_rule", "Payload", "Moment", "Scene", "SceneError", "MAIN_JOB", "load_scene", "scene_from_dict", "check_pressure", "check_target_angle", "check_gravity_direction", "DOWN", "MAX_PRESSURE", "MAX_PAYLOAD"]
 
 #: The largest target angle (the unloaded bend a pressure is sought for), degrees: ten turns, as a
 #: measurement file allows (:data:`esba.calibration.measurements.MAX_ANGLE_DEG`); 1e6 deg is a typo.
@@ -321,6 +323,23 @@ def _vector3(where: str, value: Any) -> tuple[float, float, float]:
     return tuple(_number(where, v) for v in value)  # type: ignore[return-value]
 
 
+#: Gravity's direction when none is given: +x of the base frame, down (the paper's, and the only one
+#: the planar model carries).
+DOWN = (1.0, 0.0, 0.0)
+
+
+def check_gravity_direction(value: Any, where: str = "gravity_direction") -> tuple[float, float, float]:
+    """A direction of gravity in the base frame as a unit 3-vector: three finite numbers, not all zero."""
+    try:
+        v = _vector3(where, value)
+    except SceneError:
+        raise SceneError(f"{where}={checks.quote(value)}: expected three finite numbers [x, y, z] of the base frame") from None
+    size = math.sqrt(sum(x * x for x in v))
+    if size == 0.0:
+        raise SceneError(f"{where}={_show(v)}: a zero vector has no direction; give one such as [1, 0, 0] (down, the paper's)")
+    return tuple(x / size for x in v)  # type: ignore[return-value]
+
+
 def _show(v) -> str:
     return "[" + ", ".join(f"{x:g}" for x in v) + "]"
 
@@ -410,6 +429,10 @@ class Scene:
         Include the actuator's weight (Eq. 15) with mass ``actuator.M`` and ``g``.
     g : float
         Gravitational acceleration, m/s^2 (> 0).
+    gravity_direction : three numbers
+        With ``gravity``, its direction in the base frame (x down, y the bending direction, z the
+        layer's normal), kept as a unit vector; default :data:`DOWN` (+x, the paper's). Any other
+        needs the 3-D model (the planar one's weight acts along +x only); without gravity it is unused.
     fibres : bool
         Include the fibre restraint (Eq. 18).
     segments : int
@@ -435,6 +458,7 @@ class Scene:
     variant: str = DEFAULT_VARIANT
     obstacles: tuple[Obstacle, ...] = ()
     moments: tuple[Moment, ...] = ()
+    gravity_direction: tuple[float, float, float] = DOWN
 
     def __post_init__(self) -> None:
         if not isinstance(self.actuator, Actuator):
@@ -465,6 +489,7 @@ class Scene:
         object.__setattr__(self, "gravity", _flag("gravity", self.gravity))
         object.__setattr__(self, "fibres", _flag("fibres", self.fibres))
         object.__setattr__(self, "g", _positive("g", self.g))
+        object.__setattr__(self, "gravity_direction", check_gravity_direction(self.gravity_direction))
         object.__setattr__(self, "segments", checks.segments(self.segments, SceneError))
         if self.variant not in VARIANTS:
             raise SceneError(f"variant={checks.quote(self.variant)}: allowed are {', '.join(VARIANTS)}")
@@ -492,10 +517,20 @@ class Scene:
 
     @property
     def needs_3d(self) -> bool:
-        """True when a payload points out of the bending plane, the scene has a moment or an obstacle
-        is a 3-D one (only the 3-D model carries them)."""
+        """True when a payload points out of the bending plane, the scene has a moment, an obstacle
+        is a 3-D one or its weight acts along another direction than +x (only the 3-D model carries them)."""
         return (any(p.out_of_plane_deg != 0.0 for p in self.payloads) or bool(self.moments)
-                or any(o.dimension == 3 for o in self.obstacles))
+                or any(o.dimension == 3 for o in self.obstacles) or self.turned_gravity)
+
+    @property
+    def turned_gravity(self) -> bool:
+        """True when the scene has gravity along another direction than +x (down, the planar model's)."""
+        return self.gravity and self.gravity_direction != DOWN
+
+    def down(self, direction=None) -> tuple[float, float, float]:
+        """The direction of gravity for a 3-D solve: ``direction`` when given (a flag or an API
+        keyword, which override the scene), else the scene's :attr:`gravity_direction`."""
+        return self.gravity_direction if direction is None else tuple(float(x) for x in direction)  # type: ignore[return-value]
 
     def model(self) -> Model:
         """The generated model for this scene's segments, effects and variant (generated if missing).
@@ -508,6 +543,9 @@ class Scene:
                     f"payload {k}: out_of_plane_deg={p.out_of_plane_deg:g} points out of the bending plane, which the planar model "
                     "cannot carry: solve it in 3-D (esba solve --3d; esba.statics.spatial.solve_scene3d)"
                 )
+        if self.turned_gravity:
+            raise SceneError(f"gravity_direction={_show(self.gravity_direction)}: the planar model's weight acts along +x "
+                             "(down) only: solve it in 3-D (esba solve --3d; esba.statics.spatial.solve_scene3d)")
         if self.moments:
             raise SceneError(f"moment 1: {self.moments[0].describe()}: the planar model has no moment term: solve it in 3-D "
                              "(esba solve --3d; esba.statics.spatial.solve_scene3d)")
@@ -570,7 +608,8 @@ class Scene:
         a = self.actuator
         drive = f"P={self.pressure:g} MPa" if self.pressure is not None else f"unloaded angle {self.target_angle_deg:g} deg"
         loads = "; ".join(f"{p.force:g} N at {p.angle_deg:g} deg" + (f" ({p.out_of_plane_deg:g} deg out of plane)" if p.out_of_plane_deg else "") + f", s={p.at:g}" for p in self.payloads) or "no payload"
-        extra = (", gravity" if self.gravity else "") + ("" if self.fibres else ", no fibres")
+        extra = (", gravity" + (f" along {_show(self.gravity_direction)}" if self.turned_gravity else "") if self.gravity else "")
+        extra += "" if self.fibres else ", no fibres"
         extra += "".join(f"; {m.describe()}" for m in self.moments)
         extra += "".join(f"; {o.describe()}" for o in self.obstacles)
         return (
@@ -589,7 +628,7 @@ MAIN_JOB = Scene(target_angle_deg=90.0, payloads=(Payload(2.0, 90.0, 1.0),), seg
 
 #: ``uncertainty`` (standard deviations of the parameters) is read by :func:`esba.calibration.uncertainty.load_sigmas`.
 _TOP_KEYS = {"segments", "variant", "gravity", "fibres", "actuator", "loads", "payloads", "moments", "obstacles", "uncertainty"}
-_LOAD_KEYS = {"pressure", "target_angle_deg", "g"}
+_LOAD_KEYS = {"pressure", "target_angle_deg", "g", "gravity_direction"}
 _PAYLOAD_KEYS = {"force", "angle_deg", "at", "out_of_plane_deg"}
 _MOMENT_KEYS = {"moment", "at", "arm"}
 
@@ -619,7 +658,12 @@ def scene_from_dict(data: Mapping[str, Any]) -> Scene:
     data = _check_keys("scene", data, _TOP_KEYS)
     act_keys = {f.name for f in dataclasses.fields(Actuator)}
     actuator = Actuator(**_check_keys("[actuator]", data.get("actuator", {}), act_keys))
-    loads = _check_keys("[loads]", data.get("loads", {}), _LOAD_KEYS)
+    loads = dict(_check_keys("[loads]", data.get("loads", {}), _LOAD_KEYS))
+    if "gravity_direction" in loads:
+        loads["gravity_direction"] = check_gravity_direction(loads["gravity_direction"], "[loads] gravity_direction")
+        if loads["gravity_direction"] != DOWN and data.get("gravity") is not True:
+            raise SceneError(f"[loads] gravity_direction={_show(loads['gravity_direction'])}: turns the weight, and the scene has none: "
+                             "add gravity = true (or leave gravity_direction out)")
     raw_payloads = data.get("payloads", [])
     if not isinstance(raw_payloads, list):
         raise SceneError(f"payloads={checks.quote(raw_payloads)}: expected an array of tables [[payloads]]")

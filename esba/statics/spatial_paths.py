@@ -405,7 +405,7 @@ class SpatialPathProblem:
         return cls(model, p0, dp, label, kind.unit, (low, high), kind.scale, kind.period, scene, lam0, pressure, kind.what)
 
     @classmethod
-    def from_scene(cls, scene, parameter: str, section: Mapping[str, float] | None = None, *, gravity_direction=(1.0, 0.0, 0.0)) -> SpatialPathProblem:
+    def from_scene(cls, scene, parameter: str, section: Mapping[str, float] | None = None, *, gravity_direction=None) -> SpatialPathProblem:
         """Follow ``parameter`` of a scene in 3-D (its payloads may point out of the plane; its weight
         along ``gravity_direction``; the section stiffnesses given or the eccentric section's)."""
         from esba.model.spatial import load_model3d
@@ -420,7 +420,7 @@ class SpatialPathProblem:
         if base == "load" and not (scene.payloads or scene.gravity):
             raise PathError("parameter='load': the scene has no payload and no gravity to scale")
         try:
-            effects, values = scene_values3d(scene, section, gravity_direction)
+            effects, values = scene_values3d(scene, section, scene.down(gravity_direction))
         except SpatialError as exc:
             raise PathError(str(exc)) from None
         model = load_model3d(scene.segments, effects, scene.variant)

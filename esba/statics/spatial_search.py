@@ -224,14 +224,14 @@ def _grid(n: int, lower: float, starts: int, shift: float) -> list[np.ndarray]:
 
 
 @single_threaded
-def search3d(scene, section: Mapping[str, float] | None = None, *, gravity_direction=(1.0, 0.0, 0.0), starts: int | None = None, check: bool = True) -> Equilibria3D:
+def search3d(scene, section: Mapping[str, float] | None = None, *, gravity_direction=None, starts: int | None = None, check: bool = True) -> Equilibria3D:
     """Every equilibrium of ``scene`` in 3-D that the search finds (see the module)."""
     from esba.statics.equilibria import EquilibriaOptions, equilibria
 
     starts = DEFAULT_STARTS_3D if starts is None else starts
     if isinstance(starts, bool) or not isinstance(starts, int) or not 2 <= starts <= 1000:
         raise SpatialError(f"starts={starts!r}: expected a whole number from 2 to 1000")
-    effects, values = scene_values3d(scene, section, gravity_direction)
+    effects, values = scene_values3d(scene, section, scene.down(gravity_direction))
     model = load_model3d(scene.segments, effects, scene.variant)
     n = model.n
     s = _Search(model, values)

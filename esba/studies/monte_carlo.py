@@ -175,7 +175,7 @@ def monte_carlo_study(
     progress: bool = False,
     three_d: bool = False,
     section: dict | None = None,
-    gravity_direction=(1.0, 0.0, 0.0),
+    gravity_direction=None,
 ) -> tuple[MonteCarlo, dict[str, Any]]:
     """:func:`esba.calibration.uncertainty.monte_carlo` with every sample streamed to ``out`` (CSV), resumable.
 
@@ -208,7 +208,7 @@ def monte_carlo_study(
 
         try:
             section = check_section(section, scene)
-            gravity_direction = tuple(float(x) for x in check_direction("gravity direction", gravity_direction))
+            gravity_direction = tuple(float(x) for x in check_direction("gravity direction", scene.down(gravity_direction)))
         except SpatialError as exc:
             raise StudyError(str(exc)) from None
         identity.update(model="3d", section=section, gravity_direction=list(gravity_direction))

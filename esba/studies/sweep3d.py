@@ -186,7 +186,7 @@ def solve_points3d(plan: Sweep3DPlan, start: int, stop: int) -> list[dict[str, A
             row.update(status="infeasible", message=str(exc))
             rows.append(row)
             continue
-        effects, values = scene_values3d(scene, section)
+        effects, values = scene_values3d(scene, section, scene.down())
         model = load_model3d(n, effects, scene.variant)
         eq = solve3d(model, values, certify=False, descend=True)
         status = "ok" if eq.ok else "not ok"

@@ -261,3 +261,21 @@ def test_bad_stiffness_3d_input_is_refused_in_one_line(capsys, args, message):
     code, _, err = run(capsys, *args)
     assert code == EXIT_USAGE
     assert message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_gravity_direction_from_a_scene_file_picks_the_3d_model_and_the_flag_overrides_it(capsys, tmp_path):
+    f = tmp_path / "sideways.toml"
+    f.write_text("gravity = true\n[loads]\npressure = 0.1\ngravity_direction = [0, 0, 1]\n")
+    code, out, err = run(capsys, "solve", str(f), *SECTION, "--json")
+    assert code == EXIT_OK, err
+    from_file = json.loads(out)
+    assert "gravity along [0, 0, 1]" in from_file["scene"] and from_file["tip_mm"][2] > 0.1
+    code, out, err = run(capsys, "solve", "--3d", "--gravity", "--gravity-direction", "0,0,1", "--pressure", "0.1", "--no-payload", "--no-plot", *SECTION, "--json")
+    assert code == EXIT_OK, err
+    assert np.allclose(json.loads(out)["tip_mm"], from_file["tip_mm"], rtol=0, atol=1e-9)
+    code, out, err = run(capsys, "solve", str(f), "--3d", "--gravity-direction", "1,0,0", *SECTION, "--json")  # the flag wins: down again
+    assert code == EXIT_OK, err
+    down = json.loads(out)
+    assert down["tip_mm"][2] == 0.0 and np.allclose(np.radians(down["theta_deg"]), solve(Scene(pressure=0.1, gravity=True)).theta, atol=1e-10)
+    code, out, err = run(capsys, "stiffness", str(f), *SECTION, "--json")  # stiffness picks the 3-D model too
+    assert code == EXIT_OK and json.loads(out)["tip_stiffness"] is not None, err

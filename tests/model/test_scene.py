@@ -166,7 +166,12 @@ def test_toml_fields(tmp_path):
         ("segments = \n", "is not valid TOML"),
         ("segmnts = 3\n", "scene: unknown key(s) segmnts; allowed are actuator, fibres, gravity, loads, moments, obstacles, payloads, segments, uncertainty, variant"),
         ("[actuator]\nR1 = 8\n", "[actuator]: unknown key(s) R1; allowed are E, L, M, d, r1, r2, rho_deg"),
-        ("[loads]\npresure = 0.1\n", "[loads]: unknown key(s) presure; allowed are g, pressure, target_angle_deg"),
+        ("[loads]\npresure = 0.1\n", "[loads]: unknown key(s) presure; allowed are g, gravity_direction, pressure, target_angle_deg"),
+        ("gravity = true\n[loads]\ngravity_direction = [0, 0]\n", "[loads] gravity_direction=[0, 0]: expected three finite numbers [x, y, z]"),
+        ("gravity = true\n[loads]\ngravity_direction = [0, nan, 1]\n", "[loads] gravity_direction=[0, nan, 1]: expected three finite numbers [x, y, z]"),
+        ("gravity = true\n[loads]\ngravity_direction = [0, 0, 0]\n", "[loads] gravity_direction=[0, 0, 0]: a zero vector has no direction"),
+        ("gravity = true\n[loads]\ngravity_direction = 'down'\n", "[loads] gravity_direction='down': expected three finite numbers [x, y, z]"),
+        ("[loads]\ngravity_direction = [0, 0, 1]\n", "[loads] gravity_direction=[0, 0, 1]: turns the weight, and the scene has none: add gravity = true"),
         ("[[payloads]]\nangle_deg = 0\n", "[[payloads]] #1: missing key force (N)"),
         ("[[moments]]\nat = 0.5\n", "[[moments]] #1: missing key moment ([mx, my, mz], N mm)"),
         ("[[moments]]\nmoment = [1, 2]\n", "[[moments]] #1: moment.moment=[1, 2]: expected three numbers [x, y, z]"),
@@ -208,3 +213,21 @@ def test_not_utf8(tmp_path):
 
 def test_scene_from_dict_defaults():
     assert scene_from_dict({}) == Scene()
+
+
+def test_gravity_direction_in_a_scene_file_is_a_unit_vector_and_any_but_down_needs_the_3d_model(tmp_path):
+    f = tmp_path / "sideways.toml"
+    f.write_text("gravity = true\n[loads]\ngravity_direction = [0, 0, 2]\n")
+    scene = load_scene(f)
+    assert scene.gravity_direction == (0.0, 0.0, 1.0) and scene.needs_3d and scene.down() == (0.0, 0.0, 1.0)
+    assert scene.down((0, 1, 0)) == (0.0, 1.0, 0.0)  # a flag or an API keyword overrides the file
+    assert "gravity along [0, 0, 1]" in scene.describe()
+    with pytest.raises(SceneError, match=r"gravity_direction=\[0, 0, 1\]: the planar model's weight acts along \+x"):
+        scene.model()
+    in_plane = scene.replace(gravity_direction=(0.0, 1.0, 0.0))  # in the bending plane, still not the planar model's +x
+    assert in_plane.needs_3d
+    down = scene.replace(gravity_direction=(3.0, 0.0, 0.0))
+    assert down.gravity_direction == (1.0, 0.0, 0.0) and not down.needs_3d and ", gravity;" not in down.describe()
+    assert not scene.replace(gravity=False).needs_3d  # without gravity the direction is unused
+    f.write_text("gravity = true\n[loads]\ngravity_direction = [1, 0, 0]\n")
+    assert load_scene(f) == Scene(gravity=True)

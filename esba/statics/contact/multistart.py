@@ -89,7 +89,7 @@ class ContactEquilibria3D:
         }
 
 
-def contact_equilibria3d(scene: Scene, section=None, options: ContactOptions | None = None, *, gravity_direction=(1.0, 0.0, 0.0),
+def contact_equilibria3d(scene: Scene, section=None, options: ContactOptions | None = None, *, gravity_direction=None,
                          starts: int | None = None) -> ContactEquilibria3D:
     """The 3-D equilibria of ``scene`` (with obstacles) reached from each free 3-D equilibrium.
 

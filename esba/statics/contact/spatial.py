@@ -285,7 +285,7 @@ class ContactEquilibrium3D:
 class ContactProblem3D:
     """One scene's 3-D contact problem: the model, its parameter values, the obstacles and the NLP."""
 
-    def __init__(self, scene: Scene, section: Mapping[str, float] | None = None, gravity_direction=(1.0, 0.0, 0.0),
+    def __init__(self, scene: Scene, section: Mapping[str, float] | None = None, gravity_direction=None,
                  options: ContactOptions = DEFAULT_CONTACT_3D):
         from esba.statics.spatial import scene_values3d
 
@@ -296,7 +296,7 @@ class ContactProblem3D:
         if not scene.obstacles:
             raise SceneError("solve_contact3d: the scene has no obstacles (use esba.statics.spatial.solve_scene3d)")
         self.scene, self.options = scene, options
-        self.effects, self.values = scene_values3d(scene.replace(obstacles=()), section, gravity_direction)  # the pressure of the free actuator
+        self.effects, self.values = scene_values3d(scene.replace(obstacles=()), section, scene.down(gravity_direction))  # the pressure of the free actuator
         self.model = load_model3d(scene.segments, self.effects, scene.variant)
         L, r1 = scene.actuator.L, scene.actuator.r1
         self.obstacles: list[SpatialObstacle] = [lift(o) for o in scene.obstacles]
@@ -516,7 +516,7 @@ def _crosses(prob: ContactProblem3D, pv: np.ndarray, before: np.ndarray, after: 
 
 @single_threaded
 def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, options: ContactOptions | None = None, *,
-                    gravity_direction=(1.0, 0.0, 0.0), problem: ContactProblem3D | None = None,
+                    gravity_direction=None, problem: ContactProblem3D | None = None,
                     history: Sequence[tuple[float, float]] | None = None, pressure: float | None = None,
                     warm: ContactEquilibrium3D | None = None) -> ContactEquilibrium3D:
     """The 3-D equilibrium of a scene with obstacles (frictionless contact), its contacts and KKT check.
@@ -530,7 +530,7 @@ def solve_contact3d(scene: Scene, section: Mapping[str, float] | None = None, op
     options : ContactOptions, optional
         :data:`DEFAULT_CONTACT_3D` unless given.
     gravity_direction : three numbers
-        The direction of the weight in the base frame (with gravity).
+        The direction of the weight in the base frame (with gravity; default the scene's ``gravity_direction``).
     history : sequence of (float, float), optional
         (pressure, load) fractions of the load history from rest, ending at (1, 1).
     pressure : float, optional

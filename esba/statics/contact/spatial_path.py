@@ -131,7 +131,7 @@ def _changes(scene: Scene, problem: ContactProblem3D, k: int, a: ContactEquilibr
 
 
 def contact_path3d(scene: Scene, pressures: Sequence[float], section: Mapping[str, float] | None = None, options: ContactOptions | None = None, *,
-                   tol: float = 1e-6, gravity_direction=(1.0, 0.0, 0.0)) -> ContactPath3D:
+                   tol: float = 1e-6, gravity_direction=None) -> ContactPath3D:
     """The 3-D equilibria of ``scene`` (with obstacles) at ``pressures`` (increasing or decreasing), the
     first from rest and each next one from the previous; touches, lift-offs and slides located to ``tol``
     MPa, and where the contact branch is lost."""
