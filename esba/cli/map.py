@@ -9,6 +9,7 @@ import sys
 from esba.infra import outputs
 
 from .arguments import UsageError, add_scene_flags, count_arg, float_arg, one_of, scene_from_args, with_json, write_page
+from .map3d import MAP3D_PARAMETERS
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 #: Where ``esba map`` writes its fold curves and figure unless told otherwise (the current folder).
@@ -21,7 +22,7 @@ _MAP_PARAMETERS = ("pressure", "payload", "omega", "at", "load", "r2", "d", "rho
 
 
 #: Parameters only the 3-D map (``--3d``) has: the payload's angle out of the plane, and its direction around the actuator.
-_MAP3D_ONLY = ("beta", "around")
+_MAP3D_ONLY = tuple(name for name in MAP3D_PARAMETERS if name not in _MAP_PARAMETERS)
 
 
 def axis_arg(flag: str):
@@ -29,7 +30,8 @@ def axis_arg(flag: str):
 
     def parse(text: str) -> tuple[str, float, float]:
         parts = text.split(":")
-        allowed = f"PARAM:FROM:TO with PARAM one of {', '.join(_MAP_PARAMETERS)} (a payload's with its number, e.g. omega2) and FROM < TO"
+        allowed = (f"PARAM:FROM:TO with PARAM one of {', '.join(_MAP_PARAMETERS)} (a payload's with its number, e.g. omega2), "
+                   f"with --3d one of {', '.join(MAP3D_PARAMETERS)}, and FROM < TO")
         if len(parts) != 3:
             raise argparse.ArgumentTypeError(f"{flag}={text!r}: expected {allowed}")
         name = parts[0].strip()

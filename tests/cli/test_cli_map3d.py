@@ -48,6 +48,8 @@ def test_a_3d_map_of_pressure_and_payload_in_the_plane(capsys, tmp_path):
         (["--3d", "--x", "omega:0:90", "--y", "around:0:90"], "cannot be mapped against omega"),
         (["--3d", "--x", "pressure:0:0.2", "--y", "at:0:1"], "at 0: expected a fraction"),
         (["--3d", "--x", "pressure:0:0.2", "--y", "around:0:90", "--no-payload"], "exactly one payload"),
+        (["--3d", "--x", "pressure:0:0.2", "--y", "twist:0:1"], "unknown parameter 'twist'"),
+        (["--3d", "--x", "tilt:0:1", "--y", "pressure:0:0.2"], "with --3d one of pressure, payload, omega, beta, around, at"),
     ],
 )
 def test_bad_3d_map_input(capsys, args, words):
