@@ -268,6 +268,33 @@ def scene_from_args(args: argparse.Namespace, payloads: bool = True):
         raise UsageError(str(exc)) from None
 
 
+def gravity_direction_arg(args: argparse.Namespace, scene) -> tuple[float, float, float]:
+    """``--gravity-direction X,Y,Z`` checked (one line naming it); when not given, the scene's
+    (its file's ``gravity_direction``, default (1, 0, 0): down)."""
+    if getattr(args, "gravity_direction", None) is None:
+        return scene.down()
+    from esba.statics.spatial import SpatialError, check_direction
+
+    try:
+        parts = [float(v) for v in args.gravity_direction.split(",")]
+    except ValueError:
+        raise UsageError(f"--gravity-direction {args.gravity_direction!r}: expected X,Y,Z, three numbers of the base frame") from None
+    try:
+        down = tuple(float(v) for v in check_direction("--gravity-direction", parts))
+    except SpatialError as exc:
+        raise UsageError(str(exc)) from None
+    if not scene.gravity:
+        raise UsageError("--gravity-direction turns the weight: give --gravity (or gravity = true in the scene file)")
+    return down  # type: ignore[return-value]
+
+
+def planar_only_flags(args: argparse.Namespace, scene, command: str) -> None:
+    """Without --3d (and no payload out of the plane): the 3-D flags are refused (one line)."""
+    for flag, given in (("--section", getattr(args, "section", None)), ("--gravity-direction", getattr(args, "gravity_direction", None))):
+        if given is not None:
+            raise UsageError(f"{flag} is for the 3-D model: give --3d ({command} --3d)")
+
+
 def output_file_arg(*suffixes: str) -> Callable[[str], str]:
     """An argparse type for a file to write (:func:`esba.infra.outputs.check_file`), checked when the flags are
     parsed, before any computation."""

@@ -23,7 +23,7 @@ def _cmd_equilibria(args: argparse.Namespace) -> int:
         if args.plot is not None or args.max_bend is not None:
             raise UsageError("--plot and --max-bend are not used with --3d (the 3-D search has no figure yet; its domain: docs/3d.md)")
         return cmd_equilibria3d(args, scene)
-    from .path3d import planar_only_flags
+    from .arguments import planar_only_flags
 
     planar_only_flags(args, scene, "esba equilibria")
     figure = scene_figure(args, DEFAULT_EQUILIBRIA_FIGURE)

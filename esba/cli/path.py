@@ -92,7 +92,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
 
         _check_path_size(args.max_steps, 3 * scene.segments)  # 3n unknowns a point
         return cmd_path3d(args, scene, out, plot)
-    from .path3d import planar_only_flags
+    from .arguments import planar_only_flags
 
     planar_only_flags(args, scene, "esba path")
     if args.param in _PATH_PARAMETERS_3D_ONLY:

@@ -5,35 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .arguments import UsageError
+from .arguments import UsageError, gravity_direction_arg
 from .results import EXIT_FAILED, EXIT_OK, print_result
-
-
-def gravity_direction_arg(args: argparse.Namespace, scene) -> tuple[float, float, float]:
-    """``--gravity-direction X,Y,Z`` checked (one line naming it); when not given, the scene's
-    (its file's ``gravity_direction``, default (1, 0, 0): down)."""
-    if getattr(args, "gravity_direction", None) is None:
-        return scene.down()
-    from esba.statics.spatial import SpatialError, check_direction
-
-    try:
-        parts = [float(v) for v in args.gravity_direction.split(",")]
-    except ValueError:
-        raise UsageError(f"--gravity-direction {args.gravity_direction!r}: expected X,Y,Z, three numbers of the base frame") from None
-    try:
-        down = tuple(float(v) for v in check_direction("--gravity-direction", parts))
-    except SpatialError as exc:
-        raise UsageError(str(exc)) from None
-    if not scene.gravity:
-        raise UsageError("--gravity-direction turns the weight: give --gravity (or gravity = true in the scene file)")
-    return down  # type: ignore[return-value]
-
-
-def planar_only_flags(args: argparse.Namespace, scene, command: str) -> None:
-    """Without --3d (and no payload out of the plane): the 3-D flags are refused (one line)."""
-    for flag, given in (("--section", getattr(args, "section", None)), ("--gravity-direction", getattr(args, "gravity_direction", None))):
-        if given is not None:
-            raise UsageError(f"{flag} is for the 3-D model: give --3d ({command} --3d)")
 
 
 def cmd_path3d(args: argparse.Namespace, scene, out, plot) -> int:
@@ -180,4 +153,4 @@ def cmd_equilibria3d(args: argparse.Namespace, scene) -> int:
     return EXIT_OK
 
 
-__all__ = ["cmd_path3d", "cmd_equilibria3d", "gravity_direction_arg", "planar_only_flags"]
+__all__ = ["cmd_path3d", "cmd_equilibria3d"]

@@ -17,13 +17,14 @@ from .arguments import (
     add_scene_flags,
     count_arg,
     float_arg,
+    gravity_direction_arg,
     output_file_arg,
+    planar_only_flags,
     refuse,
     scene_figure,
     scene_from_args,
 )
 from .cluster import add_cluster_flags, chunk_arg, on_cluster, study_stopped
-from .path3d import gravity_direction_arg, planar_only_flags
 from .results import EXIT_FAILED, EXIT_OK, print_result, warn_findings
 
 #: Where ``esba solve`` writes its figure when no scene file is given and no --plot.
