@@ -127,8 +127,10 @@ def _render_spatial() -> str:
         "through the layer's mid-line (an unshearable rod's energy does not depend on where the twist axis lies). EI_side "
         "and GJ are parameters of every 3-D model; the paper gives neither. Their defaults belong to the section "
         "(`esba section`: the silicone with its eccentric chamber, the layer at 6500 MPa of Section 4.2, whose width and "
-        "thickness the paper does not give, and the fibres in torsion); until it is given, `esba solve --3d` asks for "
-        "both (`--section EI_side=... --section GJ=...`). `docs/3d.md` uses the silicone alone as a concentric annulus "
+        "thickness the paper does not give, and the fibres in torsion): every 3-D command (`esba solve --3d`, ...) takes "
+        "the eccentric section's values unless `--section EI_side=... --section GJ=...` gives them. The section's own "
+        "inputs the paper does not give are parameters with defaults, listed in \"The section's assumed parameters (3-D)\" "
+        "at the end of this page. `docs/3d.md` uses the silicone alone as a concentric annulus "
         "(EI_side = E pi (r1^4 - r2^4)/4, GJ = (E/3) pi (r1^4 - r2^4)/2, G = E/3 for an incompressible rubber) as its "
         "softest case.",
         "- The plain rod: 1/2 EI (n/L) (theta_i - kappa0 L/n)^2 in the plane, kappa0 a rest curvature in the plane (1/mm).",

@@ -14,10 +14,11 @@ from .results import EXIT_OK, print_result, warn_findings
 MAX_CLI_MESH = 4
 
 
-#: The flag of each parameter of :func:`esba.model.section.section_stiffness`, for the messages.
-_FLAGS = {"E_layer": "--E-layer", "layer_width": "--layer-width", "layer_thickness": "--layer-thickness", "layer_depth": "--layer-depth",
-          "nu": "--nu", "fibre_efficiency": "--fibre-efficiency", "E_fibre": "--E-fibre", "fibre_diameter": "--fibre-diameter",
-          "fibres_per_helix": "--fibres-per-helix", "rho_deg": "--rho (or the scene's rho_deg)"}
+def _flag(field: str) -> str:
+    """The flag of a parameter of :func:`esba.model.section.section_stiffness`, for the messages."""
+    from esba.model.section import SECTION_FLAGS
+
+    return "--rho (or the scene's rho_deg)" if field == "rho_deg" else SECTION_FLAGS.get(field) or field
 
 
 def _section_data(args: argparse.Namespace) -> dict:
@@ -48,7 +49,7 @@ def _section_data(args: argparse.Namespace) -> dict:
         k = section_stiffness(a.r1, a.r2, a.d, a.E, rho_deg=a.rho_deg, **options)
     except SectionError as exc:  # named as the flag that gave it (the scene's fields are checked above)
         field, _, rest = str(exc).partition("=")
-        raise UsageError(f"{_FLAGS.get(field, field)}={rest}" if rest else str(exc)) from None
+        raise UsageError(f"{_flag(field)}={rest}" if rest else str(exc)) from None
     p = k.section
     return {
         "inputs": {"r1": a.r1, "r2": a.r2, "d": a.d, "E": a.E, **{name: v for name, v in k.parameters if name != "mesh"}},

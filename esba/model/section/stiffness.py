@@ -15,7 +15,7 @@ from .properties import SectionProperties, section_properties
 __all__ = [
     "LAYER_E", "LAYER_NU", "LAYER_THICKNESS", "SILICONE_NU", "MAGIC_ANGLE_DEG", "LOCK_WINDOW_DEG", "FIBRE_ANGLE_DEG", "FIBRE_E",
     "FIBRE_DIAMETER", "FIBRES_PER_HELIX", "FIBRE_STATES", "SECTION_PARAMETERS", "MAX_MODULUS", "SectionStiffness",
-    "rectangle_torsion_factor", "fibre_torsion", "section_stiffness",
+    "rectangle_torsion_factor", "fibre_torsion", "section_stiffness", "SECTION_OUTPUTS", "SECTION_FLAGS", "assumed_parameters",
 ]
 
 #: The inextensible layer's Young's modulus, MPa (Section 4.2, from Polygerinos et al., ref. [40]).
@@ -315,3 +315,58 @@ def section_stiffness(
             ("mesh", p.mesh),
         ),
     )
+
+
+#: The ``esba section`` flag of each of :data:`SECTION_PARAMETERS` (None: a keyword of
+#: :func:`section_stiffness` only); a test checks them against the command's parser.
+SECTION_FLAGS: dict[str, str | None] = {
+    "E_layer": "--E-layer", "nu_layer": None, "layer_width": "--layer-width", "layer_thickness": "--layer-thickness",
+    "layer_depth": "--layer-depth", "nu": "--nu", "fibres": "--fibres", "fibre_efficiency": "--fibre-efficiency",
+    "E_fibre": "--E-fibre", "fibre_diameter": "--fibre-diameter", "fibres_per_helix": "--fibres-per-helix",
+}
+
+#: The section's outputs that the 3-D model takes (``esba fit`` fits these two directly); ``EI_bend``
+#: is reported too (the planar terms keep the paper's Eq. 8).
+SECTION_OUTPUTS = ("EI_side", "GJ")
+_REPORTED = ("EI_bend", *SECTION_OUTPUTS)
+
+
+def assumed_parameters(r1: float = 8.0, r2: float = 3.0, d: float = 4.0, E: float = 0.54, rho_deg: float = FIBRE_ANGLE_DEG,
+                       mesh: int = 0) -> list[dict[str, Any]]:
+    """Each parameter of :data:`SECTION_PARAMETERS`: its default (``layer_width`` resolved to r1),
+    unit, source, and which of the section's outputs (``EI_bend`` and :data:`SECTION_OUTPUTS`) it moves,
+    found by computing them (at Table 1's section by default) with the parameter changed: numbers by
+    10 % (down for one at its upper bound, nu = 0.5; layer_depth, 0 by default, by 0.1 mm),
+    ``fibres`` to each other state. The fibres' material (``E_fibre``, ``fibre_diameter``,
+    ``fibres_per_helix``) enters only with ``fibres="taut"``, so it is changed in that state (``when``).
+
+    >>> rows = {r["name"]: r for r in assumed_parameters()}
+    >>> rows["layer_width"]["default"], rows["layer_width"]["moves"], rows["nu"]["moves"]
+    (8.0, ('EI_bend', 'EI_side', 'GJ'), ('GJ',))
+    >>> rows["E_fibre"]["moves"], rows["E_fibre"]["when"]
+    (('GJ',), 'fibres = "taut"')
+    """
+    taut = ("E_fibre", "fibre_diameter", "fibres_per_helix")
+
+    def outputs(**changes: Any) -> tuple[float, ...]:
+        k = section_stiffness(r1, r2, d, E, rho_deg=rho_deg, mesh=mesh, **changes)
+        return tuple(getattr(k, name) for name in _REPORTED)
+
+    rows = []
+    for name, (default, unit, source) in SECTION_PARAMETERS.items():
+        value = r1 if name == "layer_width" and default is None else default
+        base = {"fibres": "taut"} if name in taut else {}
+        if name == "fibres":
+            changed = [outputs(fibres=state) for state in FIBRE_STATES if state != value]
+        elif name == "fibres_per_helix":
+            changed = [outputs(**base, fibres_per_helix=value + 1)]
+        elif name == "layer_depth":
+            changed = [outputs(layer_depth=value + 0.1)]
+        else:
+            changed = [outputs(**base, **{name: value * (0.9 if name == "nu" else 1.1)})]
+        before = outputs(**base)
+        moves = tuple(out for j, out in enumerate(_REPORTED)
+                      if any(abs(c[j] - before[j]) > 1e-12 * abs(before[j]) for c in changed))
+        rows.append({"name": name, "flag": SECTION_FLAGS[name], "default": value, "unit": unit, "source": source, "moves": moves,
+                     "when": 'fibres = "taut"' if name in taut else ""})
+    return rows
