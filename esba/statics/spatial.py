@@ -457,14 +457,15 @@ def check_direction(name: str, direction) -> np.ndarray:
     return v / size
 
 
-def scene_values3d(scene, section: Mapping[str, float] | None = None, gravity_direction=(1.0, 0.0, 0.0)) -> tuple[object, dict[str, float]]:
+def scene_values3d(scene, section: Mapping[str, float] | None = None, gravity_direction=None) -> tuple[object, dict[str, float]]:
     """The spatial effects and parameter values of a scene (payloads may point out of plane; its
     moments and couples come in as the ``moment`` and ``couple`` terms).
 
     Gravity (when the scene has it) acts along ``gravity_direction`` in the base frame (x down, the
-    paper's; any direction for an actuator mounted another way), with g of the scene.
+    paper's; any direction for an actuator mounted another way), with g of the scene; None: the
+    scene's own (``gravity_direction`` in its file, :meth:`esba.model.scene.Scene.down`).
     """
-    down = check_direction("gravity direction", gravity_direction)
+    down = check_direction("gravity direction", scene.down(gravity_direction) if hasattr(scene, "down") else (gravity_direction or (1.0, 0.0, 0.0)))
     from esba.derive.effects3d import Effects3D
     from esba.model.closed_form import pressure_for_angle
 
@@ -481,10 +482,10 @@ def scene_values3d(scene, section: Mapping[str, float] | None = None, gravity_di
     return effects, values
 
 
-def solve_scene3d(scene, section: Mapping[str, float] | None = None, *, gravity_direction=(1.0, 0.0, 0.0), steps: int = 4,
+def solve_scene3d(scene, section: Mapping[str, float] | None = None, *, gravity_direction=None, steps: int = 4,
                   descend: bool = True) -> Equilibrium3D:
     """The 3-D equilibrium of ``scene`` (its payloads may point out of the bending plane; its weight
-    along ``gravity_direction``) that its load history reaches: past a sideways branch point or a fold,
+    along ``gravity_direction``, None: the scene's own) that its load history reaches: past a sideways branch point or a fold,
     the stable state below the unstable one (``descend``, :func:`solve3d`)."""
     from esba.model.spatial import load_model3d
 

@@ -170,3 +170,16 @@ def test_a_load_the_model_does_not_carry_is_refused_in_one_line():
     with pytest.raises(SpatialError, match="F2=1.0"):
         solve3d(model, {**values, "F2": 1.0})
     assert solve3d(model, {**values, "mz1": 0.0}).stable  # a zero load is no load
+
+
+def test_solve_scene3d_takes_the_scenes_gravity_direction_unless_told_otherwise():
+    from esba.model.scene import Scene
+    from esba.statics.spatial import solve_scene3d
+
+    section = {"EI_side": 4e5, "GJ": 1e6}
+    sideways = Scene(pressure=0.1, gravity=True, gravity_direction=(0.0, 0.0, 1.0))
+    by_file = solve_scene3d(sideways, section)
+    by_keyword = solve_scene3d(Scene(pressure=0.1, gravity=True), section, gravity_direction=(0.0, 0.0, 1.0))
+    assert np.array_equal(by_file.q, by_keyword.q) and by_file.tip[2] > 0.1  # the weight pulls the tip sideways
+    down = solve_scene3d(sideways, section, gravity_direction=(1.0, 0.0, 0.0))  # the keyword overrides the file
+    assert abs(down.tip[2]) < 1e-9
