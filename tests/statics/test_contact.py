@@ -120,6 +120,13 @@ def test_displacement_reaction_is_the_dead_load_that_holds_it():
     assert np.max(np.abs(free.theta - r.theta)) <= DEAD_LOAD_THETA
 
 
+def test_a_reachable_looking_target_without_equilibrium_fails_with_no_reaction():
+    r = solve_contact(Scene(segments=3, pressure=0.17), displacement=Displacement(x=134.0, y=16.0))  # within L, past the bend's reach
+    assert not r.ok and not r.success and r.reaction is None
+    assert "IPOPT did not converge" in r.message and "no reaction" in r.message
+    assert r.to_dict()["reaction_n"] is None
+
+
 def test_blocked_force_grows_and_stays_at_the_tip():
     b = blocked_force(Scene(segments=3), [0.0, 0.1, 0.2, 0.3])
     assert b.ok
@@ -180,6 +187,13 @@ def test_closest_points_are_the_minima_of_a_dense_sample():
         (lambda: scene_from_dict({"obstacles": [{"kind": "cylinder", "centre": [60, 30]}, {"kind": "cube"}]}), "[[obstacles]] #2: kind='cube'"),
         (lambda: scene_from_dict({"obstacles": [{"kind": "half-plane", "at": [135, 0], "radius": 3}]}), "unknown key(s) radius"),
         (lambda: Displacement(y=math.nan), "displacement.y=nan"),
+        (lambda: Displacement(x=math.inf), "displacement.x=inf: expected a finite number"),
+        (lambda: Displacement(), "displacement: no coordinate given: expected x, y or both (mm)"),
+        (lambda: solve_contact(Scene(segments=3, pressure=0.17), displacement=Displacement(x=140.0, y=60.0)),
+         "displacement=(x=140, y=60): the target is 152.3 mm from the base, farther than the actuator's length L = 135 mm"),
+        (lambda: solve_contact(Scene(segments=3, pressure=0.17), displacement=Displacement(y=-136.0)),
+         "displacement=(y=-136): the target is 136 mm from the base"),
+        (lambda: displacement_path(Scene(segments=3), 0.17, [0.0, 80.0, 140.0]), "displacement=(y=140): the target is 140 mm from the base"),
     ],
 )
 def test_bad_input_is_one_line(make, message):

@@ -214,6 +214,9 @@ def contact_path(scene: Scene, values: Sequence[float], parameter: str = "pressu
             return None
         return Displacement(x=v) if parameter == "tip_x" else Displacement(y=v)
 
+    if parameter != "pressure":
+        for v in values:  # every target within reach, before any solve
+            displacement(v).check_reach(scene.actuator.L)
     prob = ContactProblem(scene, options, displacement(values[0]))
     model = prob.model
 
