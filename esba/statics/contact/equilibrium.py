@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -268,7 +268,8 @@ class ContactEquilibrium:
     """One solved scene with obstacles (see the module's docstring).
 
     ``reaction`` is the force (N, [x, y]) a prescribed displacement takes (None without one, or when
-    the solve failed: ``message`` says why);
+    the solve failed: ``message`` says why); ``newton_steps``, ``ipopt_steps`` and ``halvings`` the load
+    history's steps taken by active-set Newton and by IPOPT, and the steps halved on the way;
     ``gaps`` each obstacle's least gap (mm) over the points not in contact; ``state`` the warm start
     for a neighbouring solve.
     """
@@ -291,6 +292,9 @@ class ContactEquilibrium:
     solve_time_s: float
     state: ContactState = field(repr=False)
     message: str = ""
+    newton_steps: int = 0
+    ipopt_steps: int = 0
+    halvings: int = 0
 
     @property
     def ok(self) -> bool:
@@ -339,6 +343,7 @@ class ContactEquilibrium:
             "displacement": None if self.displacement is None else {"x": self.displacement.x, "y": self.displacement.y},
             "reaction_n": None if self.reaction is None else self.reaction.tolist(),
             "status": self.status, "message": self.message, "iterations": self.iterations, "outer_passes": self.outer,
+            "newton_steps": self.newton_steps, "ipopt_steps": self.ipopt_steps, "halvings": self.halvings,
             "segments": self.scene.segments, "solve_time_s": self.solve_time_s,
         }
         if centreline:
@@ -772,7 +777,8 @@ def solve_contact(
             theta, lam, sigma = th, lm, sg
         else:
             success = False
-    return _result(prob, pv, pressure, theta, lam, sigma, status, success, iterations, outer, time.perf_counter() - t0, lbx)
+    r = _result(prob, pv, pressure, theta, lam, sigma, status, success, iterations, outer, time.perf_counter() - t0, lbx)
+    return replace(r, newton_steps=newton_steps, ipopt_steps=ipopt_steps, halvings=halvings)
 
 
 def _result(prob: ContactProblem, pv: np.ndarray, pressure: float, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, status: str,
