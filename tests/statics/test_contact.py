@@ -238,6 +238,26 @@ def test_touch_and_lift_off_are_the_same_pressure_both_ways():
     (lift,) = [e for e in down.events if e.kind == "lift-off"]
     assert touch.status == lift.status == "converged"
     assert abs(touch.parameter - lift.parameter) <= 1e-9  # frictionless: no hysteresis
+    assert [e.kind for e in down.events] == ["lift-off"]  # a real lift-off (the force goes to zero) stays one
+    just_before = solve_contact(scene, pressure=lift.parameter + 1e-7, warm=down.points[0].state)
+    assert just_before.ok and 0.0 < just_before.contacts[0].force < 1e-4
+
+
+def test_a_contact_branch_that_ends_with_force_left_is_a_contact_lost_not_a_lift_off():
+    """The finger's tip on a small cylinder beside the base (esba grasp --at -30,0 --radius 5): the tip
+    slides off it with force left and the actuator snaps through it; the last point fails."""
+    g = grasp(Scene(segments=3), (-30.0, 0.0), 5.0, [0.28, 0.29, 0.3])
+    assert [(e.kind, e.where, e.status) for e in g.events] == [("touch", "tip", "converged"), ("contact lost", "tip", "converged")]
+    lost = g.events[1]
+    assert lost.bracket == (0.29, 0.3) and abs(lost.parameter - 0.295326) < 1e-6
+    scene = g.points[0].scene
+    held = solve_contact(scene, pressure=lost.parameter - 1e-6, warm=g.points[1].state)
+    assert held.ok and [c.where for c in held.contacts] == ["tip"] and held.contacts[0].force > 0.4  # clearly positive when lost
+    beyond = solve_contact(scene, pressure=lost.parameter + 1e-6, warm=held.state)
+    assert not beyond.success
+    failed = g.points[-1]
+    assert not failed.ok and failed.contacts == () and failed.contact_length() == 0.0
+    assert failed.to_dict()["contact_length_within_0.1mm"] == 0.0
 
 
 def test_ipopt_certifies_the_active_set_result():

@@ -317,13 +317,16 @@ class ContactEquilibrium:
     def contact_length(self, within_mm: float = WRAP_MM) -> float:
         """The length of the touching surfaces that lies within ``within_mm`` of an obstacle, mm: how
         far the actuator wraps an object (the model's arcs touch a cylinder at points; this is the
-        length that lies on it to that tolerance)."""
+        length that lies on it to that tolerance; 0 with no contact, and a point inside an obstacle
+        deeper than that does not lie on it)."""
+        if not self.contacts:
+            return 0.0
         n, L = self.scene.segments, self.scene.actuator.L
         sigma = np.broadcast_to(np.linspace(0.0, 1.0, WRAP_SAMPLES + 1)[:-1] + 0.5 / WRAP_SAMPLES, (n, WRAP_SAMPLES))
         near = np.zeros((n, WRAP_SAMPLES), dtype=bool)
         for o in self.scene.obstacles:
             q = surface_points(self.theta, L, offset_of(o.resolved_side(), self.scene.actuator.r1), sigma)
-            near |= o.distance(q) <= within_mm
+            near |= np.abs(o.distance(q)) <= within_mm
         return float(np.sum(near)) * L / (n * WRAP_SAMPLES)
 
     @property
