@@ -163,11 +163,11 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
     ]
     t_ = data.tester
     ys = np.array([p.tip[1] for p in t_.points])
-    fs = np.array([-p.reaction[1] for p in t_.points])
+    fs = -t_.reactions[:, 1]
     soft = [k for k, p in enumerate(t_.points) if not p.kkt.dead_load_stable]
     thetas = np.array([p.theta for p in t_.points])
     jump = int(np.argmax(np.max(np.abs(np.diff(thetas, axis=0)), axis=1))) if len(t_.points) > 1 else 0
-    fmin = int(np.argmin(fs[: jump + 1]))
+    fmin = int(np.nanargmin(fs[: jump + 1]))
     down = data.ramp_down.jumps
     lines += [
         f"- Under displacement control the force falls from {fs[0]:.3f} N at y = {ys[0]:.1f} mm to its least, **{fs[fmin]:.4f} N**",

@@ -268,3 +268,17 @@ def test_ipopt_certifies_the_active_set_result():
     certified = solve_contact(scene, ContactOptions(certify=True))
     assert fast.status == "Newton_Active_Set" and certified.status.startswith("Newton_Active_Set; IPOPT Solve_Succeeded")
     assert np.max(np.abs(fast.theta - certified.theta)) <= 1e-9
+
+
+def test_the_tester_figure_gives_each_force_ramp_its_own_legend_entry():
+    from esba.figures.contact import tester_figure
+    from esba.statics.contact.sweeps import force_ramp
+
+    path = displacement_path(Scene(segments=3), 0.17, [40.0, 60.0, 80.0])
+    down = force_ramp(Scene(segments=3), 0.17, [2.0, 1.0, 0.0], theta0=path.points[0].theta)
+    up = force_ramp(Scene(segments=3), 0.17, [0.0, 1.0, 2.0])
+    handles, labels = tester_figure(path, (down, up)).axes[0].get_legend_handles_labels()
+    ramps = [(h.get_color(), t) for h, t in zip(handles, labels) if t.startswith("force control")]
+    assert len(ramps) == 2 and ramps[0][0] != ramps[1][0]
+    assert ramps[0][1].startswith("force control, ramp down 2 to 0 N") and ramps[1][1].startswith("force control, ramp up 0 to 2 N")
+    assert np.all(np.isfinite(path.reactions)) and path.reactions.shape == (3, 2)

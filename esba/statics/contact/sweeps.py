@@ -67,6 +67,12 @@ class ContactPath:
         return all(p.ok for p in self.points)
 
     @property
+    def reactions(self) -> np.ndarray:
+        """The reaction of each point's prescribed tip, N, shape (m, 2): NaN where there is none (no
+        prescribed tip, or a failed solve)."""
+        return np.array([[math.nan, math.nan] if p.reaction is None else p.reaction for p in self.points], dtype=float).reshape(-1, 2)
+
+    @property
     def first_touch(self) -> float | None:
         """The parameter of the first touch event (None when nothing touches on the way)."""
         touches = [e.parameter for e in self.events if e.kind == "touch"]
