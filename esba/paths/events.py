@@ -41,7 +41,8 @@ class ContactEvent:
 
     ``status`` is ``converged`` (located by Brent or by bisection to the tolerance) or ``guess`` (the
     function did not change sign on the old active set's continuation: the bracket's midpoint is reported);
-    ``bracket`` the two traced parameters around it.
+    ``bracket`` the two traced parameters around it; ``force_left`` (N) a ``contact lost``'s force at
+    the last equilibrium that held the contact (None for the other kinds).
     """
 
     kind: str
@@ -50,14 +51,19 @@ class ContactEvent:
     obstacle: str
     status: str
     bracket: tuple[float, float]
+    force_left: float | None = None
 
     def describe(self) -> str:
-        """``touch at tip``, ``lift-off at joint 3``, ``slide from inside segment 6 across joint 6 into segment 7``."""
-        return f"{self.kind} {self.where}" if self.kind == "slide" else f"{self.kind} at {self.where}"
+        """``touch at tip``, ``lift-off at joint 3``, ``slide from inside segment 6 across joint 6 into segment 7``,
+        ``contact lost at tip with 0.532 N left``."""
+        if self.kind == "slide":
+            return f"{self.kind} {self.where}"
+        left = "" if self.force_left is None else f" with {self.force_left:.4g} N left"
+        return f"{self.kind} at {self.where}{left}"
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": self.kind, "description": self.describe(), "parameter": self.parameter, "where": self.where, "obstacle": self.obstacle,
-                "status": self.status, "bracket": list(self.bracket)}
+                "status": self.status, "bracket": list(self.bracket), "force_left_n": self.force_left}
 
 
 def locate_event(f: Callable[[float], float], a: float, b: float, kind: str, where: str, obstacle: str, rtol: float = 1e-10) -> ContactEvent:

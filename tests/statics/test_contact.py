@@ -250,6 +250,8 @@ def test_a_contact_branch_that_ends_with_force_left_is_a_contact_lost_not_a_lift
     assert [(e.kind, e.where, e.status) for e in g.events] == [("touch", "tip", "converged"), ("contact lost", "tip", "converged")]
     lost = g.events[1]
     assert lost.bracket == (0.29, 0.3) and abs(lost.parameter - 0.295326) < 1e-6
+    assert lost.force_left > 0.4 and lost.describe() == f"contact lost at tip with {lost.force_left:.4g} N left"
+    assert g.events[0].force_left is None and lost.to_dict()["force_left_n"] == lost.force_left
     scene = g.points[0].scene
     held = solve_contact(scene, pressure=lost.parameter - 1e-6, warm=g.points[1].state)
     assert held.ok and [c.where for c in held.contacts] == ["tip"] and held.contacts[0].force > 0.4  # clearly positive when lost

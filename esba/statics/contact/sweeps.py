@@ -240,7 +240,7 @@ def _lift_off_or_lost(prob: ContactProblem, setup: Callable[[float], tuple[np.nd
     ended = bisect_event(holds, va, lift.bracket[1], "contact lost", lift.where, lift.obstacle)
     if last["force"] <= clear:  # the force went to zero: a lift-off the continuation did not locate
         return replace(ended, kind="lift-off")
-    return ended
+    return replace(ended, force_left=last["force"])
 
 
 def contact_path(scene: Scene, values: Sequence[float], parameter: str = "pressure", options: ContactOptions | None = None,
