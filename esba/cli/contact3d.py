@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from esba.statics.text import gaps_text
+
 from .results import EXIT_FAILED, EXIT_OK, print_result
 
 __all__ = ["cmd_solve_contact3d", "cmd_equilibria_contact3d"]
@@ -26,7 +28,7 @@ def _table(d: dict) -> str:
         ("contacts", "; ".join(
             f"{c['where']} (s = {c['s']:.4f}) {c['force_n']:.4f} N = ({c['force_vector_n'][0]:.4f}, {c['force_vector_n'][1]:.4f}, {c['force_vector_n'][2]:.4f}) N "
             f"at ({c['point_mm'][0]:.2f}, {c['point_mm'][1]:.2f}, {c['point_mm'][2]:.2f}) mm, {c['kind']} #{c['obstacle'] + 1}" for c in d["contacts"]) or "none"),
-        ("gaps", "; ".join(f"#{i + 1} {'-' if g is None else format(g, '.4f') + ' mm'}" for i, g in enumerate(d["gaps_elsewhere_mm"])) + " (least elsewhere)"),
+        ("gaps", gaps_text(d["gaps_elsewhere_mm"])),
         ("KKT", f"stationarity {k['stationarity_nmm']:.1e} N mm/rad, least gap {k['min_gap_mm']:.1e} mm, least force {k['min_force_n']:.1e} N, "
                 f"complementarity {k['complementarity_nmm']:.1e} N mm; reduced Hessian on {k['active']} active: {k['stability']} "
                 f"(least eigenvalue {min(k['reduced_eigenvalues'], default=float('nan')):.4g} N mm/rad^2)"),

@@ -110,9 +110,9 @@ def tester_figure(path: ContactPath, ramps: Sequence[ForceRamp] = (), force: flo
     fig = new_figure(6.5, 4.8)
     ax = fig.subplots()
     y = np.array([p.tip[1] for p in path.points])
-    f = np.array([-p.reaction[1] for p in path.points])
+    f = -path.reactions[:, 1]
     soft = np.array([not p.kkt.dead_load_stable for p in path.points])
-    ok = np.array([p.ok for p in path.points])
+    ok = np.array([p.ok for p in path.points]) & np.isfinite(f)
     thetas = np.array([p.theta for p in path.points])
     cuts = [0] + [k + 1 for k in np.flatnonzero(np.max(np.abs(np.diff(thetas, axis=0)), axis=1) > 0.1)] + [len(y)]
     for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):  # one line per branch; a jump of the shape is drawn dotted
@@ -121,10 +121,13 @@ def tester_figure(path: ContactPath, ramps: Sequence[ForceRamp] = (), force: flo
         if a > 0:
             ax.plot(y[a - 1:a + 1], f[a - 1:a + 1], ":", color="C0", lw=1.0)
     ax.plot(y[ok & soft], f[ok & soft], "o", color="C3", ms=4, label="... where force control is unstable")
-    for k, r in enumerate(ramps):
-        ax.plot(r.tip_y, r.forces, ".", color="C2", ms=4, alpha=0.8, label="force control (quasi-static ramp)" if k == 0 else None)
+    for k, r in enumerate(ramps):  # each ramp its own colour and legend entry: where it starts, which way it goes
+        colour, marker = ("C2", "C4", "C1", "C5")[k % 4], (".", "x", "+", "1")[k % 4]
+        way = "up" if r.forces[-1] >= r.forces[0] else "down"
+        ax.plot(r.tip_y, r.forces, marker, color=colour, ms=4, alpha=0.8,
+                label=f"force control, ramp {way} {r.forces[0]:.3g} to {r.forces[-1]:.3g} N" + (f" (jumps at {r.jumps[0][0]:.3g} N)" if r.jumps else ""))
         for fj, ya, yb in r.jumps:
-            ax.annotate("", xy=(yb, fj), xytext=(ya, fj), arrowprops={"arrowstyle": "->", "color": "C2", "lw": 1.2})
+            ax.annotate("", xy=(yb, fj), xytext=(ya, fj), arrowprops={"arrowstyle": "->", "color": colour, "lw": 1.2})
     if force is not None:
         ax.axhline(force, color="0.5", lw=0.8, ls="--")
         ax.text(ax.get_xlim()[0], force, f" {force:g} N", fontsize=7, va="bottom", color="0.4")

@@ -103,7 +103,12 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
         "  constraints); their multipliers are the reaction force.",
         "- **Events on a path** (touch, lift-off, a contact sliding onto a joint or the tip) are bracketed between two",
         "  points and located by Brent's method on the continuation of the old active set: the gap of the point that",
-        "  touches, the force of the contact that lifts off (`esba/paths/events.py`).",
+        "  touches, the force of the contact that lifts off (`esba/paths/events.py`). A lift-off is kept where the",
+        "  active-set solve just before it holds the contact with almost no force; where a contact branch ends with",
+        "  force left (the contact slides off an edge and the actuator snaps: no equilibrium in contact follows), the",
+        "  event is a `contact lost`, located by bisection on the load to the same relative 1e-10, each solve from the",
+        "  last equilibrium in contact (`esba grasp --at -30,0 --radius 5 --no-plot` prints one: the tip slides off a",
+        "  small cylinder beside the base; tests/statics/test_contact.py).",
         "- **Frictionless only.** Coulomb friction would add a tangential multiplier per contact with a cone",
         "  constraint and a stick/slip alternative: a complementarity problem that a minimisation does not pose (the",
         "  friction force is not the gradient of a potential), so not here.",
@@ -158,11 +163,11 @@ def render_page(data: ContactCases, command: str, t: Times = TIMES) -> str:
     ]
     t_ = data.tester
     ys = np.array([p.tip[1] for p in t_.points])
-    fs = np.array([-p.reaction[1] for p in t_.points])
+    fs = -t_.reactions[:, 1]
     soft = [k for k, p in enumerate(t_.points) if not p.kkt.dead_load_stable]
     thetas = np.array([p.theta for p in t_.points])
     jump = int(np.argmax(np.max(np.abs(np.diff(thetas, axis=0)), axis=1))) if len(t_.points) > 1 else 0
-    fmin = int(np.argmin(fs[: jump + 1]))
+    fmin = int(np.nanargmin(fs[: jump + 1]))
     down = data.ramp_down.jumps
     lines += [
         f"- Under displacement control the force falls from {fs[0]:.3f} N at y = {ys[0]:.1f} mm to its least, **{fs[fmin]:.4f} N**",

@@ -748,7 +748,8 @@ def _certify(model: Model, theta: np.ndarray, pv: np.ndarray, lbx: np.ndarray, o
     )
     return Minimum(point, "Solve_Succeeded", True, 0), state, certificate
 #: What ``Equilibrium.to_dict`` keeps of a contact solve (its shape and angles are the result's own).
-CONTACT_KEYS = ("contacts", "total_contact_force_n", "contact_span_mm", "gaps_elsewhere_mm", "kkt", "obstacles", "outer_passes")
+CONTACT_KEYS = ("contacts", "total_contact_force_n", "contact_span_mm", "gaps_elsewhere_mm", "kkt", "obstacles", "outer_passes",
+                "newton_steps", "ipopt_steps", "halvings")
 
 
 def _solve_with_contact(scene: Scene, options: SolverOptions, pressure: float | None, theta0: np.ndarray | None) -> Equilibrium:
@@ -776,7 +777,7 @@ def _solve_with_contact(scene: Scene, options: SolverOptions, pressure: float | 
         scene=scene, model=model, pressure=rc.pressure, theta=rc.theta, tip=rc.tip, centreline=rc.centreline,
         energy=rc.energy, terms=state["terms"], gradient_norm=rc.kkt.stationarity, eigenvalues=rc.kkt.reduced_eigenvalues,
         stability=rc.kkt.stability, status=rc.status, success=rc.success, iterations=rc.iterations, steps=rc.outer,
-        solve_time_s=rc.solve_time_s, message=rc.message, certificate=f"IPOPT with gap >= 0 constraints, then Newton on the active set: {rc.status}",
+        solve_time_s=rc.solve_time_s, message=rc.message, certificate=f"the contact solve (active-set Newton on the KKT system, IPOPT with gap >= 0 constraints where it fails): {rc.status}",
         validity=assess(scene, rc.theta, rc.pressure, rc.tip), history=how,
         multistability=not_looked("a scene with obstacles: the search for other states is of the free actuator"), contact=rc,
     )

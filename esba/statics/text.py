@@ -8,11 +8,25 @@ They read only the plain dicts of the results (with the scene's one-line descrip
 
 from __future__ import annotations
 
-__all__ = ["solve_table", "equilibria_table", "sensitivity_rows", "uncertainty_rows"]
+__all__ = ["solve_table", "equilibria_table", "sensitivity_rows", "uncertainty_rows", "gaps_text"]
 
 
 def _fmt(values, digits: int = 3) -> str:
     return ", ".join(f"{v:.{digits}f}" for v in values)
+
+
+def gaps_text(gaps) -> str:
+    """Each obstacle's least gap over the points not in contact (``gaps_elsewhere_mm``; None: all in contact)."""
+    return "; ".join(f"#{i + 1} {'-' if g is None else format(g, '.4f') + ' mm'}" for i, g in enumerate(gaps)) + " (least elsewhere)"
+
+
+def _solver_row(d: dict) -> str:
+    """What the solve did: the free solve's path points and IPOPT iterations, or the contact solve's steps."""
+    c = d.get("contact")
+    if not c:
+        return f"{d['certificate'] or 'IPOPT ' + d['status']}; {d['steps']} path points and solves, {d['iterations']} iterations in all, {d['solve_time_s']:.3f} s"
+    return (f"contact solve {d['status']}: {c['newton_steps']} load steps by active-set Newton, {c['ipopt_steps']} by IPOPT "
+            f"({d['iterations']} IPOPT iterations in {c['outer_passes']} passes), {c['halvings']} halved, {d['solve_time_s']:.3f} s")
 
 
 def solve_table(d: dict) -> str:
@@ -29,8 +43,9 @@ def solve_table(d: dict) -> str:
         ("total angle", f"{d['total_angle_deg']:.3f} deg"),
         ("tip x, y", f"{d['tip_mm'][0]:.3f}, {d['tip_mm'][1]:.3f} mm (orientation {d['tip_angle_deg']:.2f} deg)"),
         ("energy", f"{d['energy_nmm']:.4f} N mm ({terms})"),
-        ("stability", f"{d['stability']} (Hessian eigenvalues {_fmt(d['eigenvalues'], 3)} N mm/rad^2)"),
-        ("solver", f"{d['certificate'] or 'IPOPT ' + d['status']}; {d['steps']} path points and solves, {d['iterations']} iterations in all, {d['solve_time_s']:.3f} s"),
+        ("stability", f"{d['stability']} ({'reduced Hessian eigenvalues (on the constrained set)' if d.get('contact') else 'Hessian eigenvalues'} "
+                      f"{_fmt(d['eigenvalues'], 3)} N mm/rad^2)"),
+        ("solver", _solver_row(d)),
     ]
     if d.get("message"):
         rows.append(("NOT OK", d["message"]))
@@ -38,6 +53,7 @@ def solve_table(d: dict) -> str:
         c, k = d["contact"], d["contact"]["kkt"]
         rows.append(("contacts", "; ".join(f"{x['where']} (s = {x['s']:.4f}) {x['force_n']:.4f} N along ({x['direction'][0]:.3f}, {x['direction'][1]:.3f}), {x['kind']} #{x['obstacle'] + 1}"
                                            for x in c["contacts"]) or "none"))
+        rows.append(("gaps", gaps_text(c["gaps_elsewhere_mm"])))
         rows.append(("KKT", f"stationarity {k['stationarity_nmm']:.1e} N mm/rad, least gap {k['min_gap_mm']:.1e} mm, least force {k['min_force_n']:.1e} N, "
                             f"complementarity {k['complementarity_nmm']:.1e} N mm; reduced Hessian on {k['active']} active: {k['stability']}"))
     if d.get("history"):

@@ -62,6 +62,23 @@ def test_solve_path_and_equilibria_take_obstacles(capsys, tmp_path):
     assert json.loads(out)["states"][0]["contacts"][0]["where"] == "tip"
 
 
+def test_solve_text_with_obstacles_says_what_the_contact_solve_did(capsys, tmp_path):
+    scene = tmp_path / "cylinder.toml"
+    scene.write_text('segments = 3\n[loads]\npressure = 0.2\n[[obstacles]]\nkind = "cylinder"\ncentre = [90.0, 40.0]\nradius = 12.0\n')
+    code, out, err = run(capsys, "solve", str(scene))
+    assert code == EXIT_OK, err
+    code, js, err = run(capsys, "solve", str(scene), "--json")
+    d = json.loads(js)
+    c = d["contact"]
+    rows = {line.split(":", 1)[0].strip(): line.split(":", 1)[1].strip() for line in out.splitlines()}
+    (gap,) = c["gaps_elsewhere_mm"]
+    assert rows["gaps"] == f"#1 {gap:.4f} mm (least elsewhere)" and gap > 1.0
+    assert rows["stability"].startswith("stable (reduced Hessian eigenvalues (on the constrained set) ")
+    assert rows["solver"].startswith(f"contact solve {d['status']}: {c['newton_steps']} load steps by active-set Newton, {c['ipopt_steps']} by IPOPT ")
+    assert c["newton_steps"] + c["ipopt_steps"] >= 1 and "path points" not in out
+    assert f"({d['iterations']} IPOPT iterations in {c['outer_passes']} passes), {c['halvings']} halved" in rows["solver"]
+
+
 @pytest.mark.parametrize(
     "args, message",
     [

@@ -47,6 +47,7 @@ def test_solve_3d_lists_the_contact_its_force_vector_and_the_kkt_numbers(tmp_pat
     ('kind = "sphere"\ncentre = [60.0, 40.0, 0.0]\nradius = -3.0', "sphere.radius=-3: expected a radius > 0 mm"),
     ('kind = "plane"\nat = [0.0, 0.0, nan]\nnormal = [0.0, 0.0, -1.0]', "plane.at[2]=nan"),
     ('kind = "cylinder"\ncentre = [60.0, 40.0, 0.0]\naxis = [0.0, 0.0, 0.0]\nradius = 5.0', "cylinder.axis=[0, 0, 0]: a zero vector has no direction"),
+    ('kind = "plane"\nat = [-10.0, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]', "plane.at=[-10, 0, 0]: the point is behind the base"),
 ])
 def test_bad_3d_obstacles_in_a_scene_file_get_one_line_and_exit_2(tmp_path, capsys, table, message):
     scene = tmp_path / "bad.toml"

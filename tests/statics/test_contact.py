@@ -120,6 +120,13 @@ def test_displacement_reaction_is_the_dead_load_that_holds_it():
     assert np.max(np.abs(free.theta - r.theta)) <= DEAD_LOAD_THETA
 
 
+def test_a_reachable_looking_target_without_equilibrium_fails_with_no_reaction():
+    r = solve_contact(Scene(segments=3, pressure=0.17), displacement=Displacement(x=134.0, y=16.0))  # within L, past the bend's reach
+    assert not r.ok and not r.success and r.reaction is None
+    assert "IPOPT did not converge" in r.message and "no reaction" in r.message
+    assert r.to_dict()["reaction_n"] is None
+
+
 def test_blocked_force_grows_and_stays_at_the_tip():
     b = blocked_force(Scene(segments=3), [0.0, 0.1, 0.2, 0.3])
     assert b.ok
@@ -180,6 +187,13 @@ def test_closest_points_are_the_minima_of_a_dense_sample():
         (lambda: scene_from_dict({"obstacles": [{"kind": "cylinder", "centre": [60, 30]}, {"kind": "cube"}]}), "[[obstacles]] #2: kind='cube'"),
         (lambda: scene_from_dict({"obstacles": [{"kind": "half-plane", "at": [135, 0], "radius": 3}]}), "unknown key(s) radius"),
         (lambda: Displacement(y=math.nan), "displacement.y=nan"),
+        (lambda: Displacement(x=math.inf), "displacement.x=inf: expected a finite number"),
+        (lambda: Displacement(), "displacement: no coordinate given: expected x, y or both (mm)"),
+        (lambda: solve_contact(Scene(segments=3, pressure=0.17), displacement=Displacement(x=140.0, y=60.0)),
+         "displacement=(x=140, y=60): the target is 152.3 mm from the base, farther than the actuator's length L = 135 mm"),
+        (lambda: solve_contact(Scene(segments=3, pressure=0.17), displacement=Displacement(y=-136.0)),
+         "displacement=(y=-136): the target is 136 mm from the base"),
+        (lambda: displacement_path(Scene(segments=3), 0.17, [0.0, 80.0, 140.0]), "displacement=(y=140): the target is 140 mm from the base"),
     ],
 )
 def test_bad_input_is_one_line(make, message):
@@ -224,6 +238,28 @@ def test_touch_and_lift_off_are_the_same_pressure_both_ways():
     (lift,) = [e for e in down.events if e.kind == "lift-off"]
     assert touch.status == lift.status == "converged"
     assert abs(touch.parameter - lift.parameter) <= 1e-9  # frictionless: no hysteresis
+    assert [e.kind for e in down.events] == ["lift-off"]  # a real lift-off (the force goes to zero) stays one
+    just_before = solve_contact(scene, pressure=lift.parameter + 1e-7, warm=down.points[0].state)
+    assert just_before.ok and 0.0 < just_before.contacts[0].force < 1e-4
+
+
+def test_a_contact_branch_that_ends_with_force_left_is_a_contact_lost_not_a_lift_off():
+    """The finger's tip on a small cylinder beside the base (esba grasp --at -30,0 --radius 5): the tip
+    slides off it with force left and the actuator snaps through it; the last point fails."""
+    g = grasp(Scene(segments=3), (-30.0, 0.0), 5.0, [0.28, 0.29, 0.3])
+    assert [(e.kind, e.where, e.status) for e in g.events] == [("touch", "tip", "converged"), ("contact lost", "tip", "converged")]
+    lost = g.events[1]
+    assert lost.bracket == (0.29, 0.3) and abs(lost.parameter - 0.295326) < 1e-6
+    assert lost.force_left > 0.4 and lost.describe() == f"contact lost at tip with {lost.force_left:.4g} N left"
+    assert g.events[0].force_left is None and lost.to_dict()["force_left_n"] == lost.force_left
+    scene = g.points[0].scene
+    held = solve_contact(scene, pressure=lost.parameter - 1e-6, warm=g.points[1].state)
+    assert held.ok and [c.where for c in held.contacts] == ["tip"] and held.contacts[0].force > 0.4  # clearly positive when lost
+    beyond = solve_contact(scene, pressure=lost.parameter + 1e-6, warm=held.state)
+    assert not beyond.success
+    failed = g.points[-1]
+    assert not failed.ok and failed.contacts == () and failed.contact_length() == 0.0
+    assert failed.to_dict()["contact_length_within_0.1mm"] == 0.0
 
 
 def test_ipopt_certifies_the_active_set_result():
@@ -234,3 +270,17 @@ def test_ipopt_certifies_the_active_set_result():
     certified = solve_contact(scene, ContactOptions(certify=True))
     assert fast.status == "Newton_Active_Set" and certified.status.startswith("Newton_Active_Set; IPOPT Solve_Succeeded")
     assert np.max(np.abs(fast.theta - certified.theta)) <= 1e-9
+
+
+def test_the_tester_figure_gives_each_force_ramp_its_own_legend_entry():
+    from esba.figures.contact import tester_figure
+    from esba.statics.contact.sweeps import force_ramp
+
+    path = displacement_path(Scene(segments=3), 0.17, [40.0, 60.0, 80.0])
+    down = force_ramp(Scene(segments=3), 0.17, [2.0, 1.0, 0.0], theta0=path.points[0].theta)
+    up = force_ramp(Scene(segments=3), 0.17, [0.0, 1.0, 2.0])
+    handles, labels = tester_figure(path, (down, up)).axes[0].get_legend_handles_labels()
+    ramps = [(h.get_color(), t) for h, t in zip(handles, labels) if t.startswith("force control")]
+    assert len(ramps) == 2 and ramps[0][0] != ramps[1][0]
+    assert ramps[0][1].startswith("force control, ramp down 2 to 0 N") and ramps[1][1].startswith("force control, ramp up 0 to 2 N")
+    assert np.all(np.isfinite(path.reactions)) and path.reactions.shape == (3, 2)

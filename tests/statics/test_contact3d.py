@@ -133,6 +133,11 @@ def test_complementarity_to_solver_tolerance_on_every_random_3d_scene(seed):
     ({"kind": "cylinder", "centre": [60, 40, 0], "axis": [0, 0, 0], "radius": 5}, "cylinder.axis=[0, 0, 0]: a zero vector"),
     ({"kind": "cylinder", "centre": [60, -8, 30], "axis": [0, 0, 1], "radius": 5}, "into the actuator at rest"),
     ({"kind": "plane", "at": [0, 0, 5], "normal": [0, 0, -1]}, "reaches 3 mm into the actuator at rest"),
+    ({"kind": "plane", "at": [-10, 0, 0], "normal": [1, 0, 0]},
+     "plane.at=[-10, 0, 0]: the point is behind the base (x < 0, where the actuator is clamped): expected a point of its face with x >= 0 mm"),
+    ({"kind": "plane", "at": [10, 0, 0], "normal": [1, 0, 0]}, "reaches 18 mm into the actuator at rest"),  # cuts off the base (the tube's rounded end)
+    ({"kind": "sphere", "centre": [-10, 0, 0], "radius": 20}, "reaches 15.19 mm into the actuator at rest"),  # holds the base
+    ({"kind": "cylinder", "centre": [-10, 0, 0], "axis": [0, 1, 0], "radius": 20}, "into the actuator at rest"),
     ({"kind": "sphere", "centre": [60, 40, 0], "radius": 5, "axis": [1, 0, 0]}, "unknown key(s) axis for a 3-D sphere"),
 ])
 def test_bad_3d_obstacles_get_one_line(item, message):

@@ -183,7 +183,7 @@ class Plane(SpatialObstacle):
     Parameters
     ----------
     at : (float, float, float)
-        A point on its face, mm.
+        A point on its face, mm, with x >= 0 (not behind the base), as the planar half-plane's.
     normal : (float, float, float)
         The direction its face looks (out of the obstacle); any length but 0 (made a unit vector).
     side : str
@@ -196,7 +196,13 @@ class Plane(SpatialObstacle):
     kind = "plane"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "at", tuple(float(v) for v in _vector("plane.at", self.at)))
+        at = _vector("plane.at", self.at)
+        if at[0] < 0.0:
+            raise ObstacleError(
+                f"plane.at={_fmt(at)}: the point is behind the base (x < 0, where the actuator is clamped): "
+                "expected a point of its face with x >= 0 mm"
+            )
+        object.__setattr__(self, "at", tuple(float(v) for v in at))
         object.__setattr__(self, "normal", tuple(float(v) for v in _direction("plane.normal", self.normal)))
         object.__setattr__(self, "side", _side3("plane.side", self.side))
 

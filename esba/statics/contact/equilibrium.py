@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -131,12 +131,21 @@ DEFAULT_CONTACT = ContactOptions()
 
 @dataclass(frozen=True)
 class Displacement:
-    """A prescribed tip position, as a tester imposes it: x, y (mm) or both; None leaves it free.
+    """A prescribed tip position, as a tester imposes it: x, y (mm) or both; None leaves it free (one
+    of them at least is given). :meth:`check_reach` refuses a target the actuator cannot reach.
 
     >>> Displacement(y=float("nan"))
     Traceback (most recent call last):
     ...
     esba.statics.contact.equilibrium.ContactOptionsError: displacement.y=nan: expected a finite number
+    >>> Displacement()
+    Traceback (most recent call last):
+    ...
+    esba.statics.contact.equilibrium.ContactOptionsError: displacement: no coordinate given: expected x, y or both (mm)
+    >>> Displacement(x=140.0, y=60.0).check_reach(135.0)
+    Traceback (most recent call last):
+    ...
+    esba.statics.contact.equilibrium.ContactOptionsError: displacement=(x=140, y=60): the target is 152.3 mm from the base, farther than the actuator's length L = 135 mm: expected a target within L of the base
     """
 
     x: float | None = None
@@ -150,6 +159,20 @@ class Displacement:
                 if abs(v) > 1e6:
                     raise ContactOptionsError(f"displacement.{name}={v:g}: expected |value| <= 1e6 mm")
                 object.__setattr__(self, name, v)
+        if self.x is None and self.y is None:
+            raise ContactOptionsError("displacement: no coordinate given: expected x, y or both (mm)")
+
+    def check_reach(self, L: float) -> None:
+        """Refuse a target farther from the base than the length L (mm) of the inextensible layer: its
+        tip cannot get there (for one coordinate, |coordinate| > L)."""
+        given = [(name, v) for name, v in (("x", self.x), ("y", self.y)) if v is not None]
+        reach = math.hypot(*(v for _, v in given))
+        if reach > L:
+            what = ", ".join(f"{name}={v:g}" for name, v in given)
+            raise ContactOptionsError(
+                f"displacement=({what}): the target is {reach:.4g} mm from the base, farther than the actuator's length "
+                f"L = {L:g} mm: expected a target within L of the base"
+            )
 
     def bounds(self) -> tuple[list[float], list[float]]:
         lo = [-INF if v is None else v for v in (self.x, self.y)]
@@ -244,7 +267,9 @@ class ContactState:
 class ContactEquilibrium:
     """One solved scene with obstacles (see the module's docstring).
 
-    ``reaction`` is the force (N, [x, y]) a prescribed displacement takes (None without one);
+    ``reaction`` is the force (N, [x, y]) a prescribed displacement takes (None without one, or when
+    the solve failed: ``message`` says why); ``newton_steps``, ``ipopt_steps`` and ``halvings`` the load
+    history's steps taken by active-set Newton and by IPOPT, and the steps halved on the way;
     ``gaps`` each obstacle's least gap (mm) over the points not in contact; ``state`` the warm start
     for a neighbouring solve.
     """
@@ -267,6 +292,9 @@ class ContactEquilibrium:
     solve_time_s: float
     state: ContactState = field(repr=False)
     message: str = ""
+    newton_steps: int = 0
+    ipopt_steps: int = 0
+    halvings: int = 0
 
     @property
     def ok(self) -> bool:
@@ -289,13 +317,16 @@ class ContactEquilibrium:
     def contact_length(self, within_mm: float = WRAP_MM) -> float:
         """The length of the touching surfaces that lies within ``within_mm`` of an obstacle, mm: how
         far the actuator wraps an object (the model's arcs touch a cylinder at points; this is the
-        length that lies on it to that tolerance)."""
+        length that lies on it to that tolerance; 0 with no contact, and a point inside an obstacle
+        deeper than that does not lie on it)."""
+        if not self.contacts:
+            return 0.0
         n, L = self.scene.segments, self.scene.actuator.L
         sigma = np.broadcast_to(np.linspace(0.0, 1.0, WRAP_SAMPLES + 1)[:-1] + 0.5 / WRAP_SAMPLES, (n, WRAP_SAMPLES))
         near = np.zeros((n, WRAP_SAMPLES), dtype=bool)
         for o in self.scene.obstacles:
             q = surface_points(self.theta, L, offset_of(o.resolved_side(), self.scene.actuator.r1), sigma)
-            near |= o.distance(q) <= within_mm
+            near |= np.abs(o.distance(q)) <= within_mm
         return float(np.sum(near)) * L / (n * WRAP_SAMPLES)
 
     @property
@@ -315,6 +346,7 @@ class ContactEquilibrium:
             "displacement": None if self.displacement is None else {"x": self.displacement.x, "y": self.displacement.y},
             "reaction_n": None if self.reaction is None else self.reaction.tolist(),
             "status": self.status, "message": self.message, "iterations": self.iterations, "outer_passes": self.outer,
+            "newton_steps": self.newton_steps, "ipopt_steps": self.ipopt_steps, "halvings": self.halvings,
             "segments": self.scene.segments, "solve_time_s": self.solve_time_s,
         }
         if centreline:
@@ -344,6 +376,8 @@ class ContactProblem:
     def __init__(self, scene: Scene, options: ContactOptions, displacement: Displacement | None):
         if not scene.obstacles and displacement is None:
             raise SceneError("solve_contact: the scene has no obstacles and no prescribed displacement (use esba.statics.equilibrium.solve)")
+        if displacement is not None:
+            displacement.check_reach(scene.actuator.L)  # before the model is loaded or generated
         self.scene, self.options = scene, options
         self.model: Model = scene.model()
         self.nlp: ContactNLP = contact_nlp(self.model, tuple(o.kind for o in scene.obstacles), options.tol, options.max_iter, options.linear_solver)
@@ -355,11 +389,13 @@ class ContactProblem:
 
     def set_displacement(self, displacement: Displacement | None) -> None:
         """Prescribe the tip (or free it): the bounds of the last two constraints."""
+        if displacement is not None:
+            displacement.check_reach(self.scene.actuator.L)
         self.displacement = displacement
-        fixed = displacement or Displacement()
-        self.fixed = np.array([fixed.x is not None, fixed.y is not None])
-        self.targets = np.array([0.0 if fixed.x is None else fixed.x, 0.0 if fixed.y is None else fixed.y])
-        lo, hi = fixed.bounds()
+        x, y = (None, None) if displacement is None else (displacement.x, displacement.y)
+        self.fixed = np.array([x is not None, y is not None])
+        self.targets = np.array([0.0 if x is None else x, 0.0 if y is None else y])
+        lo, hi = ([-INF, -INF], [INF, INF]) if displacement is None else displacement.bounds()
         self.lbg = np.concatenate([np.zeros(self.m), lo])
         self.ubg = np.concatenate([np.full(self.m, INF), hi])
 
@@ -744,7 +780,8 @@ def solve_contact(
             theta, lam, sigma = th, lm, sg
         else:
             success = False
-    return _result(prob, pv, pressure, theta, lam, sigma, status, success, iterations, outer, time.perf_counter() - t0, lbx)
+    r = _result(prob, pv, pressure, theta, lam, sigma, status, success, iterations, outer, time.perf_counter() - t0, lbx)
+    return replace(r, newton_steps=newton_steps, ipopt_steps=ipopt_steps, halvings=halvings)
 
 
 def _result(prob: ContactProblem, pv: np.ndarray, pressure: float, theta: np.ndarray, lam: np.ndarray, sigma: np.ndarray, status: str,
@@ -811,9 +848,6 @@ def _result(prob: ContactProblem, pv: np.ndarray, pressure: float, theta: np.nda
         rest = [gap[j] for j in idx if not active[j]]
         gaps.append(float(min(rest)) if rest else float("nan"))
     contacts = _merged(contacts)
-    reaction = None
-    if prob.displacement is not None:
-        reaction = -lam[m:m + 2] * np.array([prob.displacement.x is not None, prob.displacement.y is not None])
     message = ""
     if not success:
         message = f"IPOPT did not converge: {status}"
@@ -824,6 +858,11 @@ def _result(prob: ContactProblem, pv: np.ndarray, pressure: float, theta: np.nda
         success, message = False, f"penetration {-kkt.min_gap:.3g} mm > gap_tol"
     elif verdict != "stable":
         message = f"the equilibrium is {verdict} on the constrained set: smallest reduced-Hessian eigenvalue {eig[0]:.3g} N mm/rad^2"
+    reaction = None  # only an equilibrium has one: a failed solve's multipliers are no force
+    if prob.displacement is not None and success:
+        reaction = -lam[m:m + 2] * np.array([prob.displacement.x is not None, prob.displacement.y is not None])
+    elif prob.displacement is not None:
+        message += "; no reaction: the prescribed tip was not reached in equilibrium"
     model = prob.model
     cl = model.centreline(theta, L, samples=n * opts.samples_per_segment + 1)
     energy = model.energy(theta, pv)

@@ -24,7 +24,7 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -34,9 +34,9 @@ from esba.infra.errors import InputError
 from esba.model.contact.obstacles import Cylinder, HalfPlane
 from esba.model.contact.surface import surface_derivatives
 from esba.model.scene import Payload, Scene, check_pressure
-from esba.paths.events import ContactEvent, locate_event
+from esba.paths.events import ContactEvent, bisect_event, locate_event
 
-from .equilibrium import ContactEquilibrium, ContactOptions, ContactProblem, Displacement, _closest, _newton, _pack, solve_contact
+from .equilibrium import ContactEquilibrium, ContactOptions, ContactProblem, Displacement, _active_set, _closest, _crosses, _newton, _pack, solve_contact
 
 __all__ = ["ContactPath", "contact_path", "blocked_force", "grasp", "displacement_path", "force_ramp", "ForceRamp", "MAX_POINTS"]
 
@@ -65,6 +65,12 @@ class ContactPath:
     @property
     def ok(self) -> bool:
         return all(p.ok for p in self.points)
+
+    @property
+    def reactions(self) -> np.ndarray:
+        """The reaction of each point's prescribed tip, N, shape (m, 2): NaN where there is none (no
+        prescribed tip, or a failed solve)."""
+        return np.array([[math.nan, math.nan] if p.reaction is None else p.reaction for p in self.points], dtype=float).reshape(-1, 2)
 
     @property
     def first_touch(self) -> float | None:
@@ -107,10 +113,11 @@ def _label(prob: ContactProblem, j: int) -> tuple[str, str, int, int]:
 
 def _events(prob: ContactProblem, setup: Callable[[float], tuple[np.ndarray, np.ndarray]], a: ContactEquilibrium, b: ContactEquilibrium,
             va: float, vb: float) -> list[ContactEvent]:
-    """The events between two points of a path: each change of the active set, located on the old set's continuation."""
+    """The events between two points of a path: each change of the active set, located on the old set's
+    continuation; a contact that ends with force left where the solves from ``a`` lose it (:func:`_lift_off_or_lost`)."""
     m, tol = prob.m, prob.options.force_tol
     old = -a.state.lam_g[:m] > tol
-    new = -b.state.lam_g[:m] > tol
+    new = (-b.state.lam_g[:m] > tol) if b.success else np.zeros(m, dtype=bool)  # a failed solve's multipliers are no contacts
     if np.array_equal(old, new):
         return []
     mask = np.concatenate([old, prob.fixed])
@@ -192,8 +199,48 @@ def _events(prob: ContactProblem, setup: Callable[[float], tuple[np.ndarray, np.
             r = continued(v)
             return math.nan if r is None else float(r[1][j])
 
-        out.append(locate_event(force, va, vb, "lift-off", where, name))
+        out.append(_lift_off_or_lost(prob, setup, j, locate_event(force, va, vb, "lift-off", where, name), a, b, va))
     return sorted(out, key=lambda e: e.parameter)
+
+
+#: A contact whose force, at the last equilibrium that holds it before it is lost, is above this
+#: fraction of its force at the path's previous point ended with force left (``contact lost``): at a
+#: lift-off located to 1e-10 the force left is of that order of the previous one.
+LOST_FORCE_FRACTION = 1e-3
+
+
+def _lift_off_or_lost(prob: ContactProblem, setup: Callable[[float], tuple[np.ndarray, np.ndarray]], j: int, lift: ContactEvent,
+                      a: ContactEquilibrium, b: ContactEquilibrium, va: float) -> ContactEvent:
+    """Constraint ``j``, active at ``a`` and not at ``b``: a ``lift-off`` (its force goes to zero) or a
+    ``contact lost`` (the contact branch ends with force left, and the actuator snaps).
+
+    The lift-off located on the old active set's continuation is kept when ``b`` is an equilibrium and
+    the active-set Newton solve from ``a`` (first-order KKT conditions checked, no step through an
+    obstacle) just before it holds the contact with almost no force left. Else the end of the contact
+    is located by bisection on the load, each solve from the last equilibrium that held it, and its
+    force there says which of the two events it is."""
+    tol = prob.options.force_tol
+    force_a = float(-a.state.lam_g[j])
+    clear = max(LOST_FORCE_FRACTION * force_a, 10.0 * tol)
+    last = {"state": (a.state.theta, a.state.lam_g, a.state.sigma), "force": force_a}
+
+    def holds(v: float) -> bool:
+        theta, lam, sigma = last["state"]
+        pv, lbx = setup(v)
+        found = _active_set(prob, pv, theta, lam, sigma, lbx)
+        if found is None or _crosses(prob, theta, found[0]) or -found[1][j] <= tol:
+            return False
+        last["state"], last["force"] = found, float(-found[1][j])
+        return True
+
+    if b.success and lift.status == "converged":
+        if holds(lift.parameter - 1e-6 * (lift.parameter - va)) and last["force"] <= clear:
+            return lift
+        last = {"state": (a.state.theta, a.state.lam_g, a.state.sigma), "force": force_a}
+    ended = bisect_event(holds, va, lift.bracket[1], "contact lost", lift.where, lift.obstacle)
+    if last["force"] <= clear:  # the force went to zero: a lift-off the continuation did not locate
+        return replace(ended, kind="lift-off")
+    return replace(ended, force_left=last["force"])
 
 
 def contact_path(scene: Scene, values: Sequence[float], parameter: str = "pressure", options: ContactOptions | None = None,
@@ -214,6 +261,9 @@ def contact_path(scene: Scene, values: Sequence[float], parameter: str = "pressu
             return None
         return Displacement(x=v) if parameter == "tip_x" else Displacement(y=v)
 
+    if parameter != "pressure":
+        for v in values:  # every target within reach, before any solve
+            displacement(v).check_reach(scene.actuator.L)
     prob = ContactProblem(scene, options, displacement(values[0]))
     model = prob.model
 
@@ -229,7 +279,7 @@ def contact_path(scene: Scene, values: Sequence[float], parameter: str = "pressu
     for k, v in enumerate(values):
         p = float(v) if parameter == "pressure" else pressure
         r = solve_contact(scene, options, pressure=p, displacement=displacement(v), warm=state, problem=prob)
-        if points:
+        if points and points[-1].success:
             events += _events(prob, setup, points[-1], r, float(values[k - 1]), float(v))
             prob.set_displacement(displacement(v))
         points.append(r)
