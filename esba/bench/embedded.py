@@ -13,6 +13,9 @@ For n = 3, 8 and 16, in one run:
   provides (``sizeof``), and the same sizes for a Cortex-M4 (``arm-none-eabi-gcc -mcpu=cortex-m4
   -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -Os``) in double and single precision where that
   compiler is installed (else it says so);
+* the Cortex-M4's instructions per equilibrium and the time they take, estimated from its
+  technical reference manual, where ``qemu-arm`` can run the M4 build (:mod:`esba.bench.cortexm4`:
+  single precision on every equilibrium scene, double on the first; ``m4_time=False`` skips it);
 * the accuracy of the single-precision build (``--float``) against double on random scenes;
 * what the demo, built by ``make`` from the export alone, prints for the README's example.
 
@@ -40,6 +43,7 @@ from esba.export.writer import export_c
 from esba.model.scene import Payload, Scene
 from esba.statics.equilibrium import solve
 
+from . import cortexm4
 from .timing import median_time
 
 __all__ = ["EMBEDDED_NS", "EQUILIBRIUM_SCENES", "INVERSE_SCENES", "DRIVER", "embedded_benchmark", "random_scenes", "run_driver"]
@@ -223,8 +227,26 @@ def _accuracy(double_exe: Path, float_exe: Path, n: int) -> dict:
     }
 
 
-def embedded_benchmark(ns: Sequence[int] = EMBEDDED_NS, repeat: int = 11, progress: Callable[[str], None] | None = None) -> dict:
+def _m4_times(exports: dict, exes: dict, n: int, workdir: Path, arm: str, qemu: str, precisions: Sequence[str]) -> dict:
+    """Instructions and estimated cycles per equilibrium on a Cortex-M4 (:mod:`esba.bench.cortexm4`)
+    for the equilibrium scenes, with each run's status and angles against the host's build of the
+    same precision."""
+    out = {}
+    for prec in precisions:
+        chosen = EQUILIBRIUM_SCENES if prec == "float" else EQUILIBRIUM_SCENES[:1]  # double: ~40x the instructions (software floating point)
+        scenes = [{"pressure": p, "payload[0].force": f, "payload[0].angle": math.radians(a), "payload[0].at": s} for p, f, a, s in chosen]
+        sub = workdir / f"m4-n{n}-{prec}"
+        sub.mkdir(exist_ok=True)
+        counts, results = cortexm4.m4_equilibrium_counts(exports[prec].folder, exports[prec].spec.name, n, scenes, "theta", n, sub, arm, qemu)
+        _, host = run_driver(exes[prec], [("e", *sc) for sc in chosen], 1)
+        out[prec] = cortexm4.summary(counts, results, [(r["status"], r["theta"]) for r in host])
+    return out
+
+
+def embedded_benchmark(ns: Sequence[int] = EMBEDDED_NS, repeat: int = 11, progress: Callable[[str], None] | None = None, m4_time: bool = True) -> dict:
     """Run the benchmark (see the module); returns the data :mod:`esba.pages.embedded` renders.
+    ``m4_time``: also count the Cortex-M4's instructions per equilibrium under qemu-arm where it and
+    arm-none-eabi-gcc are installed (:mod:`esba.bench.cortexm4`; minutes).
 
     Raises
     ------
@@ -236,6 +258,7 @@ def embedded_benchmark(ns: Sequence[int] = EMBEDDED_NS, repeat: int = 11, progre
     if cc is None:
         raise build.BuildError("esba bench embedded needs a C compiler ($CC, gcc, cc): none was found")
     arm = build.arm_compiler()
+    qemu = cortexm4.qemu_arm() if m4_time else None
     rows = []
     t_start = time.perf_counter()
     demo = None
@@ -256,6 +279,10 @@ def embedded_benchmark(ns: Sequence[int] = EMBEDDED_NS, repeat: int = 11, progre
             say(f"n = {n}: sizes")
             host = _sizes(exports["double"], work, cc, ["-O2"], "size")
             m4 = {prec: _sizes(exports[prec], work, arm, list(build.CORTEX_M4), "arm-none-eabi-size") for prec in ("double", "float")} if arm else {}
+            m4_time = None
+            if arm and qemu:
+                say(f"n = {n}: the Cortex-M4's instructions (qemu-arm)")
+                m4_time = _m4_times(exports, exes, n, work, arm, qemu, ("float", "double") if n == ns[0] else ("float",))
             say(f"n = {n}: float against double")
             accuracy = _accuracy(exes["double"], exes["float"], n)
             if demo is None:
@@ -281,12 +308,13 @@ def embedded_benchmark(ns: Sequence[int] = EMBEDDED_NS, repeat: int = 11, progre
                 "inverse_pressure_difference_mpa": max(abs(c["pressure"] - p["pressure"]) for c, p in zip(c_inv, py_inv)),
                 "host": host,
                 "cortex_m4": m4,
+                "cortex_m4_time": m4_time,
                 "accuracy": accuracy,
             })
     say("the 3-D export")
     from .embedded3d import embedded3d_benchmark
 
-    spatial = embedded3d_benchmark(repeat=repeat, progress=say)
+    spatial = embedded3d_benchmark(repeat=repeat, progress=say, m4_time=m4_time)
     for r in rows:
         for kind in ("equilibrium", "inverse"):
             c, p = statistics.median(r[f"c_{kind}_us"]), statistics.median(r[f"py_{kind}_us"])
@@ -301,6 +329,10 @@ def embedded_benchmark(ns: Sequence[int] = EMBEDDED_NS, repeat: int = 11, progre
         "compiler": subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.splitlines()[0],
         "arm_compiler": subprocess.run([arm, "--version"], capture_output=True, text=True).stdout.splitlines()[0] if arm else None,
         "arm_install": build.ARM_INSTALL,
+        "m4_time": m4_time,
+        "qemu": subprocess.run([qemu, "--version"], capture_output=True, text=True).stdout.splitlines()[0] if qemu else None,
+        "qemu_install": cortexm4.QEMU_INSTALL,
+        "m4_clock_hz": cortexm4.CLOCK_HZ,
         "machine": f"{platform.machine()}, Python {platform.python_version()}, CasADi {ca.__version__}",
         "time_s": time.perf_counter() - t_start,
         "accuracy_scenes": ACCURACY_SCENES,
@@ -326,6 +358,12 @@ def embedded_table(data: dict) -> str:
                      f"max |d theta| {a['theta_rad']:.2g} rad, tip {a['tip_mm']:.2g} mm, inverse pressure {a['inverse_pressure_mpa']:.2g} MPa")
     if data["arm_compiler"] is None:
         lines.append(f"arm-none-eabi-gcc is not installed: no Cortex-M4 sizes ({data['arm_install']})")
+    for label, rs in (("", data["rows"]), ("3-D ", data.get("spatial", {}).get("rows", []))):
+        for r in rs:
+            for prec, m in (r.get("cortex_m4_time") or {}).items():
+                lines.append(f"{label}n = {r['n']}: Cortex-M4 {prec}: {m['instructions_median']:,.0f} instructions per equilibrium, "
+                             f"{m['us_min_median'] / 1e3:.2f} to {m['us_max_median'] / 1e3:.2f} ms at {data['m4_clock_hz'] / 1e6:g} MHz (estimated; "
+                             f"statuses as the host's: {'yes' if m['statuses_as_host'] else 'NO'})")
     for r in data.get("spatial", {}).get("rows", []):
         lines.append(f"3-D n = {r['n']}: {r['c_us']:.1f} us per equilibrium in C, {r['python_us']:.0f} us in Python ({r['speedup']:.0f}x), "
                      f"text {r['text']} B, work {r['work_bytes']} B, max |d q| {r['max_q_difference']:.2g} rad")

@@ -26,6 +26,8 @@ from esba.export.spatial import ExportSpec3D, export_c3d
 from esba.model.spatial import load_model3d
 from esba.statics.spatial import solve3d
 
+from . import cortexm4
+
 __all__ = ["EMBEDDED3D_NS", "SCENES3D", "embedded3d_benchmark"]
 
 #: Segment counts of the 3-D rows.
@@ -36,12 +38,32 @@ SCENES3D = ((0.12, 1.0, 90.0, 30.0, 1.0), (0.05, 0.5, 90.0, -45.0, 1.0), (0.2, 2
 TABLE1 = {"L": 135.0, "r1": 8.0, "r2": 3.0, "d": 4.0, "rho": math.radians(10.0), "E": 0.54, "M": 0.035}
 
 
-def embedded3d_benchmark(ns: Sequence[int] = EMBEDDED3D_NS, repeat: int = 11, progress: Callable[[str], None] | None = None) -> dict:
+def _m4_times(exports: dict, n: int, workdir: Path, arm: str, qemu: str, precisions: Sequence[str], params: dict, cc: str) -> dict:
+    """Instructions and estimated cycles per 3-D equilibrium on a Cortex-M4 (:mod:`esba.bench.cortexm4`)
+    for :data:`SCENES3D`, each run's status and state against the host's build of the same precision."""
+    scenes = [{"pressure": p, "payload[0].force": f, "payload[0].angle": math.radians(om), "payload[0].out_of_plane": math.radians(be),
+               "payload[0].at": s} for p, f, om, be, s in SCENES3D]
+    out = {}
+    for prec in precisions:
+        chosen = scenes if prec == "float" else scenes[:1]  # double: ~40x the instructions (software floating point)
+        sub = workdir / f"m4-n{n}-{prec}"
+        sub.mkdir(exist_ok=True)
+        e = exports[prec]
+        counts, results = cortexm4.m4_equilibrium_counts(e.folder, e.spec.name, n, chosen, "q", 3 * n, sub, arm, qemu)
+        lib = Library3D(build.compile_shared(e.source, out=sub / "host.so", cc=cc, opt="-O2"), e.spec)
+        host = lib.batch_records(lib.as_records("params", [params] * len(chosen)),
+                                 lib.as_records("loads", [loads3d(p, [(f, math.radians(om), math.radians(be), s)]) for p, f, om, be, s in SCENES3D[: len(chosen)]]))
+        out[prec] = cortexm4.summary(counts, results, [(int(r["status"]), np.asarray(r["q"], dtype=float)) for r in host])
+    return out
+
+
+def embedded3d_benchmark(ns: Sequence[int] = EMBEDDED3D_NS, repeat: int = 11, progress: Callable[[str], None] | None = None, m4_time: bool = True) -> dict:
     say = progress or (lambda _msg: None)
     cc = build.compiler()
     if cc is None:
         raise build.BuildError("esba bench embedded needs a C compiler ($CC, gcc, cc): none was found")
     arm = build.arm_compiler()
+    qemu = cortexm4.qemu_arm() if m4_time else None
     rows = []
     with tempfile.TemporaryDirectory(prefix="esba-bench-embedded3d-") as tmp:
         work = Path(tmp)
@@ -77,17 +99,21 @@ def embedded3d_benchmark(ns: Sequence[int] = EMBEDDED3D_NS, repeat: int = 11, pr
             obj = work / f"n{n}.o"
             build.run_compiler(cc, ["-std=c99", "-O2", "-c", str(export.source), "-o", str(obj)])
             size = build.object_size(obj)
-            arm_sizes = {}
+            arm_sizes, m4_time = {}, None
             if arm is not None:
-                for prec in ("double", "float"):
-                    e = export if prec == "double" else export_c3d(ExportSpec3D(n, precision="float"), work / f"n{n}-float")
+                exports = {"double": export, "float": export_c3d(ExportSpec3D(n, precision="float"), work / f"n{n}-float")}
+                for prec, e in exports.items():
                     o = work / f"n{n}-{prec}-m4.o"
                     build.run_compiler(arm, ["-std=c99", *build.CORTEX_M4, "-c", str(e.source), "-o", str(o)])
                     arm_sizes[prec] = build.object_size(o, tool="arm-none-eabi-size")
+                if qemu is not None:
+                    say(f"3-D n = {n}: the Cortex-M4's instructions (qemu-arm)")
+                    m4_time = _m4_times(exports, n, work, arm, qemu, ("float", "double") if n == ns[0] else ("float",), params, cc)
             rows.append({
                 "n": n, "name": spec.name, "c_us": statistics.median(c_us), "python_us": statistics.median(py_us),
                 "speedup": statistics.median(py_us) / statistics.median(c_us), "max_q_difference": max(gaps), "statuses": statuses,
                 "text": size["text"], "data": size["data"], "bss": size["bss"], "work_bytes": lib.work_bytes, "cortex_m4": arm_sizes,
+                "cortex_m4_time": m4_time,
                 "section": section,
             })
             say(f"3-D n = {n}: {rows[-1]['c_us']:.0f} us per equilibrium in C")

@@ -283,7 +283,7 @@ def _cmd_bench_embedded(args: argparse.Namespace) -> int:
     ns = tuple(sorted(set(args.segments))) if args.segments else _EMBEDDED_NS
     from esba.bench import embedded as bench_embedded
 
-    data = bench_embedded.embedded_benchmark(ns, repeat=args.repeat, progress=_bench_progress(args, "  {}"))
+    data = bench_embedded.embedded_benchmark(ns, repeat=args.repeat, progress=_bench_progress(args, "  {}"), m4_time=not args.no_m4_time)
     if page is not None:
         from esba.pages.embedded import write_page
 
@@ -292,6 +292,8 @@ def _cmd_bench_embedded(args: argparse.Namespace) -> int:
             command += "".join(f" --segments {n}" for n in ns)
         if args.repeat != 11:
             command += f" --repeat {args.repeat}"
+        if args.no_m4_time:
+            command += " --no-m4-time"
         if args.out is not None:
             command += f" --out {args.out}"
         data["page"] = str(write_page(page, data, command))
@@ -362,6 +364,8 @@ def add_bench(sub) -> None:
     em.add_argument("--segments", "-n", type=count_arg("segments", 1, 64, "each n is exported and compiled"), action="append", metavar="N", help="segment counts (repeatable; default 3, 8 and 16)")
     em.add_argument("--repeat", type=count_arg("repeat", 1, _MAX_REPEAT), default=11, help="calls per timing, median reported (default 11, at most 100)")
     em.add_argument("--out", default=None, metavar="FILE.md", help="page to write (default docs/embedded.md in a checkout, else ./embedded.md)")
+    em.add_argument("--no-m4-time", action="store_true",
+                    help="skip the Cortex-M4's instruction counts under qemu-arm (minutes; without qemu-arm or arm-none-eabi-gcc they are skipped anyway)")
     em.add_argument("--no-write", action="store_true", help="print only; write no page")
     em.add_argument("--json", action="store_true", help="print JSON")
     em.set_defaults(func=_cmd_bench_embedded)

@@ -14,6 +14,7 @@ from typing import Any
 from esba.export.binding import STATUS
 from esba.export.writer import STATUS_TABLE, flag_table
 from esba.infra import outputs
+from esba.infra.roundoff import RELATIVE_FLOOR, floored
 
 __all__ = ["CONTROL_LOOP", "embedded_page", "write_page"]
 
@@ -75,6 +76,87 @@ def _us(v: float) -> str:
 
 def _status_list(codes) -> str:
     return ", ".join(STATUS[c] for c in codes)
+
+
+def _ms(us: float) -> str:
+    return f"{us / 1e3:,.2f}" if us < 1e4 else f"{us / 1e3:,.1f}" if us < 1e5 else f"{us / 1e3:,.0f}"
+
+
+def _m4_time_rows(label: str, n: int, t: dict | None) -> list[str]:
+    """Rows of the Cortex-M4 time table for one n (both precisions where counted)."""
+    out = []
+    for prec in ("float", "double"):
+        if not t or prec not in t:
+            continue
+        m = t[prec]
+        scenes = len(m["instructions"])
+        same = "yes" if m["statuses_as_host"] else "**no**"
+        out.append(f"| {label} | {n} | {prec} | {scenes} | {m['instructions_median']:,.0f} | {_ms(m['us_min_median'])} to {_ms(m['us_max_median'])} | "
+                   f"{same} | {floored(m['state_difference_from_host'], '.1e', RELATIVE_FLOOR)} |")
+    return out
+
+
+def _double_ratio(data: dict[str, Any]) -> str:
+    """How many times the float build's instructions the double build takes on the first scene."""
+    out = []
+    for label, rows in (("planar", data["rows"]), ("3-D", (data.get("spatial") or {}).get("rows", []))):
+        t = rows[0].get("cortex_m4_time") if rows else None
+        if t and "double" in t and "float" in t:
+            out.append(f"{t['double']['instructions'][0] / t['float']['instructions'][0]:.0f}x ({label}, n = {rows[0]['n']})")
+    return ": " + " and ".join(out) + " the float build's instructions on the first scene" if out else ""
+
+
+def _m4_time_section(data: dict[str, Any], command: str) -> list[str]:
+    """How long an equilibrium takes on a Cortex-M4, estimated from the instructions it executes."""
+    lines = ["", "### Time per equilibrium on a Cortex-M4 (estimated)", ""]
+    if not data.get("m4_time", True):
+        return lines + [f"Not counted in this run (`--no-m4-time`); `{command.replace(' --no-m4-time', '')}` counts them."]
+    if data.get("arm_compiler") is None or data.get("qemu") is None:
+        missing = " and ".join(x for x, have in (("`arm-none-eabi-gcc`", data.get("arm_compiler")), ("`qemu-arm`", data.get("qemu"))) if not have)
+        return lines + [f"{missing} {'was' if ' and ' not in missing else 'were'} not installed when this page was written, so the M4's",
+                        f"instructions were not counted (Debian or Ubuntu: `{data['arm_install']}`, `{data['qemu_install']}`)."]
+    spatial = (data.get("spatial") or {}).get("rows", [])
+    mhz = data["m4_clock_hz"] / 1e6
+    lines += [
+        "A time on a Cortex-M4 needs the chip. What a machine without one can give exactly is the stream",
+        "of instructions the chip executes, and from it an estimate of the cycles (`esba.bench.cortexm4`):",
+        "",
+        "- the export and a small driver are built for the M4 as `make cortex-m4` builds the model, linked as",
+        f"  a Linux program, and run by `qemu-arm` ({data['qemu']}; `{data['qemu_install']}`), which logs",
+        "  every block of instructions it translates and executes. The driver calls a marker function",
+        "  before and after each equilibrium, so each is counted alone; objdump decodes the instructions;",
+        "- each executed instruction gets its cycles from the Cortex-M4's technical reference manual (ARM DDI",
+        "  0439B, Table 3-1, and the FPU's Table 7-1) as a range: a load 1 to 2, a taken branch 2 to 4 (a",
+        "  pipeline refill of 1 to 3), `IT` 0 to 1, a division 2 to 12, `VLDR`/`VSTR` 2, `VMLA`/`VFMA` 3,",
+        "  `VDIV`/`VSQRT` 14; whether a branch was taken is read from the next block executed;",
+        f"- microseconds are those cycles at {mhz:g} MHz (an STM32F405/407's clock).",
+        "",
+        "This assumes memory without wait states (code and data in zero-wait-state RAM, or flash behind an",
+        "accelerator that hides its wait states, as the STM32F4's ART does for most code); a part fetching",
+        "from slow flash without a cache takes longer. qemu runs the M4's instructions on its `max` core",
+        "(its `cortex-m4` aborts in user mode on an assertion in qemu 7.2); qemu's own timing is not used.",
+        "The M4 run computes the host's equilibrium: the same statuses, and states within the last bits of",
+        "the precision (newlib's libm is not glibc's). The double build runs every operation in software",
+        f"(the FPU has single precision only){_double_ratio(data)}, so it is counted on the",
+        "first scene only. The scenes are the timing table's (planar) and the 3-D section's below.",
+        "",
+        f"| model | n | precision | scenes | instructions per equilibrium (median) | ms at {mhz:g} MHz (median, fewest to most cycles) | statuses as the host's | largest state difference from the host (rad) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in data["rows"]:
+        lines += _m4_time_rows("planar", r["n"], r.get("cortex_m4_time"))
+    for r in spatial:
+        lines += _m4_time_rows("3-D", r["n"], r.get("cortex_m4_time"))
+    planar = data["rows"][0].get("cortex_m4_time") or {}
+    if "float" in planar:
+        f = planar["float"]
+        host = data["rows"][0]["c_equilibrium_median_us"]
+        lines += ["", f"At n = {data['rows'][0]['n']} in single precision an equilibrium takes about {_ms(f['us_min_median'])} to {_ms(f['us_max_median'])} ms on the M4,",
+                  f"{f['us_min_median'] / host:,.0f} to {f['us_max_median'] / host:,.0f} times the host's double build ({_us(host)} µs): {1e6 / f['us_max_median']:,.0f} to",
+                  f"{1e6 / f['us_min_median']:,.0f} equilibria a second from the straight state, enough for a pressure loop of a few hundred Hz,",
+                  "not for one at kHz. A warm start from the last cycle's state (the control loop below) takes fewer",
+                  "Newton iterations (tests/export/test_equilibrium.py checks it); its time on the M4 is not counted here."]
+    return lines
 
 
 def _spatial_section(sp: dict | None) -> list[str]:
@@ -228,6 +310,7 @@ def embedded_page(data: dict[str, Any], command: str) -> str:
             for prec in ("float", "double"):
                 m = r["cortex_m4"][prec]
                 lines.append(f"| {r['n']} | {prec} | {m['size']['text']:,} | {m['stack_equilibrium']:,} | {m['stack_inverse']:,} | {m['largest_frame']:,} |")
+        lines += _m4_time_section(data, command)
     lines += [
         "",
         "## Single precision against double",
