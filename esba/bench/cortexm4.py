@@ -63,8 +63,7 @@ CYCLES: dict[str, tuple[int, int]] = {
     "sdiv": (2, 12), "udiv": (2, 12),
     **{m: (1, 2) for m in ("ldr", "ldrb", "ldrh", "ldrsb", "ldrsh", "ldrex", "str", "strb", "strh", "strex")},
     "ldrd": (2, 3), "strd": (2, 3),
-    "it": (0, 1), "ite": (0, 1), "itt": (0, 1), "itee": (0, 1), "itte": (0, 1), "ittt": (0, 1), "itet": (0, 1), "itttt": (0, 1),
-    "iteee": (0, 1), "ittee": (0, 1), "itete": (0, 1), "ittte": (0, 1), "iteet": (0, 1), "itett": (0, 1), "ittet": (0, 1), "itete": (0, 1),
+    "it": (0, 1),
     # FPv4-SP: single precision only
     **{m: (1, 1) for m in ("vadd", "vsub", "vmul", "vnmul", "vabs", "vneg", "vcmp", "vcmpe", "vcvt", "vcvtr", "vmov", "vmrs", "vmsr",
                            "vcvta", "vcvtn", "vcvtp", "vcvtm", "vmaxnm", "vminnm", "vsel")},
@@ -77,9 +76,16 @@ _MULTIPLE = {"ldm", "ldmia", "ldmdb", "stm", "stmia", "stmdb", "push", "pop", "v
 _REFILL = (1, 3)
 
 
+#: IT and its forms (ITT, ITE, ..., up to four instructions): 0 cycles when folded, else 1.
+_IT = re.compile(r"it[te]{0,3}")
+
+
 def _base(mnemonic: str) -> str:
-    """The mnemonic without its width (``.w``) or data type (``.f32``) suffix, flag-setting ``s`` and condition."""
+    """The mnemonic without its width (``.w``) or data type (``.f32``) suffix, flag-setting ``s`` and
+    condition; every form of IT as ``it``."""
     m = mnemonic.lower().split(".")[0]
+    if _IT.fullmatch(m):
+        return "it"
     known = CYCLES.keys() | _BRANCHES | _MULTIPLE
     if m in known:
         return m

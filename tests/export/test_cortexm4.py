@@ -38,7 +38,9 @@ from esba.export import build
     ("ldmia.w", "sp!, {r4, r5, r6, r7, r8, pc}", True, (8, 10)),
     ("vpush", "{s16-s19}", False, (5, 5)),
     ("vpop", "{d8-d9}", False, (5, 5)),         # two double registers: four words
+    ("it", "eq", False, (0, 1)),
     ("itte", "ne", False, (0, 1)),
+    ("iteet", "gt", False, (0, 1)),             # every IT form, not a list of some
     ("vadd.f32", "s0, s1, s2", False, (1, 1)),
     ("vmlane.f32", "s0, s1, s2", False, (3, 3)),
     ("vfma.f32", "s0, s1, s2", False, (3, 3)),
